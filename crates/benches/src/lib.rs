@@ -1,0 +1,137 @@
+//! # benches: wall-clock benchmarks of solver-core
+//!
+//! Shared fixtures for the criterion benchmarks (`benches/rk4_step.rs`) and the
+//! criterion-free step timer (`src/bin/step_time.rs`):
+//!
+//! - the compound pendulum ([`pendulum_solver`]) hinged to a fixed anchor
+//!   ([`fixed_anchor`]), stepped with [`PENDULUM_DT`];
+//! - the reference towed system ([`reference_params`], the project's default
+//!   configuration built from literals, as in solver-core's tests), trimmed in
+//!   steady level flight at [`CRUISE_ALTITUDE`] and [`CRUISE_MACH`]
+//!   ([`towed_solver`], [`cruise_path`]), stepped with [`TOWED_DT`].
+//!
+//! Run the benchmarks with
+//! `cargo bench -p benches --bench rk4_step -- --warm-up-time 1 --measurement-time 3`
+//! and the quick check with `cargo run --release -p benches --bin step_time`.
+//!
+//! Benchmark names (stable, quoted in the docs):
+//! `pendulum_rk4_step/{f32,f64}/{N}`, `towed_rk4_step/{f32,f64}/graded16`,
+//! `towed_rk4_step/f64/uniform300`, `tension_solve/{two_sweep,shooting,dense}/{N}`.
+
+use solver_core::{
+    AeroTable, AircraftState, Atmosphere, CableParams, DecoyParams, EndBody, Environment, Model,
+    ModelParams, Real, SegmentLayout, Solver, Uniform, Vec3, pendulum_initial_state,
+    reference_pendulum, trim,
+};
+
+/// Time step of the pendulum benchmarks, s.
+pub const PENDULUM_DT: f64 = 1e-4;
+/// Time step of the towed-system benchmarks, s.
+pub const TOWED_DT: f64 = 1e-3;
+/// Flight altitude of the towed-system benchmarks, m.
+pub const CRUISE_ALTITUDE: f64 = 9000.0;
+/// Flight Mach number of the towed-system benchmarks.
+pub const CRUISE_MACH: f64 = 0.8;
+/// Segment count of the graded towed model.
+pub const GRADED_COUNT: usize = 16;
+/// Length ratio between neighbouring segments of the graded towed model.
+pub const GRADED_RATIO: f64 = 1.3;
+
+/// The reference decoy aerodynamic table (alpha in degrees, cl, cd, cm).
+const AERO_CSV: &str = include_str!("../../../config/decoy-aero.csv");
+
+/// The reference towed system (the project's default configuration values) with the
+/// given segment layout, built from literals (a copy of solver-core's test fixture,
+/// `tests/common/mod.rs::reference_params`).
+pub fn reference_params<T: Real>(layout: SegmentLayout<T>) -> ModelParams<T> {
+    let rows: Vec<[f64; 4]> = AERO_CSV
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("alpha") && !l.trim().is_empty())
+        .map(|l| {
+            let v: Vec<f64> = l
+                .split(',')
+                .map(|x| x.trim().parse().expect("decoy-aero.csv: bad number"))
+                .collect();
+            [v[0], v[1], v[2], v[3]]
+        })
+        .collect();
+    ModelParams {
+        environment: Environment {
+            gravity: T::lit(9.80665),
+            wind: Vec3::zeros(),
+            atmosphere: Atmosphere::isa(),
+        },
+        connection_point: Vec3::new(T::lit(-4.0), T::zero(), T::lit(1.0)),
+        cable: CableParams {
+            length: T::lit(100.0),
+            diameter: T::lit(0.0025),
+            linear_density: T::lit(0.010),
+            cd_normal: T::lit(1.1),
+            cf_tangential: T::lit(0.022),
+        },
+        layout,
+        end: EndBody::Decoy(DecoyParams {
+            mass: T::lit(4.0),
+            length: T::lit(0.9),
+            diameter: T::lit(0.064),
+            x_cg: T::lit(0.27),
+            x_tow: T::lit(0.12),
+            x_mrp: T::lit(0.45),
+            inertia_cg: Vec3::new(T::lit(0.0025), T::lit(0.27), T::lit(0.27)),
+            cm_q: T::lit(-80.0),
+            cl_p: T::lit(-0.3),
+            aero: AeroTable::from_degrees(&rows).expect("decoy-aero.csv: bad table"),
+        }),
+    }
+}
+
+/// The 16-segment graded layout (ratio 1.3) of the towed benchmarks.
+pub fn graded_layout<T: Real>() -> SegmentLayout<T> {
+    SegmentLayout::Graded {
+        count: GRADED_COUNT,
+        ratio: T::lit(GRADED_RATIO),
+    }
+}
+
+/// ISA speed of sound at `altitude` m, m/s.
+pub fn speed_of_sound(altitude: f64) -> f64 {
+    Atmosphere::<f64>::isa()
+        .at(altitude)
+        .expect("altitude inside the ISA model")
+        .speed_of_sound
+}
+
+/// Cruise airspeed: Mach 0.8 at 9 km (ISA), m/s.
+pub fn cruise_speed() -> f64 {
+    CRUISE_MACH * speed_of_sound(CRUISE_ALTITUDE)
+}
+
+/// Steady level flight heading north at 9 km, Mach 0.8.
+pub fn cruise_path<T: Real>() -> Uniform<T> {
+    Uniform {
+        initial: AircraftState::level(T::lit(CRUISE_ALTITUDE), T::lit(cruise_speed())),
+    }
+}
+
+/// The pendulum's fixed anchor: an aircraft at rest at the origin.
+pub fn fixed_anchor<T: Real>() -> Uniform<T> {
+    Uniform {
+        initial: AircraftState::fixed(Vec3::zeros()),
+    }
+}
+
+/// The compound pendulum with `count` rods (capacity `N`) in its initial state
+/// (all rods at -60 degrees, at rest), boxed because large capacities are large.
+pub fn pendulum_solver<T: Real, const N: usize>(count: usize) -> Box<Solver<T, N>> {
+    let model = reference_pendulum::<T, N>(count).expect("pendulum model");
+    let state = pendulum_initial_state::<T, N>(count);
+    Box::new(Solver::new(model, state).expect("finite initial state"))
+}
+
+/// The reference towed system with `layout` (capacity `N`), trimmed in the
+/// [`cruise_path`] flight, boxed.
+pub fn towed_solver<T: Real, const N: usize>(layout: SegmentLayout<T>) -> Box<Solver<T, N>> {
+    let model = Model::<T, N>::new(reference_params(layout)).expect("reference towed model");
+    let state = trim(&model, &cruise_path::<T>().initial).expect("trim at 9 km, Mach 0.8");
+    Box::new(Solver::new(model, state).expect("finite trim state"))
+}

@@ -1,0 +1,736 @@
+//! # decoy-config: the towed decoy system's configuration
+//!
+//! A system is described by a TOML file (environment, aircraft, cable, decoy,
+//! solver) plus a CSV table of the decoy's aerodynamic coefficients that the TOML
+//! names in `decoy.aero_table`. The project's reference system
+//! (`config/reference-system.toml` + `config/decoy-aero.csv`) is embedded in the
+//! crate, so [`SystemConfig::builtin`] works from any directory.
+//!
+//! Loading validates everything once and reports the first problem as a typed
+//! [`ConfigError`] whose message names the file, the field or the CSV line.
+//! [`SystemConfig::model_params`] then turns the configuration into the solver's
+//! [`ModelParams`] for any scalar type and segment layout.
+//!
+//! Units SI; world frame NED (z down, altitude = -z); aircraft points in the
+//! aircraft body frame (FRD); decoy stations are distances behind the decoy nose.
+//!
+//! ```
+//! use decoy_config::SystemConfig;
+//! use solver_core::Model;
+//! let config = SystemConfig::builtin().unwrap();
+//! let model: Model<f32, 16> = config.model(config.embedded_layout()).unwrap();
+//! assert_eq!(model.segment_count(), 16);
+//! let speed = config.mach_to_speed(9000.0, 0.8).unwrap();
+//! assert!((speed - 243.0).abs() < 1.0);
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use solver_core::{
+    AeroTable, AeroTableError, Atmosphere, AtmosphereError, CableParams, DecoyParams, EndBody, Environment, Model,
+    ModelParams, Real, SegmentLayout, Vec3,
+};
+
+/// The built-in system description (`config/reference-system.toml`).
+pub const BUILTIN_TOML: &str = include_str!("../../../config/reference-system.toml");
+/// The built-in decoy aerodynamic table (`config/decoy-aero.csv`).
+pub const BUILTIN_AERO_CSV: &str = include_str!("../../../config/decoy-aero.csv");
+/// How errors in the built-in TOML name their file.
+pub const BUILTIN_TOML_NAME: &str = "built-in reference-system.toml";
+/// How errors in the built-in aerodynamic table name their file.
+pub const BUILTIN_AERO_NAME: &str = "built-in decoy-aero.csv";
+/// The only atmosphere model supported (`environment.atmosphere`).
+pub const SUPPORTED_ATMOSPHERE: &str = "ISA-1976";
+/// The header line of the aerodynamic table.
+pub const AERO_CSV_HEADER: [&str; 4] = ["alpha_deg", "cl", "cd", "cm"];
+
+/// Why a configuration could not be loaded or used.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// A file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The TOML is malformed, or has a missing, unknown or mistyped field.
+    #[error("{file}{}: {message}", line_suffix(*line))]
+    Toml {
+        /// The TOML file.
+        file: String,
+        /// 1-based line of the problem, when known.
+        line: Option<usize>,
+        /// What is wrong (names the field and its table).
+        message: String,
+    },
+    /// The aerodynamic table is malformed or unusable.
+    #[error("{file}{}: {message}", line_suffix(*line))]
+    AeroCsv {
+        /// The CSV file.
+        file: String,
+        /// 1-based line of the problem, when it is one line's.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A field has a value outside its physical range (non-finite, not positive, ...).
+    #[error("{file}: {field} {message}")]
+    Invalid {
+        /// The TOML file.
+        file: String,
+        /// The field, as `table.key` (for example `decoy.mass`).
+        field: String,
+        /// What is wrong with its value.
+        message: String,
+    },
+    /// `environment.atmosphere` names a model the solver does not have.
+    #[error("{file}: environment.atmosphere = \"{name}\" is not supported (only \"ISA-1976\")")]
+    UnsupportedAtmosphere {
+        /// The TOML file.
+        file: String,
+        /// The name given.
+        name: String,
+    },
+    /// The solver rejected the model built from the configuration (for example too
+    /// many segments for its capacity).
+    #[error("{0}")]
+    Solver(#[from] solver_core::ConfigError),
+    /// The atmosphere cannot give air properties at the requested altitude.
+    #[error("{0}")]
+    Atmosphere(#[from] AtmosphereError),
+}
+
+fn line_suffix(line: Option<usize>) -> String {
+    line.map(|l| format!(", line {l}")).unwrap_or_default()
+}
+
+/// `[environment]`: gravity, atmosphere and wind.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentConfig {
+    /// Gravitational acceleration, m/s^2, along +z (NED).
+    pub gravity: f64,
+    /// Atmosphere model name; only `"ISA-1976"` is supported.
+    pub atmosphere: String,
+    /// Specific gas constant of air, J/(kg K).
+    pub gas_constant: f64,
+    /// Ratio of specific heats.
+    pub gamma: f64,
+    /// Steady wind (air velocity over ground), NED, m/s.
+    pub wind_ned: [f64; 3],
+}
+
+/// `[aircraft]`: points on the aircraft, body frame (FRD), m, relative to the
+/// aircraft reference point whose motion the flight profile prescribes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AircraftConfig {
+    /// Cable hinge on the aircraft.
+    pub connection_point: [f64; 3],
+    /// Centre of the engine nozzle exit.
+    pub exhaust_nozzle: [f64; 3],
+    /// Plume axis (need not be unit length, must not be zero).
+    pub exhaust_axis: [f64; 3],
+    /// Nozzle exit radius, m.
+    pub exhaust_nozzle_radius: f64,
+    /// Half angle of the plume cone, degrees.
+    pub exhaust_half_angle_deg: f64,
+    /// Length of the hot plume core considered dangerous to the cable, m.
+    pub exhaust_length: f64,
+    /// Fore end point of the fuselage collision capsule.
+    pub envelope_fore: [f64; 3],
+    /// Aft end point of the fuselage collision capsule.
+    pub envelope_aft: [f64; 3],
+    /// Radius of the collision capsule, m.
+    pub envelope_radius: f64,
+}
+
+/// `[cable]`: the tow cable.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CableConfig {
+    /// Deployed length, m.
+    pub length: f64,
+    /// Diameter, m.
+    pub diameter: f64,
+    /// Mass per unit length, kg/m.
+    pub linear_density: f64,
+    /// Young's modulus, Pa (the model is inextensible; used to report strain).
+    pub elastic_modulus: f64,
+    /// Management limit on the connection-point tension, N.
+    pub allowable_tension: f64,
+    /// Cross-flow drag coefficient on the normal velocity component.
+    pub cd_normal: f64,
+    /// Skin-friction coefficient on the tangential velocity component.
+    pub cf_tangential: f64,
+}
+
+/// `[decoy]`: the towed body. Stations are metres behind the nose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecoyConfig {
+    /// Mass, kg.
+    pub mass: f64,
+    /// Body length, m (aerodynamic reference length).
+    pub length: f64,
+    /// Body diameter, m (reference area pi d^2 / 4).
+    pub diameter: f64,
+    /// Centre of gravity station, m.
+    pub x_cg: f64,
+    /// Towing point (cable hinge) station, m.
+    pub x_tow: f64,
+    /// Principal moments of inertia about the CG (roll, pitch, yaw), kg m^2.
+    pub inertia_cg: [f64; 3],
+    /// Moment reference point station of the aerodynamic table, m.
+    pub x_mrp: f64,
+    /// The aerodynamic table file, relative to the TOML file's directory.
+    pub aero_table: String,
+    /// Pitch/yaw damping derivative, per rad.
+    pub cm_q: f64,
+    /// Roll damping derivative, per rad.
+    pub cl_p: f64,
+}
+
+/// `[solver]`: discretisation and time step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverConfig {
+    /// Uniform segment count of the host model.
+    pub segments_host: usize,
+    /// Segment count of the reduced (embedded) model.
+    pub segments_embedded: usize,
+    /// Length ratio between neighbouring segments of the embedded model (>= 1).
+    pub grading_ratio_embedded: f64,
+    /// RK4 time step of the host model, s.
+    pub time_step_host: f64,
+}
+
+/// One row of the decoy aerodynamic table.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AeroRow {
+    /// Total angle of attack, degrees.
+    pub alpha_deg: f64,
+    /// Lift coefficient.
+    pub cl: f64,
+    /// Drag coefficient.
+    pub cd: f64,
+    /// Pitching moment coefficient about the moment reference point, positive nose-up.
+    pub cm: f64,
+}
+
+impl AeroRow {
+    /// `[alpha_deg, cl, cd, cm]`, the form [`AeroTable::from_degrees`] takes.
+    pub fn to_array(self) -> [f64; 4] {
+        [self.alpha_deg, self.cl, self.cd, self.cm]
+    }
+}
+
+/// A validated towed-decoy system: every table of the TOML file plus the parsed
+/// aerodynamic table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SystemConfig {
+    /// Gravity, atmosphere, wind.
+    pub environment: EnvironmentConfig,
+    /// Connection point, exhaust plume and collision envelope on the aircraft.
+    pub aircraft: AircraftConfig,
+    /// The tow cable.
+    pub cable: CableConfig,
+    /// The decoy.
+    pub decoy: DecoyConfig,
+    /// Discretisation and time step.
+    pub solver: SolverConfig,
+    /// The decoy aerodynamic table read from `decoy.aero_table`.
+    #[serde(skip)]
+    pub aero_rows: Vec<AeroRow>,
+    /// Where the TOML came from (a path, or the built-in name), for messages.
+    #[serde(skip)]
+    pub source: String,
+}
+
+impl SystemConfig {
+    /// The project's reference system, embedded in the binary.
+    pub fn builtin() -> Result<Self, ConfigError> {
+        Self::parse(BUILTIN_TOML, BUILTIN_TOML_NAME, |_| Ok((BUILTIN_AERO_NAME.to_owned(), BUILTIN_AERO_CSV.to_owned())))
+    }
+
+    /// Loads a system TOML file; `decoy.aero_table` is resolved relative to the
+    /// TOML file's directory (or used as is when absolute).
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        let path = path.as_ref();
+        let text = read(path)?;
+        let base = path.parent().unwrap_or_else(|| Path::new("."));
+        Self::parse(&text, &path.display().to_string(), |aero_table| {
+            let csv_path = base.join(aero_table);
+            let csv = read(&csv_path)?;
+            Ok((csv_path.display().to_string(), csv))
+        })
+    }
+
+    /// Parses a system from TOML text and the text of its aerodynamic table (the
+    /// TOML's `decoy.aero_table` is then only a name used in messages).
+    pub fn from_str(toml_text: &str, aero_csv_text: &str) -> Result<Self, ConfigError> {
+        Self::parse(toml_text, "configuration", |aero_table| Ok((aero_table.to_owned(), aero_csv_text.to_owned())))
+    }
+
+    fn parse(
+        toml_text: &str,
+        toml_name: &str,
+        load_csv: impl FnOnce(&str) -> Result<(String, String), ConfigError>,
+    ) -> Result<Self, ConfigError> {
+        let mut config: SystemConfig = toml::from_str(toml_text).map_err(|e| toml_error(toml_name, toml_text, &e))?;
+        config.source = toml_name.to_owned();
+        config.validate()?;
+        let (csv_name, csv_text) = load_csv(&config.decoy.aero_table)?;
+        config.aero_rows = parse_aero_csv(&csv_name, &csv_text)?;
+        Ok(config)
+    }
+
+    /// Checks every field of the TOML tables (not the aerodynamic table, which is
+    /// checked when parsed): finite numbers, positive masses and lengths, stations
+    /// on the body, a supported atmosphere.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let c = Checker { file: &self.source };
+        let env = &self.environment;
+        if env.atmosphere != SUPPORTED_ATMOSPHERE {
+            return Err(ConfigError::UnsupportedAtmosphere { file: self.source.clone(), name: env.atmosphere.clone() });
+        }
+        c.positive("environment.gravity", env.gravity)?;
+        c.positive("environment.gas_constant", env.gas_constant)?;
+        c.positive("environment.gamma", env.gamma)?;
+        c.finite_vec("environment.wind_ned", env.wind_ned)?;
+
+        let a = &self.aircraft;
+        c.finite_vec("aircraft.connection_point", a.connection_point)?;
+        c.finite_vec("aircraft.exhaust_nozzle", a.exhaust_nozzle)?;
+        c.finite_vec("aircraft.exhaust_axis", a.exhaust_axis)?;
+        if a.exhaust_axis.iter().all(|v| *v == 0.0) {
+            return Err(c.invalid("aircraft.exhaust_axis", "must not be the zero vector".to_owned()));
+        }
+        c.non_negative("aircraft.exhaust_nozzle_radius", a.exhaust_nozzle_radius)?;
+        c.range("aircraft.exhaust_half_angle_deg", a.exhaust_half_angle_deg, 0.0, 89.0)?;
+        c.non_negative("aircraft.exhaust_length", a.exhaust_length)?;
+        c.finite_vec("aircraft.envelope_fore", a.envelope_fore)?;
+        c.finite_vec("aircraft.envelope_aft", a.envelope_aft)?;
+        c.non_negative("aircraft.envelope_radius", a.envelope_radius)?;
+
+        let cable = &self.cable;
+        c.positive("cable.length", cable.length)?;
+        c.positive("cable.diameter", cable.diameter)?;
+        c.positive("cable.linear_density", cable.linear_density)?;
+        c.positive("cable.elastic_modulus", cable.elastic_modulus)?;
+        c.positive("cable.allowable_tension", cable.allowable_tension)?;
+        c.non_negative("cable.cd_normal", cable.cd_normal)?;
+        c.non_negative("cable.cf_tangential", cable.cf_tangential)?;
+
+        let d = &self.decoy;
+        c.positive("decoy.mass", d.mass)?;
+        c.positive("decoy.length", d.length)?;
+        c.positive("decoy.diameter", d.diameter)?;
+        c.range("decoy.x_cg", d.x_cg, 0.0, d.length)?;
+        c.range("decoy.x_tow", d.x_tow, 0.0, d.length)?;
+        c.range("decoy.x_mrp", d.x_mrp, 0.0, d.length)?;
+        for (axis, value) in ["roll", "pitch", "yaw"].iter().zip(d.inertia_cg) {
+            c.positive(&format!("decoy.inertia_cg ({axis})"), value)?;
+        }
+        c.finite("decoy.cm_q", d.cm_q)?;
+        c.finite("decoy.cl_p", d.cl_p)?;
+        if d.aero_table.trim().is_empty() {
+            return Err(c.invalid("decoy.aero_table", "must name the aerodynamic table file".to_owned()));
+        }
+
+        let s = &self.solver;
+        if s.segments_host == 0 {
+            return Err(c.invalid("solver.segments_host", "must be at least 1".to_owned()));
+        }
+        if s.segments_embedded == 0 {
+            return Err(c.invalid("solver.segments_embedded", "must be at least 1".to_owned()));
+        }
+        c.range("solver.grading_ratio_embedded", s.grading_ratio_embedded, 1.0, 10.0)?;
+        c.positive("solver.time_step_host", s.time_step_host)?;
+        Ok(())
+    }
+
+    /// The atmosphere model with the configured constants.
+    pub fn atmosphere<T: Real>(&self) -> Atmosphere<T> {
+        let env = &self.environment;
+        Atmosphere::Isa1976 {
+            gas_constant: T::lit(env.gas_constant),
+            gamma: T::lit(env.gamma),
+            gravity: T::lit(env.gravity),
+        }
+    }
+
+    /// The host model's layout: `solver.segments_host` uniform segments.
+    pub fn host_layout<T: Real>(&self) -> SegmentLayout<T> {
+        SegmentLayout::Uniform { count: self.solver.segments_host }
+    }
+
+    /// The embedded model's layout: `solver.segments_embedded` segments graded by
+    /// `solver.grading_ratio_embedded` (short at the decoy).
+    pub fn embedded_layout<T: Real>(&self) -> SegmentLayout<T> {
+        SegmentLayout::Graded {
+            count: self.solver.segments_embedded,
+            ratio: T::lit(self.solver.grading_ratio_embedded),
+        }
+    }
+
+    /// The decoy aerodynamic table in the solver's form.
+    pub fn aero_table<T: Real>(&self) -> Result<AeroTable<T>, ConfigError> {
+        let rows: Vec<[f64; 4]> = self.aero_rows.iter().map(|r| r.to_array()).collect();
+        AeroTable::from_degrees(&rows).map_err(|e| ConfigError::Solver(e.into()))
+    }
+
+    /// The solver's model parameters for this system with the given segment layout
+    /// (the decoy at the end of the chain, the ISA 1976 atmosphere).
+    pub fn model_params<T: Real>(&self, layout: SegmentLayout<T>) -> Result<ModelParams<T>, ConfigError> {
+        let env = &self.environment;
+        let cable = &self.cable;
+        let d = &self.decoy;
+        let t = T::lit;
+        Ok(ModelParams {
+            environment: Environment { gravity: t(env.gravity), wind: vec3(env.wind_ned), atmosphere: self.atmosphere() },
+            connection_point: vec3(self.aircraft.connection_point),
+            cable: CableParams {
+                length: t(cable.length),
+                diameter: t(cable.diameter),
+                linear_density: t(cable.linear_density),
+                cd_normal: t(cable.cd_normal),
+                cf_tangential: t(cable.cf_tangential),
+            },
+            layout,
+            end: EndBody::Decoy(DecoyParams {
+                mass: t(d.mass),
+                length: t(d.length),
+                diameter: t(d.diameter),
+                x_cg: t(d.x_cg),
+                x_tow: t(d.x_tow),
+                x_mrp: t(d.x_mrp),
+                inertia_cg: vec3(d.inertia_cg),
+                cm_q: t(d.cm_q),
+                cl_p: t(d.cl_p),
+                aero: self.aero_table()?,
+            }),
+        })
+    }
+
+    /// Builds and validates the solver model with capacity `N` for `layout`
+    /// ([`ConfigError::Solver`] if, for example, `layout` has more than `N` segments).
+    pub fn model<T: Real, const N: usize>(&self, layout: SegmentLayout<T>) -> Result<Model<T, N>, ConfigError> {
+        Ok(Model::new(self.model_params(layout)?)?)
+    }
+
+    /// ISA speed of sound at `altitude` (m, positive up), m/s.
+    pub fn speed_of_sound(&self, altitude: f64) -> Result<f64, ConfigError> {
+        Ok(self.atmosphere::<f64>().at(altitude)?.speed_of_sound)
+    }
+
+    /// True airspeed for Mach number `mach` at `altitude` (m), m/s: Mach times the
+    /// ISA speed of sound there. Errors outside the atmosphere's altitude range.
+    pub fn mach_to_speed(&self, altitude: f64, mach: f64) -> Result<f64, ConfigError> {
+        Ok(mach * self.speed_of_sound(altitude)?)
+    }
+}
+
+/// A `[x, y, z]` triple as a solver vector.
+pub fn vec3<T: Real>(v: [f64; 3]) -> Vec3<T> {
+    Vec3::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]))
+}
+
+fn read(path: &Path) -> Result<String, ConfigError> {
+    std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: path.to_owned(), source })
+}
+
+/// Field checks that name the file and the field.
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    fn invalid(&self, field: &str, message: String) -> ConfigError {
+        ConfigError::Invalid { file: self.file.to_owned(), field: field.to_owned(), message }
+    }
+    fn finite(&self, field: &str, v: f64) -> Result<(), ConfigError> {
+        if v.is_finite() { Ok(()) } else { Err(self.invalid(field, format!("must be a finite number, got {v}"))) }
+    }
+    fn finite_vec(&self, field: &str, v: [f64; 3]) -> Result<(), ConfigError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(self.invalid(field, format!("must hold finite numbers, got {v:?}")))
+        }
+    }
+    fn positive(&self, field: &str, v: f64) -> Result<(), ConfigError> {
+        self.finite(field, v)?;
+        if v > 0.0 { Ok(()) } else { Err(self.invalid(field, format!("must be positive, got {v}"))) }
+    }
+    fn non_negative(&self, field: &str, v: f64) -> Result<(), ConfigError> {
+        self.finite(field, v)?;
+        if v >= 0.0 { Ok(()) } else { Err(self.invalid(field, format!("must not be negative, got {v}"))) }
+    }
+    fn range(&self, field: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
+        self.finite(field, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(())
+        } else {
+            Err(self.invalid(field, format!("must be between {lo} and {hi}, got {v}")))
+        }
+    }
+}
+
+/// A one-line TOML error: the line of the problem, the message, and the table it is in.
+fn toml_error(file: &str, text: &str, error: &toml::de::Error) -> ConfigError {
+    let mut message = error.message().trim().replace('\n', " ");
+    let mut line = None;
+    if let Some(span) = error.span() {
+        let start = span.start.min(text.len());
+        line = Some(text[..start].matches('\n').count() + 1);
+        let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+        let table = text[..line_end]
+            .lines()
+            .filter_map(|l| {
+                let l = l.trim();
+                l.strip_prefix('[').and_then(|rest| rest.split(']').next()).map(str::trim)
+            })
+            .next_back();
+        if let Some(table) = table {
+            message = format!("{message} (in [{table}])");
+        }
+    }
+    ConfigError::Toml { file: file.to_owned(), line, message }
+}
+
+/// Parses the aerodynamic table CSV: `#` comment lines and blank lines are skipped,
+/// the first other line must be the header `alpha_deg,cl,cd,cm`, every following
+/// line one row of four numbers. The rows must be finite, strictly increasing in
+/// angle and span 0 to 180 degrees.
+pub fn parse_aero_csv(file: &str, text: &str) -> Result<Vec<AeroRow>, ConfigError> {
+    let error = |line: Option<usize>, message: String| ConfigError::AeroCsv { file: file.to_owned(), line, message };
+    let mut header_seen = false;
+    let mut rows = Vec::new();
+    let mut line_numbers = Vec::new();
+    for (index, raw) in text.lines().enumerate() {
+        let number = index + 1;
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if !header_seen {
+            if fields != AERO_CSV_HEADER {
+                return Err(error(Some(number), format!("expected the header `alpha_deg,cl,cd,cm`, found `{line}`")));
+            }
+            header_seen = true;
+            continue;
+        }
+        if fields.len() != 4 {
+            return Err(error(
+                Some(number),
+                format!("expected 4 values (alpha_deg,cl,cd,cm), found {}: `{line}`", fields.len()),
+            ));
+        }
+        let mut values = [0.0; 4];
+        for ((value, name), field) in values.iter_mut().zip(AERO_CSV_HEADER).zip(&fields) {
+            let parsed: f64 =
+                field.parse().map_err(|_| error(Some(number), format!("{name}: `{field}` is not a number")))?;
+            if !parsed.is_finite() {
+                return Err(error(Some(number), format!("{name}: `{field}` is not a finite number")));
+            }
+            *value = parsed;
+        }
+        rows.push(AeroRow { alpha_deg: values[0], cl: values[1], cd: values[2], cm: values[3] });
+        line_numbers.push(number);
+    }
+    if !header_seen {
+        return Err(error(None, "no header line `alpha_deg,cl,cd,cm` found".to_owned()));
+    }
+    let arrays: Vec<[f64; 4]> = rows.iter().map(|r| r.to_array()).collect();
+    AeroTable::<f64>::from_degrees(&arrays).map_err(|e| match e {
+        AeroTableError::NotIncreasing { row } => error(
+            Some(line_numbers[row]),
+            format!(
+                "alpha_deg {} does not increase on the previous row's {} (angles must increase strictly)",
+                rows[row].alpha_deg,
+                rows[row - 1].alpha_deg
+            ),
+        ),
+        AeroTableError::NonFinite { row } => error(Some(line_numbers[row]), "a value is not finite".to_owned()),
+        AeroTableError::DoesNotCover0To180 => error(
+            None,
+            format!(
+                "alpha_deg must run from 0 to 180 degrees, the table runs from {} to {}",
+                rows[0].alpha_deg,
+                rows[rows.len() - 1].alpha_deg
+            ),
+        ),
+        other => error(None, other.to_string()),
+    })?;
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with(from: &str, to: &str) -> String {
+        assert!(BUILTIN_TOML.contains(from), "test edit `{from}` not found");
+        BUILTIN_TOML.replacen(from, to, 1)
+    }
+
+    #[test]
+    fn builtin_parses_and_builds_models() {
+        let config = SystemConfig::builtin().unwrap();
+        assert_eq!(config.environment.atmosphere, "ISA-1976");
+        assert_eq!(config.aircraft.connection_point, [-4.0, 0.0, 1.0]);
+        assert_eq!(config.aircraft.exhaust_half_angle_deg, 5.0);
+        assert_eq!(config.aircraft.envelope_radius, 1.6);
+        assert_eq!(config.cable.allowable_tension, 1200.0);
+        assert_eq!(config.decoy.inertia_cg, [0.0025, 0.27, 0.27]);
+        assert_eq!(config.solver.segments_host, 300);
+        assert_eq!(config.aero_rows.len(), 37);
+        assert_eq!(config.aero_rows[1], AeroRow { alpha_deg: 2.0, cl: 0.428087, cd: 0.464949, cm: -0.092994 });
+
+        let host: Model<f64, 300> = config.model(config.host_layout()).unwrap();
+        assert_eq!(host.segment_count(), 300);
+        assert!((host.lengths().iter().sum::<f64>() - 100.0).abs() < 1e-9);
+        let (decoy, _) = host.decoy().unwrap();
+        assert_eq!(decoy.mass, 4.0);
+        assert_eq!(decoy.aero.rows(), 37);
+
+        let embedded: Model<f32, 16> = config.model(config.embedded_layout()).unwrap();
+        let l = embedded.lengths();
+        assert!((l[0] / l[15] - 1.3f32.powi(15)).abs() < 1e-2);
+    }
+
+    #[test]
+    fn from_str_and_from_file_match_builtin() {
+        let builtin = SystemConfig::builtin().unwrap();
+        let parsed = SystemConfig::from_str(BUILTIN_TOML, BUILTIN_AERO_CSV).unwrap();
+        assert_eq!(parsed.aero_rows, builtin.aero_rows);
+        assert_eq!(parsed.decoy, builtin.decoy);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/reference-system.toml");
+        let file = SystemConfig::from_file(&path).unwrap();
+        assert_eq!(file.cable, builtin.cable);
+        assert_eq!(file.aero_rows, builtin.aero_rows);
+    }
+
+    #[test]
+    fn too_many_segments_is_a_solver_error() {
+        let config = SystemConfig::builtin().unwrap();
+        let err = config.model::<f64, 16>(config.host_layout()).unwrap_err();
+        assert!(matches!(err, ConfigError::Solver(solver_core::ConfigError::TooManySegments { .. })), "{err}");
+    }
+
+    #[test]
+    fn missing_field_is_named() {
+        let toml = with("mass = 4.0 ", "# no mass ");
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(matches!(err, ConfigError::Toml { .. }), "{err:?}");
+        let message = err.to_string();
+        assert!(message.contains("missing field `mass`") && message.contains("decoy"), "{message}");
+    }
+
+    #[test]
+    fn unknown_field_is_named_with_its_line() {
+        let toml = with("cl_p = -0.3", "cl_p = -0.3\ncl_r = 1.0");
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        let line = toml.lines().position(|l| l.starts_with("cl_r")).unwrap() + 1;
+        match &err {
+            ConfigError::Toml { line: Some(l), message, .. } => {
+                assert_eq!(*l, line);
+                assert!(message.contains("unknown field `cl_r`"), "{message}");
+            }
+            other => panic!("wrong error {other:?}"),
+        }
+        assert!(err.to_string().contains(&format!("line {line}")), "{err}");
+    }
+
+    #[test]
+    fn negative_mass_is_invalid() {
+        let toml = with("mass = 4.0 ", "mass = -4.0 ");
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        match &err {
+            ConfigError::Invalid { field, .. } => assert_eq!(field, "decoy.mass"),
+            other => panic!("wrong error {other:?}"),
+        }
+        assert!(err.to_string().contains("decoy.mass must be positive, got -4"), "{err}");
+    }
+
+    #[test]
+    fn non_finite_and_unsupported_values_are_rejected() {
+        let toml = with("length = 100.0 ", "length = nan ");
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(matches!(&err, ConfigError::Invalid { field, .. } if field == "cable.length"), "{err:?}");
+        let toml = with("\"ISA-1976\"", "\"US-1962\"");
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(matches!(&err, ConfigError::UnsupportedAtmosphere { name, .. } if name == "US-1962"), "{err:?}");
+        let toml = with("x_tow = 0.12", "x_tow = 1.5");
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(matches!(&err, ConfigError::Invalid { field, .. } if field == "decoy.x_tow"), "{err:?}");
+    }
+
+    #[test]
+    fn bad_csv_row_names_its_line() {
+        let csv = BUILTIN_AERO_CSV.replacen("4,0.903119,0.513152,-0.185451", "4,0.903119,oops,-0.185451", 1);
+        let line = csv.lines().position(|l| l.contains("oops")).unwrap() + 1;
+        let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+        match &err {
+            ConfigError::AeroCsv { line: Some(l), message, .. } => {
+                assert_eq!(*l, line);
+                assert!(message.contains("cd: `oops` is not a number"), "{message}");
+            }
+            other => panic!("wrong error {other:?}"),
+        }
+        assert!(err.to_string().contains(&format!("decoy-aero.csv, line {line}")), "{err}");
+
+        let csv = BUILTIN_AERO_CSV.replacen("6,1.420349,0.599285,-0.276836", "6,1.420349,0.599285", 1);
+        let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+        assert!(matches!(err, ConfigError::AeroCsv { line: Some(_), .. }), "{err:?}");
+    }
+
+    #[test]
+    fn non_increasing_alpha_names_its_line() {
+        let csv = BUILTIN_AERO_CSV.replacen("\n12,", "\n9,", 1);
+        let line = csv.lines().position(|l| l.starts_with("9,")).unwrap() + 1;
+        let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+        match &err {
+            ConfigError::AeroCsv { line: Some(l), message, .. } => {
+                assert_eq!(*l, line);
+                assert!(message.contains("alpha_deg 9 does not increase"), "{message}");
+            }
+            other => panic!("wrong error {other:?}"),
+        }
+    }
+
+    #[test]
+    fn table_not_spanning_0_to_180_and_bad_header_are_rejected() {
+        let csv = BUILTIN_AERO_CSV.replacen("\n180,0.000000,0.450000,0.000000", "", 1);
+        let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+        assert!(matches!(err, ConfigError::AeroCsv { line: None, .. }), "{err:?}");
+        let csv = BUILTIN_AERO_CSV.replacen("alpha_deg,cl,cd,cm", "alpha,cl,cd,cm", 1);
+        let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+        assert!(matches!(err, ConfigError::AeroCsv { line: Some(_), .. }), "{err:?}");
+    }
+
+    #[test]
+    fn missing_files_are_io_errors_naming_the_path() {
+        let err = SystemConfig::from_file("/nonexistent/system.toml").unwrap_err();
+        assert!(matches!(err, ConfigError::Io { .. }), "{err:?}");
+        assert!(err.to_string().contains("/nonexistent/system.toml"), "{err}");
+    }
+
+    #[test]
+    fn mach_to_speed_uses_isa() {
+        let config = SystemConfig::builtin().unwrap();
+        let a0 = config.speed_of_sound(0.0).unwrap();
+        assert!((a0 - 340.294).abs() < 0.01, "{a0}");
+        let v = config.mach_to_speed(9000.0, 0.8).unwrap();
+        assert!((v - 0.8 * (1.4f64 * 287.05287 * 229.65).sqrt()).abs() < 1e-9, "{v}");
+        assert!(matches!(config.mach_to_speed(25_000.0, 0.8), Err(ConfigError::Atmosphere(_))));
+    }
+}

@@ -1,0 +1,296 @@
+//! ISA 1976 standard atmosphere from sea level to 20 km, and the local air column
+//! the cable flies in.
+//!
+//! Troposphere (h <= 11 km): T = T0 - L h, p = p0 (T/T0)^(g0/(L R)).
+//! Lower stratosphere (11-20 km): T = 216.65 K, p = p11 exp(-g0 (h - 11 km)/(R T11)).
+//! rho = p/(R T), a = sqrt(gamma R T). The laws are written in geopotential
+//! altitude H; the solver's altitude h is geometric height above mean sea level,
+//! positive up (h = -z in NED), converted with H = r0 h / (r0 + h), r0 = 6,356,766 m.
+
+use crate::error::AtmosphereError;
+use crate::scalar::Real;
+
+/// Lowest altitude the model accepts, m (a dead-sea margin below mean sea level).
+pub const MIN_ALTITUDE_M: f64 = -500.0;
+/// Highest altitude the model accepts, m (top of the ISA 1976 lower stratosphere layer used).
+pub const MAX_ALTITUDE_M: f64 = 20_000.0;
+
+const T0: f64 = 288.15;
+const P0: f64 = 101_325.0;
+const LAPSE: f64 = 0.0065;
+/// Tropopause, geopotential altitude, m.
+const H_TROPOPAUSE: f64 = 11_000.0;
+/// Effective earth radius of the 1976 standard for geopotential altitude, m.
+const EARTH_RADIUS: f64 = 6_356_766.0;
+/// Tropopause, geometric altitude, m.
+const H_TROPOPAUSE_GEOMETRIC: f64 = EARTH_RADIUS * H_TROPOPAUSE / (EARTH_RADIUS - H_TROPOPAUSE);
+const T_TROPOPAUSE: f64 = 216.65;
+
+/// Air properties at one altitude.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AirProperties<T: Real> {
+    /// Density, kg/m^3.
+    pub density: T,
+    /// First derivative of density with altitude, kg/m^4.
+    pub density_slope: T,
+    /// Second derivative of density with altitude, kg/m^5.
+    pub density_curvature: T,
+    /// Speed of sound, m/s.
+    pub speed_of_sound: T,
+    /// Static temperature, K.
+    pub temperature: T,
+    /// Static pressure, Pa.
+    pub pressure: T,
+}
+
+/// The atmosphere model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Atmosphere<T: Real> {
+    /// ISA 1976 to 20 km with the given gas constant, ratio of specific heats and
+    /// standard gravity (the hydrostatic constant g0).
+    Isa1976 {
+        /// Specific gas constant of air, J/(kg K).
+        gas_constant: T,
+        /// Ratio of specific heats.
+        gamma: T,
+        /// Standard gravity used in the hydrostatic equation, m/s^2.
+        gravity: T,
+    },
+    /// No air at all (the compound pendulum): zero density, no aerodynamic force.
+    Vacuum,
+}
+
+impl<T: Real> Atmosphere<T> {
+    /// The standard ISA 1976 atmosphere (R = 287.05287, gamma = 1.4, g0 = 9.80665).
+    pub fn isa() -> Self {
+        Atmosphere::Isa1976 {
+            gas_constant: T::lit(287.052_87),
+            gamma: T::lit(1.4),
+            gravity: T::lit(9.806_65),
+        }
+    }
+
+    /// Air properties at `altitude` (m, positive up).
+    ///
+    /// Errors with [`AtmosphereError::AltitudeOutOfRange`] outside
+    /// [`MIN_ALTITUDE_M`, `MAX_ALTITUDE_M`] and [`AtmosphereError::NonFinite`] for NaN.
+    pub fn at(&self, altitude: T) -> Result<AirProperties<T>, AtmosphereError> {
+        let (r, gamma, g0) = match *self {
+            Atmosphere::Vacuum => {
+                if !altitude.finite() {
+                    return Err(AtmosphereError::NonFinite);
+                }
+                let z = T::zero();
+                return Ok(AirProperties {
+                    density: z,
+                    density_slope: z,
+                    density_curvature: z,
+                    speed_of_sound: z,
+                    temperature: z,
+                    pressure: z,
+                });
+            }
+            Atmosphere::Isa1976 {
+                gas_constant,
+                gamma,
+                gravity,
+            } => (gas_constant, gamma, gravity),
+        };
+        if !altitude.finite() {
+            return Err(AtmosphereError::NonFinite);
+        }
+        let h = altitude.to_f64();
+        if !(MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&h) {
+            return Err(AtmosphereError::AltitudeOutOfRange { altitude_m: h });
+        }
+        Ok(isa_layer(
+            h,
+            h <= H_TROPOPAUSE_GEOMETRIC,
+            r.to_f64(),
+            gamma.to_f64(),
+            g0.to_f64(),
+        ))
+    }
+}
+
+/// ISA properties at geometric altitude `h_geometric` evaluated with the troposphere
+/// (`troposphere = true`) or stratosphere law; derivatives are with respect to geometric altitude.
+fn isa_layer<T: Real>(
+    h_geometric: f64,
+    troposphere: bool,
+    r: f64,
+    gamma: f64,
+    g0: f64,
+) -> AirProperties<T> {
+    let h = EARTH_RADIUS * h_geometric / (EARTH_RADIUS + h_geometric);
+    // dH/dh and d2H/dh2 for the chain rule.
+    let ratio = EARTH_RADIUS / (EARTH_RADIUS + h_geometric);
+    let dh1 = ratio * ratio;
+    let dh2 = -2.0 * ratio * ratio / (EARTH_RADIUS + h_geometric);
+    {
+        // Evaluate in f64 whatever T is: this runs once per derivative evaluation.
+        let exponent = g0 / (LAPSE * r);
+        let (temperature, pressure, slope_factor, curvature_factor);
+        if troposphere {
+            temperature = T0 - LAPSE * h;
+            pressure = P0 * libm_pow(temperature / T0, exponent);
+            // rho ~ T^(n), n = exponent - 1: drho/dh = -n L rho / T, d2rho/dh2 = n (n-1) L^2 rho / T^2.
+            let n = exponent - 1.0;
+            slope_factor = -n * LAPSE / temperature;
+            curvature_factor = n * (n - 1.0) * LAPSE * LAPSE / (temperature * temperature);
+        } else {
+            let p11 = P0 * libm_pow(T_TROPOPAUSE / T0, exponent);
+            temperature = T_TROPOPAUSE;
+            let inv_scale_height = g0 / (r * T_TROPOPAUSE);
+            pressure = p11 * libm_exp(-(h - H_TROPOPAUSE) * inv_scale_height);
+            slope_factor = -inv_scale_height;
+            curvature_factor = inv_scale_height * inv_scale_height;
+        }
+        let density = pressure / (r * temperature);
+        let slope_geopotential = density * slope_factor;
+        let curvature_geopotential = density * curvature_factor;
+        AirProperties {
+            density: T::lit(density),
+            density_slope: T::lit(slope_geopotential * dh1),
+            density_curvature: T::lit(
+                curvature_geopotential * dh1 * dh1 + slope_geopotential * dh2,
+            ),
+            speed_of_sound: T::lit(libm_sqrt(gamma * r * temperature)),
+            temperature: T::lit(temperature),
+            pressure: T::lit(pressure),
+        }
+    }
+}
+
+/// The air around the towed system during one derivative evaluation: density as a
+/// second-order expansion in altitude about the connection point.
+///
+/// The cable hangs within its length of the aircraft; over +-100 m the quadratic
+/// expansion of the ISA density differs from the exact value by less than 1e-6
+/// relative (the cubic term, (dh/H_scale)^3/6; checked in the tests), and it avoids
+/// a `pow` per segment in the hot loop. The temperature lapse rate jumps at the 11 km tropopause, so a
+/// column within 1 km of it also keeps the other layer's expansion about 11 km and
+/// uses it for points on the other side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AirColumn<T: Real> {
+    /// Altitude of the expansion point, m.
+    pub reference_altitude: T,
+    /// Properties at the expansion point.
+    pub air: AirProperties<T>,
+    /// The other layer's properties at the tropopause, when the reference is within 1 km of it.
+    pub across_tropopause: Option<AirProperties<T>>,
+}
+
+impl<T: Real> AirColumn<T> {
+    /// The air column about `altitude` (m, positive up).
+    pub fn new(atmosphere: &Atmosphere<T>, altitude: T) -> Result<Self, AtmosphereError> {
+        let air = atmosphere.at(altitude)?;
+        let h = altitude.to_f64();
+        let across_tropopause = match *atmosphere {
+            Atmosphere::Isa1976 {
+                gas_constant,
+                gamma,
+                gravity,
+            } if (h - H_TROPOPAUSE_GEOMETRIC).abs() < 1000.0 => Some(isa_layer(
+                H_TROPOPAUSE_GEOMETRIC,
+                h > H_TROPOPAUSE_GEOMETRIC,
+                gas_constant.to_f64(),
+                gamma.to_f64(),
+                gravity.to_f64(),
+            )),
+            _ => None,
+        };
+        Ok(AirColumn {
+            reference_altitude: altitude,
+            air,
+            across_tropopause,
+        })
+    }
+
+    /// Density at altitude `h` (m, positive up), never negative.
+    #[inline]
+    pub fn density(&self, h: T) -> T {
+        let tropopause = T::lit(H_TROPOPAUSE_GEOMETRIC);
+        let (h_ref, air) = match &self.across_tropopause {
+            Some(other) if (h > tropopause) != (self.reference_altitude > tropopause) => {
+                (tropopause, other)
+            }
+            _ => (self.reference_altitude, &self.air),
+        };
+        let dh = h - h_ref;
+        let half = T::lit(0.5);
+        let rho = air.density + dh * (air.density_slope + half * dh * air.density_curvature);
+        if rho > T::zero() { rho } else { T::zero() }
+    }
+}
+
+fn libm_pow(x: f64, y: f64) -> f64 {
+    <f64 as nalgebra::ComplexField>::powf(x, y)
+}
+fn libm_exp(x: f64) -> f64 {
+    <f64 as nalgebra::ComplexField>::exp(x)
+}
+fn libm_sqrt(x: f64) -> f64 {
+    <f64 as nalgebra::ComplexField>::sqrt(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn isa_table_values() {
+        // US Standard Atmosphere 1976, tabulated against geometric altitude.
+        let isa = Atmosphere::<f64>::isa();
+        let sl = isa.at(0.0).unwrap();
+        assert!((sl.density - 1.2250).abs() < 1e-4);
+        assert!((sl.speed_of_sound - 340.294).abs() < 0.01);
+        let h9 = isa.at(9000.0).unwrap();
+        assert!((h9.density - 0.46706).abs() < 1e-4, "{}", h9.density);
+        assert!(
+            (h9.temperature - 229.733).abs() < 1e-3,
+            "{}",
+            h9.temperature
+        );
+        assert!(
+            (h9.speed_of_sound - 303.85).abs() < 0.05,
+            "{}",
+            h9.speed_of_sound
+        );
+        let h11 = isa.at(11_000.0).unwrap();
+        assert!((h11.pressure - 22_700.0).abs() < 5.0, "{}", h11.pressure);
+        let h20 = isa.at(20_000.0).unwrap();
+        assert!((h20.density - 0.088_910).abs() < 1e-4, "{}", h20.density);
+        assert!((h20.temperature - 216.65).abs() < 1e-9);
+    }
+
+    #[test]
+    fn out_of_range_is_an_error() {
+        let isa = Atmosphere::<f64>::isa();
+        assert!(matches!(
+            isa.at(20_001.0),
+            Err(AtmosphereError::AltitudeOutOfRange { .. })
+        ));
+        assert!(matches!(
+            isa.at(-600.0),
+            Err(AtmosphereError::AltitudeOutOfRange { .. })
+        ));
+        assert_eq!(isa.at(f64::NAN), Err(AtmosphereError::NonFinite));
+    }
+
+    #[test]
+    fn quadratic_column_is_accurate_over_the_cable_span() {
+        let isa = Atmosphere::<f64>::isa();
+        for &h0 in &[
+            3000.0, 9000.0, 10_950.0, 11_050.0, 11_100.0, 12_000.0, 19_950.0,
+        ] {
+            let column = AirColumn::new(&isa, h0).unwrap();
+            for k in -10..=5 {
+                let h = h0 + 10.0 * k as f64;
+                let exact = isa.at(h).unwrap().density;
+                let rel = (column.density(h) - exact).abs() / exact;
+                assert!(rel < 1e-6, "h0 {h0} h {h} rel {rel}");
+            }
+        }
+    }
+}

@@ -1,0 +1,621 @@
+//! One evaluation of the equations of motion, in named passes:
+//!
+//! 1. [`prepare`]: forward kinematics down the chain (joint 0 = connection point,
+//!    joint N = towing point), loads on every body (gravity, cable cross-flow drag,
+//!    decoy aerodynamics), and the velocity-dependent terms of each joint equation.
+//! 2. [`solve_tensions`]: the tension recurrence (DESIGN §3) as a block LDLᵀ
+//!    (block Thomas) two-sweep elimination with 3x3 blocks; or
+//!    [`solve_tensions_shooting`], the paper's single-sweep shooting form, kept as a
+//!    reference that the tests show diverging with N.
+//! 3. [`accelerations`]: segment and decoy angular accelerations from the tensions.
+//!
+//! Notation (DESIGN §3): T_j is the force the upstream body exerts on the downstream
+//! body at joint j; segment i runs from joint i-1 to joint i with unit direction
+//! e_i, mass m_i, length l_i, projector P_i = I - e_i e_iᵀ. For every joint the
+//! joint's acceleration written from its two bodies must agree:
+//!
+//! ```text
+//!   -(I - 3P_j)/m_j T_{j-1} + D_j T_j - (I - 3P_{j+1})/m_{j+1} T_{j+1} = b_j
+//!   D_j = (I + 3P_j)/m_j + (I + 3P_{j+1})/m_{j+1}
+//!   b_j = (F_j/m_j - c_j) - (F_{j+1}/m_{j+1} + c_{j+1}),  c_i = -(l_i/2) w_i x (w_i x e_i)
+//! ```
+//!
+//! closed at joint 0 by the prescribed connection-point acceleration
+//! (`D_0 = (I + 3P_1)/m_1`, `b_0 = a_0 - F_1/m_1 - c_1`) and at joint N by the decoy's
+//! Newton-Euler equations (`D_N += I/m_d + [r]xᵀ I_d⁻¹ [r]x`), or by T_N = 0 for a free end.
+
+use nalgebra::{Quaternion, UnitQuaternion};
+
+use crate::atmosphere::AirColumn;
+use crate::error::SolveError;
+use crate::model::Model;
+use crate::motion::PointKinematics;
+use crate::scalar::{Mat3, Real, Vec3, vec_finite};
+use crate::state::{Derivative, State};
+
+/// Per-evaluation scratch and results. Read after an evaluation through
+/// [`crate::Outputs`]; the hot loop writes it and keeps nothing else.
+///
+/// Indexing: entry `i` of the per-segment arrays belongs to segment i+1 and its
+/// downstream joint i+1; joint 0 (the connection point) has its own fields.
+#[derive(Clone, Copy, Debug)]
+pub struct Workspace<T: Real, const N: usize> {
+    /// Joint 0 kinematics (connection point).
+    pub(crate) connection: PointKinematics<T>,
+    /// Position of joint i+1, NED.
+    pub(crate) joint_position: [Vec3<T>; N],
+    /// Velocity of joint i+1, NED.
+    pub(crate) joint_velocity: [Vec3<T>; N],
+    /// External force per unit mass on segment i+1 (gravity + drag), F/m.
+    pub(crate) specific_force: [Vec3<T>; N],
+    /// Centripetal term c = -(l/2) w x (w x e) of segment i+1.
+    pub(crate) centripetal: [Vec3<T>; N],
+    /// Elimination: X_j = S_j⁻¹ B_j for joint j = i.
+    pub(crate) elimination: [Mat3<T>; N],
+    /// Elimination: z_j = S_j⁻¹ y_j for joint j = i.
+    pub(crate) reduced_rhs: [Vec3<T>; N],
+    /// T_{i+1}: force of segment i+1 on the next body at joint i+1.
+    pub(crate) joint_force: [Vec3<T>; N],
+    /// T_0: force of the aircraft on segment 1 at the connection point.
+    pub(crate) connection_force: Vec3<T>,
+    /// Decoy quantities of this evaluation (zero for a free end).
+    pub(crate) decoy: DecoyScratch<T>,
+}
+
+/// Decoy quantities of one evaluation.
+#[derive(Clone, Copy, Debug)]
+pub struct DecoyScratch<T: Real> {
+    /// CG position, NED.
+    pub cg_position: Vec3<T>,
+    /// CG velocity, NED.
+    pub cg_velocity: Vec3<T>,
+    /// Aerodynamic force, NED, N.
+    pub aero_force: Vec3<T>,
+    /// Aerodynamic moment about the CG (table moment, lift/drag transfer, damping), body frame, N m.
+    pub aero_moment_body: Vec3<T>,
+    /// Total angle of attack, rad.
+    pub angle_of_attack: T,
+    /// Airspeed at the CG, m/s.
+    pub airspeed: T,
+    /// Dynamic pressure, Pa.
+    pub dynamic_pressure: T,
+    /// Decoy block of joint N: I/m_d + [r]xᵀ I⁻¹ [r]x (NED).
+    pub(crate) joint_block: Mat3<T>,
+    /// Decoy part of b_N.
+    pub(crate) joint_rhs: Vec3<T>,
+}
+
+impl<T: Real, const N: usize> Default for Workspace<T, N> {
+    fn default() -> Self {
+        let z = Vec3::zeros();
+        Workspace {
+            connection: PointKinematics {
+                position: z,
+                velocity: z,
+                acceleration: z,
+            },
+            joint_position: [z; N],
+            joint_velocity: [z; N],
+            specific_force: [z; N],
+            centripetal: [z; N],
+            elimination: [Mat3::zeros(); N],
+            reduced_rhs: [z; N],
+            joint_force: [z; N],
+            connection_force: z,
+            decoy: DecoyScratch {
+                cg_position: z,
+                cg_velocity: z,
+                aero_force: z,
+                aero_moment_body: z,
+                angle_of_attack: T::zero(),
+                airspeed: T::zero(),
+                dynamic_pressure: T::zero(),
+                joint_block: Mat3::zeros(),
+                joint_rhs: z,
+            },
+        }
+    }
+}
+
+/// Which tension solver [`evaluate`] uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TensionMethod {
+    /// Block LDLᵀ two-sweep elimination: O(N), numerically stable. The product's solver.
+    TwoSweep,
+    /// The paper's single-sweep shooting form: O(N), round-off grows about 3.7^N. Reference only.
+    Shooting,
+}
+
+/// Cable cross-flow drag on a segment (DESIGN §2): with the air velocity relative to
+/// the segment centre u split into u_t = (u.e)e and u_n = u - u_t,
+/// `F = 0.5 rho d l (C_n |u_n| u_n + pi C_f |u_t| u_t)`.
+#[inline]
+pub fn cable_drag<T: Real>(
+    model_cable: &crate::model::CableParams<T>,
+    density: T,
+    length: T,
+    direction: &Vec3<T>,
+    relative_air: &Vec3<T>,
+) -> Vec3<T> {
+    let k = T::lit(0.5) * density * model_cable.diameter * length;
+    let ut = direction * relative_air.dot(direction);
+    let un = relative_air - ut;
+    un * (k * model_cable.cd_normal * un.norm())
+        + ut * (k * T::pi() * model_cable.cf_tangential * ut.norm())
+}
+
+/// Aerodynamic force and moment on the decoy, DESIGN §2.
+///
+/// Inputs: decoy attitude (body FRD to NED), body rate, CG velocity over the
+/// ground, wind, local density. Output: force (NED), moment about the CG (body
+/// frame), total angle of attack, airspeed, dynamic pressure.
+///
+/// Lift acts in the plane of the total angle of attack along the part of the body
+/// axis perpendicular to the airflow; drag opposes the airflow; the table moment Cm
+/// (positive nose-up, i.e. increasing the angle of attack) acts about the axis
+/// V̂ x x_b at the moment reference point and is transferred to the CG; damping
+/// moments are `q S L cm_q (w_perp L / 2V)` and `q S L cl_p (p L / 2V)`.
+pub fn decoy_aero<T: Real>(
+    decoy: &crate::model::DecoyParams<T>,
+    derived: &crate::model::DecoyDerived<T>,
+    rotation: &UnitQuaternion<T>,
+    body_rate: &Vec3<T>,
+    cg_velocity: &Vec3<T>,
+    wind: &Vec3<T>,
+    density: T,
+) -> (Vec3<T>, Vec3<T>, T, T, T) {
+    let vb = rotation.inverse_transform_vector(&(cg_velocity - wind));
+    let speed = vb.norm();
+    let zero = Vec3::zeros();
+    if !(speed > T::lit(1e-6)) || !(density > T::zero()) {
+        return (zero, zero, T::zero(), speed, T::zero());
+    }
+    let q = T::lit(0.5) * density * speed * speed;
+    let vhat = vb / speed;
+    let x = Vec3::x();
+    let cos_a = vhat.x.clamp(-T::one(), T::one());
+    let perp = x - vhat * cos_a;
+    let sin_a = perp.norm();
+    let alpha = sin_a.atan2(cos_a);
+    let c = decoy.aero.at(alpha);
+    let qs = q * derived.reference_area;
+    let qsl = qs * decoy.length;
+    let mut force_b = vhat * (-qs * c.cd);
+    let mut moment_b = Vec3::zeros();
+    if sin_a > T::lit(1e-9) {
+        let inv = T::one() / sin_a;
+        force_b += perp * (qs * c.cl * inv);
+        moment_b += vhat.cross(&x) * (qsl * c.cm * inv);
+    }
+    moment_b += derived.mrp_from_cg.cross(&force_b);
+    let damping = qsl * decoy.length / (T::lit(2.0) * speed);
+    let roll = body_rate.x;
+    let w_perp = Vec3::new(T::zero(), body_rate.y, body_rate.z);
+    moment_b += w_perp * (damping * decoy.cm_q) + x * (damping * decoy.cl_p * roll);
+    (rotation * force_b, moment_b, alpha, speed, q)
+}
+
+/// Pass 1: kinematics, loads and the velocity terms.
+///
+/// Joint 0 is the connection point; `p_i = p_{i-1} + l_i e_i`,
+/// `v_i = v_{i-1} + l_i w_i x e_i`. Cable loads act at segment centres.
+pub fn prepare<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    ws: &mut Workspace<T, N>,
+) {
+    let n = model.segment_count();
+    let params = model.params();
+    let env = &params.environment;
+    let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
+    let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
+    let half = T::lit(0.5);
+    ws.connection = *connection;
+    let mut p = connection.position;
+    let mut v = connection.velocity;
+    let lengths = model.lengths();
+    let inverse_masses = model.inverse_masses();
+    for i in 0..n {
+        let e = state.directions[i];
+        let w = state.rates[i];
+        let l = lengths[i];
+        let we = w.cross(&e);
+        let mut specific = gravity;
+        if has_air {
+            let centre_altitude = -(p.z + e.z * (half * l));
+            let centre_velocity = v + we * (half * l);
+            let density = air.density(centre_altitude);
+            specific += cable_drag(&params.cable, density, l, &e, &(env.wind - centre_velocity))
+                * inverse_masses[i];
+        }
+        ws.specific_force[i] = specific;
+        ws.centripetal[i] = -w.cross(&we) * (half * l);
+        p += e * l;
+        v += we * l;
+        ws.joint_position[i] = p;
+        ws.joint_velocity[i] = v;
+    }
+
+    if let Some((decoy, derived)) = model.decoy() {
+        let rotation = state.decoy_rotation();
+        let wb = state.decoy_rate;
+        let tow = ws.joint_position[n - 1];
+        let tow_velocity = ws.joint_velocity[n - 1];
+        let r_world = rotation * derived.tow_from_cg;
+        let cg_position = tow - r_world;
+        let cg_velocity = tow_velocity - rotation * wb.cross(&derived.tow_from_cg);
+        let density = air.density(-cg_position.z);
+        let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) = decoy_aero(
+            decoy,
+            derived,
+            &rotation,
+            &wb,
+            &cg_velocity,
+            &env.wind,
+            density,
+        );
+        let inertia = decoy.inertia_cg;
+        let gyroscopic = wb.cross(&inertia.component_mul(&wb));
+        // Towing-point acceleration from the decoy side (a_tow = a_cg + dw x r + w x (w x r)):
+        //   a_tow = (T_N + F_d)/m_d + [r]xᵀ I⁻¹ [r]x T_N - r x I⁻¹ (M - w x I w) + w x (w x r).
+        // `rhs_body` is its force-free angular part in the body frame.
+        let free_angular = (aero_moment_body - gyroscopic).component_mul(&derived.inertia_inv);
+        let rhs_body =
+            wb.cross(&wb.cross(&derived.tow_from_cg)) - derived.tow_from_cg.cross(&free_angular);
+        let inverse_mass = T::one() / decoy.mass;
+        let force = aero_force + gravity * decoy.mass;
+        let rot = rotation.to_rotation_matrix();
+        let r = rot.matrix();
+        ws.decoy = DecoyScratch {
+            cg_position,
+            cg_velocity,
+            aero_force,
+            aero_moment_body,
+            angle_of_attack: alpha,
+            airspeed,
+            dynamic_pressure,
+            joint_block: Mat3::identity() * inverse_mass
+                + r * derived.hinge_compliance * r.transpose(),
+            // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
+            joint_rhs: -(force * inverse_mass) - r * rhs_body,
+        };
+    }
+}
+
+/// The diagonal contribution (I + 3P)/m = (4I - 3 e eᵀ)/m of one segment to each of its joints.
+#[inline(always)]
+fn segment_block<T: Real>(e: &Vec3<T>, inverse_mass: T) -> Mat3<T> {
+    let three = T::lit(3.0);
+    let four = T::lit(4.0);
+    let mut m = e * e.transpose() * (-three * inverse_mass);
+    let d = four * inverse_mass;
+    m[(0, 0)] += d;
+    m[(1, 1)] += d;
+    m[(2, 2)] += d;
+    m
+}
+
+/// `B X` for the coupling block B = -(I - 3P)/m = (2I - 3 e eᵀ)/m.
+#[inline(always)]
+fn coupling_times<T: Real>(e: &Vec3<T>, inverse_mass: T, x: &Mat3<T>) -> Mat3<T> {
+    let row = e.transpose() * x;
+    (x * T::lit(2.0) - e * row * T::lit(3.0)) * inverse_mass
+}
+
+#[inline(always)]
+fn coupling_times_vec<T: Real>(e: &Vec3<T>, inverse_mass: T, v: &Vec3<T>) -> Vec3<T> {
+    (v * T::lit(2.0) - e * (T::lit(3.0) * e.dot(v))) * inverse_mass
+}
+
+/// Right-hand side b_j and diagonal block D_j of joint `j` (0..=last).
+#[inline(always)]
+fn joint_row<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &Workspace<T, N>,
+    j: usize,
+) -> (Mat3<T>, Vec3<T>) {
+    let n = model.segment_count();
+    let inverse_masses = model.inverse_masses();
+    let mut block = Mat3::zeros();
+    let mut rhs = Vec3::zeros();
+    if j == 0 {
+        rhs += ws.connection.acceleration;
+    } else {
+        // Upstream segment j (index j-1) seen from its downstream end.
+        block += segment_block(&state.directions[j - 1], inverse_masses[j - 1]);
+        rhs += ws.specific_force[j - 1] - ws.centripetal[j - 1];
+    }
+    if j < n {
+        // Downstream segment j+1 (index j) seen from its upstream end.
+        block += segment_block(&state.directions[j], inverse_masses[j]);
+        rhs -= ws.specific_force[j] + ws.centripetal[j];
+    } else {
+        block += ws.decoy.joint_block;
+        rhs += ws.decoy.joint_rhs;
+    }
+    (block, rhs)
+}
+
+/// LDLᵀ factors of a symmetric positive-definite 3x3 matrix.
+#[derive(Clone, Copy, Debug)]
+struct Ldl3<T: Real> {
+    l21: T,
+    l31: T,
+    l32: T,
+    d1_inv: T,
+    d2_inv: T,
+    d3_inv: T,
+}
+
+impl<T: Real> Ldl3<T> {
+    /// Factors S = L D Lᵀ using the lower triangle; `None` when a pivot is not
+    /// positive (this also catches NaN).
+    #[inline(always)]
+    fn factor(s: &Mat3<T>) -> Option<Self> {
+        let zero = T::zero();
+        let d1 = s[(0, 0)];
+        if !(d1 > zero) {
+            return None;
+        }
+        let d1_inv = T::one() / d1;
+        let l21 = s[(1, 0)] * d1_inv;
+        let l31 = s[(2, 0)] * d1_inv;
+        let d2 = s[(1, 1)] - l21 * s[(1, 0)];
+        if !(d2 > zero) {
+            return None;
+        }
+        let d2_inv = T::one() / d2;
+        let l32 = (s[(2, 1)] - l31 * s[(1, 0)]) * d2_inv;
+        let d3 = s[(2, 2)] - l31 * s[(2, 0)] - l32 * l32 * d2;
+        if !(d3 > zero && d3.finite()) {
+            return None;
+        }
+        Some(Ldl3 {
+            l21,
+            l31,
+            l32,
+            d1_inv,
+            d2_inv,
+            d3_inv: T::one() / d3,
+        })
+    }
+
+    #[inline(always)]
+    fn solve(&self, b: &Vec3<T>) -> Vec3<T> {
+        let y1 = b.x;
+        let y2 = b.y - self.l21 * y1;
+        let y3 = b.z - self.l31 * y1 - self.l32 * y2;
+        let x3 = y3 * self.d3_inv;
+        let x2 = y2 * self.d2_inv - self.l32 * x3;
+        let x1 = y1 * self.d1_inv - self.l21 * x2 - self.l31 * x3;
+        Vec3::new(x1, x2, x3)
+    }
+
+    #[inline(always)]
+    fn solve_matrix(&self, b: &Mat3<T>) -> Mat3<T> {
+        Mat3::from_columns(&[
+            self.solve(&b.column(0).into_owned()),
+            self.solve(&b.column(1).into_owned()),
+            self.solve(&b.column(2).into_owned()),
+        ])
+    }
+}
+
+/// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0).
+#[inline]
+fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
+    let n = model.segment_count();
+    if model.decoy().is_some() { n } else { n - 1 }
+}
+
+/// Pass 2: the tension recurrence as a block LDLᵀ two-sweep elimination.
+///
+/// Forward sweep (joint 0 toward the decoy): S_0 = D_0, y_0 = b_0, and for each joint
+/// X_j = S_j⁻¹ B_j, z_j = S_j⁻¹ y_j, S_{j+1} = D_{j+1} - B_j X_j, y_{j+1} = b_{j+1} - B_j z_j,
+/// where B_j = -(I - 3P_{j+1})/m_{j+1} is symmetric. Back sweep: T_last = S_last⁻¹ y_last,
+/// T_j = z_j - X_j T_{j+1}. Every S_j is a Schur complement of an SPD matrix and
+/// so SPD; a pivot that is not positive is reported with its joint.
+pub fn solve_tensions<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+) -> Result<(), SolveError> {
+    let last = last_joint(model);
+    let inverse_masses = model.inverse_masses();
+    let (mut s, mut y) = joint_row(model, state, ws, 0);
+    for j in 0..last {
+        let ldl = Ldl3::factor(&s).ok_or(SolveError::NonPositivePivot { joint: j })?;
+        let e = state.directions[j];
+        let inverse_mass = inverse_masses[j];
+        // X_j = S_j⁻¹ B_j with B_j = (2I - 3 e eᵀ)/m.
+        let mut b = e * e.transpose() * (T::lit(-3.0) * inverse_mass);
+        let two = T::lit(2.0) * inverse_mass;
+        b[(0, 0)] += two;
+        b[(1, 1)] += two;
+        b[(2, 2)] += two;
+        let x = ldl.solve_matrix(&b);
+        let z = ldl.solve(&y);
+        ws.elimination[j] = x;
+        ws.reduced_rhs[j] = z;
+        let (d_next, b_next) = joint_row(model, state, ws, j + 1);
+        s = d_next - coupling_times(&e, inverse_mass, &x);
+        y = b_next - coupling_times_vec(&e, inverse_mass, &z);
+    }
+    let ldl = Ldl3::factor(&s).ok_or(SolveError::NonPositivePivot { joint: last })?;
+    let mut t = ldl.solve(&y);
+    set_joint_force(ws, last, t);
+    for j in (0..last).rev() {
+        t = ws.reduced_rhs[j] - ws.elimination[j] * t;
+        set_joint_force(ws, j, t);
+    }
+    finish_tensions(model, ws)
+}
+
+#[inline(always)]
+fn set_joint_force<T: Real, const N: usize>(ws: &mut Workspace<T, N>, j: usize, t: Vec3<T>) {
+    if j == 0 {
+        ws.connection_force = t;
+    } else {
+        ws.joint_force[j - 1] = t;
+    }
+}
+
+/// Clears T_N for a free end and checks every force is finite.
+fn finish_tensions<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    ws: &mut Workspace<T, N>,
+) -> Result<(), SolveError> {
+    let n = model.segment_count();
+    if model.decoy().is_none() {
+        ws.joint_force[n - 1] = Vec3::zeros();
+    }
+    let mut sum = ws.connection_force.x + ws.connection_force.y + ws.connection_force.z;
+    for f in &ws.joint_force[..n] {
+        sum += f.x + f.y + f.z;
+    }
+    if sum.finite() {
+        return Ok(());
+    }
+    if !vec_finite(&ws.connection_force) {
+        return Err(SolveError::NonFinite { joint: 0 });
+    }
+    let joint = ws.joint_force[..n]
+        .iter()
+        .position(|f| !vec_finite(f))
+        .map_or(n, |i| i + 1);
+    Err(SolveError::NonFinite { joint })
+}
+
+/// Pass 2, reference: the paper's single-sweep shooting form.
+///
+/// T_0 is unknown; every T_j is carried as an affine function U_j T_0 + u_j of it,
+/// from row j of the system: T_{j+1} = B_j⁻¹ (b_j - D_j T_j - B_{j-1} T_{j-1}), with
+/// B_j⁻¹ = m (I/2 - 3/2 e eᵀ) in closed form. The last row's residual α T_0 + β = 0 fixes
+/// T_0 = -α⁻¹ β. The transverse growth factor of this recurrence is about 2 + √3 per
+/// segment, so round-off is amplified about 3.7^N: unusable beyond a few tens of
+/// segments in f64 and about 8 in f32 (DESIGN §3). Kept for tests and benchmarks only.
+pub fn solve_tensions_shooting<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+) -> Result<(), SolveError> {
+    let last = last_joint(model);
+    let inverse_masses = model.inverse_masses();
+    let masses = model.masses();
+    // Affine carriers for T_{j-1} and T_j: (U, u).
+    let (mut u_prev, mut v_prev) = (Mat3::zeros(), Vec3::zeros());
+    let (mut u_cur, mut v_cur) = (Mat3::identity(), Vec3::zeros());
+    // Store the carriers to recover every T_j once T_0 is known.
+    ws.elimination[0] = u_cur;
+    ws.reduced_rhs[0] = v_cur;
+    for j in 0..last {
+        let (d, b) = joint_row(model, state, ws, j);
+        // Row j: B_{j-1} T_{j-1} + D_j T_j + B_j T_{j+1} = b_j.
+        let mut rest_u = d * u_cur;
+        let mut rest_v = d * v_cur;
+        if j > 0 {
+            let e_up = state.directions[j - 1];
+            rest_u += coupling_times(&e_up, inverse_masses[j - 1], &u_prev);
+            rest_v += coupling_times_vec(&e_up, inverse_masses[j - 1], &v_prev);
+        }
+        let e = state.directions[j];
+        // B_j = (2I - 3 e eᵀ)/m has eigenvalue -1/m along e and 2/m across it, so
+        // B_j⁻¹ = m (I/2 - 3/2 e eᵀ).
+        let binv = (Mat3::identity() * T::lit(0.5) - e * e.transpose() * T::lit(1.5)) * masses[j];
+        let u_next = binv * (-rest_u);
+        let v_next = binv * (b - rest_v);
+        u_prev = u_cur;
+        v_prev = v_cur;
+        u_cur = u_next;
+        v_cur = v_next;
+        if j + 1 < N {
+            ws.elimination[j + 1] = u_cur;
+            ws.reduced_rhs[j + 1] = v_cur;
+        }
+    }
+    // Residual of the last row: B_{last-1} T_{last-1} + D_last T_last - b_last = α T_0 + β.
+    let (d, b) = joint_row(model, state, ws, last);
+    let mut alpha = d * u_cur;
+    let mut beta = d * v_cur - b;
+    if last > 0 {
+        let e_up = state.directions[last - 1];
+        alpha += coupling_times(&e_up, inverse_masses[last - 1], &u_prev);
+        beta += coupling_times_vec(&e_up, inverse_masses[last - 1], &v_prev);
+    }
+    let t0 = alpha
+        .lu()
+        .solve(&(-beta))
+        .ok_or(SolveError::NonPositivePivot { joint: last })?;
+    ws.connection_force = t0;
+    for j in 1..=last {
+        let (u, v) = if j < N {
+            (ws.elimination[j], ws.reduced_rhs[j])
+        } else {
+            (u_cur, v_cur)
+        };
+        ws.joint_force[j - 1] = u * t0 + v;
+    }
+    finish_tensions(model, ws)
+}
+
+/// Pass 3: accelerations from the tensions.
+///
+/// Segment i: dw_i/dt = -(6/(m_i l_i)) e_i x (T_{i-1} + T_i) (hinge torques about the
+/// centre over the thin-rod inertia m l²/12), de_i/dt = w_i x e_i.
+/// Decoy: I dw/dt = M + r x T_N - w x I w (body frame), dq/dt = q ⊗ (0, w)/2.
+pub fn accelerations<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) {
+    let n = model.segment_count();
+    let gains = model.rate_gains();
+    let mut upstream = ws.connection_force;
+    for i in 0..n {
+        let e = state.directions[i];
+        let downstream = ws.joint_force[i];
+        out.directions[i] = state.rates[i].cross(&e);
+        out.rates[i] = -e.cross(&(upstream + downstream)) * gains[i];
+        upstream = downstream;
+    }
+    if let Some((decoy, derived)) = model.decoy() {
+        let rotation = state.decoy_rotation();
+        let wb = state.decoy_rate;
+        let tension_body = rotation.inverse_transform_vector(&ws.joint_force[n - 1]);
+        let inertia = decoy.inertia_cg;
+        let torque = ws.decoy.aero_moment_body + derived.tow_from_cg.cross(&tension_body)
+            - wb.cross(&inertia.component_mul(&wb));
+        out.decoy_rate = torque.component_mul(&derived.inertia_inv);
+        let [w, x, y, z] = state.decoy_attitude;
+        let dq = Quaternion::new(w, x, y, z) * Quaternion::new(T::zero(), wb.x, wb.y, wb.z);
+        let half = T::lit(0.5);
+        out.decoy_attitude = [dq.w * half, dq.i * half, dq.j * half, dq.k * half];
+    } else {
+        out.decoy_attitude = [T::zero(); 4];
+        out.decoy_rate = Vec3::zeros();
+    }
+}
+
+/// All three passes: the state derivative at `state` given the connection-point
+/// kinematics and the air column.
+pub fn evaluate<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    method: TensionMethod,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) -> Result<(), SolveError> {
+    prepare(model, state, connection, air, ws);
+    match method {
+        TensionMethod::TwoSweep => solve_tensions(model, state, ws)?,
+        TensionMethod::Shooting => solve_tensions_shooting(model, state, ws)?,
+    }
+    accelerations(model, state, ws, out);
+    Ok(())
+}

@@ -1,0 +1,340 @@
+//! The solver: model + state + workspace, advanced by fixed-step RK4 (DESIGN §4).
+
+use nalgebra::UnitQuaternion;
+
+use crate::atmosphere::AirColumn;
+use crate::dynamics::{self, TensionMethod, Workspace};
+use crate::error::{InputError, SolveError};
+use crate::model::Model;
+use crate::motion::{AircraftState, FlightPath, PointKinematics};
+use crate::scalar::{Real, Vec3};
+use crate::state::{Derivative, State};
+
+/// A towed system ready to integrate: the model (immutable), the state (a plain
+/// value) and the workspace (scratch, plus the results of the last evaluation).
+///
+/// Determinism: [`Solver::step`] reads only the model, the state, the flight path
+/// and `dt`; the same inputs give bit-identical states.
+#[derive(Clone, Debug)]
+pub struct Solver<T: Real, const N: usize> {
+    model: Model<T, N>,
+    state: State<T, N>,
+    method: TensionMethod,
+    ws: Workspace<T, N>,
+    stage: State<T, N>,
+    slope: Derivative<T, N>,
+    sum: Derivative<T, N>,
+}
+
+impl<T: Real, const N: usize> Solver<T, N> {
+    /// A solver for `model` starting from `state`.
+    ///
+    /// Errors with [`SolveError::NonFinite`] if the state holds NaN or infinity.
+    pub fn new(model: Model<T, N>, state: State<T, N>) -> Result<Self, SolveError> {
+        let mut solver = Solver {
+            model,
+            state: State::default(),
+            method: TensionMethod::TwoSweep,
+            ws: Workspace::default(),
+            stage: State::default(),
+            slope: Derivative::default(),
+            sum: Derivative::default(),
+        };
+        solver.set_state(state)?;
+        Ok(solver)
+    }
+
+    /// Chooses the tension solver (the shooting form is for reference tests only).
+    pub fn set_method(&mut self, method: TensionMethod) {
+        self.method = method;
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model<T, N> {
+        &self.model
+    }
+
+    /// The current state (copy it to save; restore with [`Solver::set_state`]).
+    pub fn state(&self) -> &State<T, N> {
+        &self.state
+    }
+
+    /// Replaces the state after checking it is finite; on error the old state stays.
+    pub fn set_state(&mut self, state: State<T, N>) -> Result<(), SolveError> {
+        if !state.is_finite(self.model.segment_count()) {
+            return Err(SolveError::NonFinite { joint: 0 });
+        }
+        self.state = state;
+        Ok(())
+    }
+
+    /// Advances the state by one RK4 step of `dt` seconds along `path`, then
+    /// renormalises (unit directions, rates perpendicular to them, unit quaternion).
+    ///
+    /// On any error (unusable aircraft state, non-positive pivot, non-finite result)
+    /// the state is left exactly as it was.
+    ///
+    /// `dt` is f64 in every precision so that time advances identically for f32 and
+    /// f64 solvers; the arithmetic of the step uses `dt` rounded to `T`.
+    pub fn step<P: FlightPath<T> + ?Sized>(&mut self, path: &P, dt: f64) -> Result<(), SolveError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(InputError::BadTimeStep.into());
+        }
+        let n = self.model.segment_count();
+        let t0 = self.state.time;
+        let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
+        let half = T::lit(0.5 * dt);
+        let sixth = T::lit(dt / 6.0);
+        let full = T::lit(dt);
+        let two = T::lit(2.0);
+
+        // k1 at the current state.
+        evaluate_at(
+            &self.model,
+            &self.state,
+            path,
+            t0,
+            self.method,
+            &mut self.ws,
+            &mut self.slope,
+        )?;
+        self.sum.assign(&self.slope, n);
+        // k2 at y + dt/2 k1.
+        self.stage.set_stage(&self.state, &self.slope, half, n);
+        evaluate_at(
+            &self.model,
+            &self.stage,
+            path,
+            t_half,
+            self.method,
+            &mut self.ws,
+            &mut self.slope,
+        )?;
+        self.sum.add_scaled(&self.slope, two, n);
+        // k3 at y + dt/2 k2.
+        self.stage.set_stage(&self.state, &self.slope, half, n);
+        evaluate_at(
+            &self.model,
+            &self.stage,
+            path,
+            t_half,
+            self.method,
+            &mut self.ws,
+            &mut self.slope,
+        )?;
+        self.sum.add_scaled(&self.slope, two, n);
+        // k4 at y + dt k3.
+        self.stage.set_stage(&self.state, &self.slope, full, n);
+        evaluate_at(
+            &self.model,
+            &self.stage,
+            path,
+            t_end,
+            self.method,
+            &mut self.ws,
+            &mut self.slope,
+        )?;
+        self.sum.add_scaled(&self.slope, T::one(), n);
+        // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
+        self.stage.set_stage(&self.state, &self.sum, sixth, n);
+        self.stage.time = t_end;
+        self.stage.renormalise(n);
+        if !self.stage.is_finite(n) {
+            let joint = (0..n)
+                .find(|&i| {
+                    !(crate::scalar::vec_finite(&self.stage.directions[i])
+                        && crate::scalar::vec_finite(&self.stage.rates[i]))
+                })
+                .map_or(n, |i| i + 1);
+            return Err(SolveError::NonFinite { joint });
+        }
+        self.state = self.stage;
+        Ok(())
+    }
+
+    /// Evaluates the dynamics at the current state and returns the outputs
+    /// (forces at every joint, positions, decoy attitude, rates, aerodynamics).
+    pub fn outputs<P: FlightPath<T> + ?Sized>(
+        &mut self,
+        path: &P,
+    ) -> Result<Outputs<'_, T, N>, SolveError> {
+        evaluate_at(
+            &self.model,
+            &self.state,
+            path,
+            self.state.time,
+            self.method,
+            &mut self.ws,
+            &mut self.slope,
+        )?;
+        Ok(Outputs {
+            model: &self.model,
+            state: &self.state,
+            ws: &self.ws,
+            derivative: &self.slope,
+        })
+    }
+
+    /// The state derivative at the current state (for tests and references).
+    pub fn derivative<P: FlightPath<T> + ?Sized>(
+        &mut self,
+        path: &P,
+    ) -> Result<Derivative<T, N>, SolveError> {
+        evaluate_at(
+            &self.model,
+            &self.state,
+            path,
+            self.state.time,
+            self.method,
+            &mut self.ws,
+            &mut self.slope,
+        )?;
+        Ok(self.slope)
+    }
+}
+
+/// Samples the flight path at `t`, checks it, and evaluates the dynamics.
+pub(crate) fn evaluate_at<T: Real, const N: usize, P: FlightPath<T> + ?Sized>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    path: &P,
+    t: f64,
+    method: TensionMethod,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) -> Result<(), SolveError> {
+    let (connection, air) = connection_and_air(model, &path.state_at(t))?;
+    dynamics::evaluate(model, state, &connection, &air, method, ws, out)
+}
+
+/// Validates an aircraft state and derives the connection-point kinematics and the air column about it.
+pub fn connection_and_air<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    aircraft: &AircraftState<T>,
+) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
+    aircraft.validate()?;
+    let connection = aircraft.point(&model.params().connection_point);
+    let air = AirColumn::new(
+        &model.params().environment.atmosphere,
+        -connection.position.z,
+    )?;
+    Ok((connection, air))
+}
+
+/// Decoy outputs of one evaluation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DecoyOutputs<T: Real> {
+    /// CG position, NED, m.
+    pub cg_position: Vec3<T>,
+    /// CG velocity, NED, m/s.
+    pub cg_velocity: Vec3<T>,
+    /// Attitude, body (FRD) to NED.
+    pub attitude: UnitQuaternion<T>,
+    /// Euler angles (roll, pitch, yaw), rad, ZYX convention, body relative to NED.
+    pub euler: (T, T, T),
+    /// Angular velocity, body frame, rad/s.
+    pub rate: Vec3<T>,
+    /// Angular acceleration, body frame, rad/s^2.
+    pub angular_acceleration: Vec3<T>,
+    /// Total angle of attack, rad.
+    pub angle_of_attack: T,
+    /// Airspeed at the CG, m/s.
+    pub airspeed: T,
+    /// Aerodynamic force, NED, N.
+    pub aero_force: Vec3<T>,
+    /// Aerodynamic moment about the CG, body frame, N m.
+    pub aero_moment: Vec3<T>,
+}
+
+/// A view of the results of the last evaluation.
+#[derive(Clone, Copy, Debug)]
+pub struct Outputs<'a, T: Real, const N: usize> {
+    model: &'a Model<T, N>,
+    state: &'a State<T, N>,
+    ws: &'a Workspace<T, N>,
+    derivative: &'a Derivative<T, N>,
+}
+
+impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
+    /// Time of the evaluated state, s.
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+    /// Number of segments.
+    pub fn segment_count(&self) -> usize {
+        self.model.segment_count()
+    }
+    /// Force T_j at joint `j` (0 = connection point, N = towing point), exerted by the
+    /// upstream body on the downstream body, NED, N. A taut cable pulls segment j+1
+    /// toward the aircraft, so T_j points roughly along -e_{j+1}.
+    pub fn joint_force(&self, j: usize) -> Vec3<T> {
+        if j == 0 {
+            self.ws.connection_force
+        } else {
+            self.ws.joint_force[j - 1]
+        }
+    }
+    /// Cable tension at joint `j`, N: the force's component along the cable, positive
+    /// when the cable pulls (|T_j| signed by -T_j . e).
+    pub fn tension(&self, j: usize) -> T {
+        let f = self.joint_force(j);
+        let n = self.model.segment_count();
+        let e = self.state.directions[if j == 0 { 0 } else { (j - 1).min(n - 1) }];
+        let magnitude = f.norm();
+        if f.dot(&e) > T::zero() {
+            -magnitude
+        } else {
+            magnitude
+        }
+    }
+    /// Tension at the connection point (joint 0), N.
+    pub fn connection_tension(&self) -> T {
+        self.tension(0)
+    }
+    /// Tension at the towing point (joint N), N.
+    pub fn tow_tension(&self) -> T {
+        self.tension(self.model.segment_count())
+    }
+    /// Position of joint `j`, NED, m (0 = connection point).
+    pub fn joint_position(&self, j: usize) -> Vec3<T> {
+        if j == 0 {
+            self.ws.connection.position
+        } else {
+            self.ws.joint_position[j - 1]
+        }
+    }
+    /// Velocity of joint `j`, NED, m/s.
+    pub fn joint_velocity(&self, j: usize) -> Vec3<T> {
+        if j == 0 {
+            self.ws.connection.velocity
+        } else {
+            self.ws.joint_velocity[j - 1]
+        }
+    }
+    /// Angular acceleration of segment `i` (1-based), NED, rad/s^2.
+    pub fn segment_angular_acceleration(&self, i: usize) -> Vec3<T> {
+        self.derivative.rates[i - 1]
+    }
+    /// The state derivative of this evaluation.
+    pub fn derivative(&self) -> &Derivative<T, N> {
+        self.derivative
+    }
+    /// Decoy outputs, or `None` for a free end.
+    pub fn decoy(&self) -> Option<DecoyOutputs<T>> {
+        self.model.decoy()?;
+        let d = &self.ws.decoy;
+        let attitude = self.state.decoy_rotation();
+        Some(DecoyOutputs {
+            cg_position: d.cg_position,
+            cg_velocity: d.cg_velocity,
+            attitude,
+            euler: attitude.euler_angles(),
+            rate: self.state.decoy_rate,
+            angular_acceleration: self.derivative.decoy_rate,
+            angle_of_attack: d.angle_of_attack,
+            airspeed: d.airspeed,
+            aero_force: d.aero_force,
+            aero_moment: d.aero_moment_body,
+        })
+    }
+}

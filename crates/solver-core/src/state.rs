@@ -1,0 +1,132 @@
+//! The integrated state: a plain value that can be copied, saved and restored.
+
+use nalgebra::{Quaternion, UnitQuaternion};
+
+use crate::scalar::{Real, Vec3};
+
+/// State of the cable and decoy (2N + 3 degrees of freedom).
+///
+/// Invariants after every step: each `directions[i]` is a unit vector, each
+/// `rates[i]` is perpendicular to `directions[i]`, `decoy_attitude` is a unit
+/// quaternion. Entries beyond the model's segment count are unused and zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct State<T: Real, const N: usize> {
+    /// Simulation time, s. Always f64: an f32 clock accumulating 1 ms steps drifts by
+    /// about 1e-4 s per 1000 steps and would shift manoeuvre events.
+    pub time: f64,
+    /// Unit direction of segment i+1, from joint i toward joint i+1 (toward the decoy), NED.
+    pub directions: [Vec3<T>; N],
+    /// Angular velocity of segment i+1, NED, rad/s (perpendicular to its direction).
+    pub rates: [Vec3<T>; N],
+    /// Decoy attitude, body (FRD) to NED, `[w, x, y, z]` (unused for a free end).
+    pub decoy_attitude: [T; 4],
+    /// Decoy angular velocity, decoy body frame, rad/s (unused for a free end).
+    pub decoy_rate: Vec3<T>,
+}
+
+/// Time derivative of a [`State`] (same layout).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Derivative<T: Real, const N: usize> {
+    /// d(direction)/dt = w x e.
+    pub directions: [Vec3<T>; N],
+    /// Angular acceleration of each segment, NED.
+    pub rates: [Vec3<T>; N],
+    /// dq/dt = q (x) (0, w_body) / 2.
+    pub decoy_attitude: [T; 4],
+    /// Decoy angular acceleration, body frame.
+    pub decoy_rate: Vec3<T>,
+}
+
+impl<T: Real, const N: usize> Default for State<T, N> {
+    fn default() -> Self {
+        State {
+            time: 0.0,
+            directions: [Vec3::zeros(); N],
+            rates: [Vec3::zeros(); N],
+            decoy_attitude: [T::one(), T::zero(), T::zero(), T::zero()],
+            decoy_rate: Vec3::zeros(),
+        }
+    }
+}
+
+impl<T: Real, const N: usize> Default for Derivative<T, N> {
+    fn default() -> Self {
+        Derivative {
+            directions: [Vec3::zeros(); N],
+            rates: [Vec3::zeros(); N],
+            decoy_attitude: [T::zero(); 4],
+            decoy_rate: Vec3::zeros(),
+        }
+    }
+}
+
+impl<T: Real, const N: usize> State<T, N> {
+    /// The decoy attitude as a unit quaternion.
+    pub fn decoy_rotation(&self) -> UnitQuaternion<T> {
+        let [w, x, y, z] = self.decoy_attitude;
+        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+    }
+
+    /// `self = base + h * d` over the first `count` segments (RK4 stage).
+    pub(crate) fn set_stage(&mut self, base: &Self, d: &Derivative<T, N>, h: T, count: usize) {
+        for i in 0..count {
+            self.directions[i] = base.directions[i] + d.directions[i] * h;
+            self.rates[i] = base.rates[i] + d.rates[i] * h;
+        }
+        for k in 0..4 {
+            self.decoy_attitude[k] = base.decoy_attitude[k] + d.decoy_attitude[k] * h;
+        }
+        self.decoy_rate = base.decoy_rate + d.decoy_rate * h;
+    }
+
+    /// Restores the invariants: unit directions, rates perpendicular to them, unit quaternion.
+    pub(crate) fn renormalise(&mut self, count: usize) {
+        for i in 0..count {
+            let e = self.directions[i] / self.directions[i].norm();
+            self.directions[i] = e;
+            let w = self.rates[i];
+            self.rates[i] = w - e * w.dot(&e);
+        }
+        let n = self
+            .decoy_attitude
+            .iter()
+            .fold(T::zero(), |a, q| a + *q * *q)
+            .sqrt();
+        for q in &mut self.decoy_attitude {
+            *q /= n;
+        }
+    }
+
+    /// True when every used value is finite.
+    pub fn is_finite(&self, count: usize) -> bool {
+        self.time.is_finite()
+            && self.directions[..count]
+                .iter()
+                .chain(self.rates[..count].iter())
+                .all(crate::scalar::vec_finite)
+            && self.decoy_attitude.iter().all(|q| q.finite())
+            && crate::scalar::vec_finite(&self.decoy_rate)
+    }
+}
+
+impl<T: Real, const N: usize> Derivative<T, N> {
+    /// `self = d` (first RK4 stage of the weighted sum).
+    pub(crate) fn assign(&mut self, d: &Self, count: usize) {
+        self.directions[..count].copy_from_slice(&d.directions[..count]);
+        self.rates[..count].copy_from_slice(&d.rates[..count]);
+        self.decoy_attitude = d.decoy_attitude;
+        self.decoy_rate = d.decoy_rate;
+    }
+
+    /// `self += w * d` (RK4 weighted sum).
+    pub(crate) fn add_scaled(&mut self, d: &Self, w: T, count: usize) {
+        for i in 0..count {
+            self.directions[i] += d.directions[i] * w;
+            self.rates[i] += d.rates[i] * w;
+        }
+        for k in 0..4 {
+            self.decoy_attitude[k] += d.decoy_attitude[k] * w;
+        }
+        self.decoy_rate += d.decoy_rate * w;
+    }
+}

@@ -1,0 +1,371 @@
+//! `cargo xtask setup`: make the machine ready and say what was found and done.
+//!
+//! Target code (`thumbv7em-none-eabihf`) is built with the rustup toolchain when
+//! `rustup target add` works. When it cannot download, the Debian compiler is
+//! installed and linked as the rustup toolchain `debian`, and `core` is built from
+//! source (see `/work/shared/TOOLCHAIN.md`). The chosen mode is written to
+//! `target/xtask-toolchain` (`rustup` or `debian`) for later tools.
+//!
+//! `XTASK_TOOLCHAIN=debian` forces the Debian fallback (to exercise it in CI).
+
+use std::fs;
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+
+use crate::process::{self, Result};
+
+/// The bare-metal target of the firmware and of the solver's no_std build.
+pub const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// Time limit of one `rustup target add` / `rustup component add` attempt.
+const RUSTUP_TIMEOUT: Duration = Duration::from_secs(90);
+/// Attempts of `rustup target add` before falling back (one once stalled > 60 s).
+const RUSTUP_ATTEMPTS: u32 = 2;
+
+/// Debian package and the binary it provides: QEMU for the Cortex-M boards.
+const QEMU: (&str, &str) = ("qemu-system-arm", "qemu-system-arm");
+
+/// Debian packages of the fallback cross toolchain.
+const DEBIAN_TOOLCHAIN_PACKAGES: &[&str] = &[
+    "rustc-web",
+    "cargo-web",
+    "rust-web-src",
+    "binutils-arm-none-eabi",
+];
+
+/// Name under which the Debian compiler is linked into rustup.
+const DEBIAN_TOOLCHAIN: &str = "debian";
+
+/// `-Z` flags the Debian toolchain needs to build `core` for the target.
+const BUILD_STD_FLAGS: &[&str] = &[
+    "-Z",
+    "build-std=core,compiler_builtins",
+    "-Z",
+    "build-std-features=compiler-builtins-mem",
+];
+
+/// Which compiler builds target code.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Toolchain {
+    /// The rustup toolchain with the prebuilt `thumbv7em-none-eabihf` standard library.
+    Rustup,
+    /// Debian's compiler (rustup toolchain `debian`), `core` built from source.
+    Debian,
+}
+
+impl Toolchain {
+    fn name(self) -> &'static str {
+        match self {
+            Toolchain::Rustup => "rustup",
+            Toolchain::Debian => "debian",
+        }
+    }
+
+    /// A `cargo` command for target code, run in `dir`, whose subcommand and
+    /// arguments are `args`; the Debian mode adds `RUSTC_BOOTSTRAP=1` and the
+    /// `-Z build-std` flags.
+    pub fn cargo(self, dir: &Path, args: &[&str]) -> Command {
+        let mut cmd = match self {
+            Toolchain::Rustup => {
+                let mut cmd = Command::new("cargo");
+                cmd.args(args);
+                cmd
+            }
+            Toolchain::Debian => {
+                let mut cmd = Command::new("rustup");
+                cmd.args(["run", DEBIAN_TOOLCHAIN, "cargo"])
+                    .args(args)
+                    .args(BUILD_STD_FLAGS)
+                    .env("RUSTC_BOOTSTRAP", "1");
+                cmd
+            }
+        };
+        cmd.current_dir(dir);
+        cmd
+    }
+}
+
+/// How much of the machine to prepare.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scope {
+    /// Host tools only (the main job needs neither the target nor QEMU).
+    Host,
+    /// Everything: lint components, the target toolchain and QEMU.
+    Full,
+}
+
+/// What setup found and did, for the summary.
+#[derive(Default)]
+struct Report {
+    installed: Vec<String>,
+    present: Vec<String>,
+    missing: Vec<String>,
+}
+
+/// Runs `apt-get`, with `sudo` when not root, updating the index at most once.
+#[derive(Default)]
+struct Apt {
+    updated: bool,
+}
+
+impl Apt {
+    fn command(args: &[&str]) -> Result<Command> {
+        let manual = format!("apt-get {}", args.join(" "));
+        if process::which("apt-get").is_none() {
+            return Err(format!(
+                "apt-get not found; install by hand the equivalent of: {manual}"
+            ));
+        }
+        let mut cmd = if is_root() {
+            Command::new("apt-get")
+        } else if process::which("sudo").is_some() {
+            let mut cmd = Command::new("sudo");
+            cmd.args(["DEBIAN_FRONTEND=noninteractive", "apt-get"]);
+            cmd
+        } else {
+            return Err(format!(
+                "not root and sudo is not available; as root run: {manual}"
+            ));
+        };
+        cmd.env("DEBIAN_FRONTEND", "noninteractive")
+            .args(["-o", "DPkg::Lock::Timeout=300"])
+            .args(args);
+        Ok(cmd)
+    }
+
+    fn install(&mut self, packages: &[&str]) -> Result<()> {
+        if !self.updated {
+            self.updated = true;
+            // A partly failing index update (one unreachable mirror) should not stop
+            // the install; apt-get install says clearly if a package is unavailable.
+            if let Err(e) = process::run(&mut Self::command(&["update"])?) {
+                println!("warning: {e}; trying the install anyway");
+            }
+        }
+        let mut args = vec!["install", "-y", "--no-install-recommends"];
+        args.extend_from_slice(packages);
+        process::run(&mut Self::command(&args)?)
+    }
+}
+
+fn is_root() -> bool {
+    process::output(Command::new("id").arg("-u")).is_ok_and(|uid| uid.trim() == "0")
+}
+
+fn dpkg_installed(package: &str) -> bool {
+    process::output(Command::new("dpkg-query").args(["-W", "-f=${Status}", package]))
+        .is_ok_and(|status| status.trim_end().ends_with("install ok installed"))
+}
+
+/// First line of `<program> <args>`'s output, if it runs.
+fn version(program: &str, args: &[&str]) -> Option<String> {
+    let out = process::output(Command::new(program).args(args)).ok()?;
+    out.lines().next().map(|l| l.trim().to_owned())
+}
+
+/// Prepares the machine for `scope`; returns the toolchain mode for target code
+/// (`None` for [`Scope::Host`]).
+pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
+    println!("== setup ({})", root.display());
+    let mut report = Report::default();
+    let mut apt = Apt::default();
+
+    let cargo = version("cargo", &["--version"])
+        .ok_or("`cargo --version` does not run: is Rust installed (https://rustup.rs)?")?;
+    println!("found: {cargo}");
+    report.present.push("cargo".into());
+
+    let toolchain = match scope {
+        Scope::Host => {
+            println!("host job: the target toolchain and QEMU are not needed");
+            None
+        }
+        Scope::Full => {
+            components(&mut report);
+            let toolchain = target(root, &mut report, &mut apt)?;
+            qemu(&mut report, &mut apt)?;
+            Some(toolchain)
+        }
+    };
+
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "nothing".to_owned()
+        } else {
+            v.join(", ")
+        }
+    };
+    println!("installed: {}", list(&report.installed));
+    println!("already present: {}", list(&report.present));
+    if !report.missing.is_empty() {
+        println!(
+            "not available (stages needing them are skipped): {}",
+            list(&report.missing)
+        );
+    }
+    if let Some(tc) = toolchain {
+        println!("target code toolchain: {}", tc.name());
+    }
+    Ok(toolchain)
+}
+
+/// rustfmt and clippy: try `rustup component add`; their absence is not fatal here
+/// (`test` skips fmt without rustfmt, and the clippy stage reports its own failure).
+fn components(report: &mut Report) {
+    for (component, probe) in [("rustfmt", "fmt"), ("clippy", "clippy")] {
+        if process::succeeds(Command::new("cargo").args([probe, "--version"])) {
+            println!("found: {component}");
+            report.present.push(component.into());
+            continue;
+        }
+        println!("missing: {component}; installing it with rustup");
+        let added = process::which("rustup").is_some()
+            && process::run_with_timeout(
+                Command::new("rustup").args(["component", "add", component]),
+                RUSTUP_TIMEOUT,
+            )
+            .inspect_err(|e| println!("warning: {e}"))
+            .is_ok();
+        if added {
+            report
+                .installed
+                .push(format!("{component} (rustup component)"));
+        } else {
+            println!(
+                "warning: {component} is not available; install it with `rustup component add {component}`"
+            );
+            report.missing.push(component.into());
+        }
+    }
+}
+
+/// Makes `thumbv7em-none-eabihf` buildable; rustup first, Debian as fallback.
+fn target(root: &Path, report: &mut Report, apt: &mut Apt) -> Result<Toolchain> {
+    let forced = std::env::var("XTASK_TOOLCHAIN").is_ok_and(|v| v == "debian");
+    let rustup = if forced {
+        Err("XTASK_TOOLCHAIN=debian is set".to_owned())
+    } else {
+        rustup_target(report)
+    };
+    let toolchain = match rustup {
+        Ok(()) => Toolchain::Rustup,
+        Err(e) => {
+            println!("rustup cannot provide {TARGET}: {e}");
+            println!("falling back to the Debian toolchain (core built from source)");
+            debian_toolchain(report, apt)?;
+            Toolchain::Debian
+        }
+    };
+    record(root, toolchain)?;
+    Ok(toolchain)
+}
+
+fn rustup_target(report: &mut Report) -> Result<()> {
+    if process::which("rustup").is_none() {
+        return Err("rustup not found on PATH".into());
+    }
+    let installed =
+        process::output(Command::new("rustup").args(["target", "list", "--installed"]))?;
+    if installed.lines().any(|l| l.trim() == TARGET) {
+        println!("found: Rust target {TARGET} (rustup)");
+        report.present.push(format!("{TARGET} (rustup)"));
+        return Ok(());
+    }
+    println!("missing: Rust target {TARGET}; installing it with rustup");
+    let mut last = String::new();
+    for attempt in 1..=RUSTUP_ATTEMPTS {
+        match process::run_with_timeout(
+            Command::new("rustup").args(["target", "add", TARGET]),
+            RUSTUP_TIMEOUT,
+        ) {
+            Ok(()) => {
+                report.installed.push(format!("{TARGET} (rustup)"));
+                return Ok(());
+            }
+            Err(e) => {
+                println!("attempt {attempt}/{RUSTUP_ATTEMPTS} failed: {e}");
+                last = e;
+            }
+        }
+    }
+    Err(last)
+}
+
+fn debian_toolchain(report: &mut Report, apt: &mut Apt) -> Result<()> {
+    let missing: Vec<&str> = DEBIAN_TOOLCHAIN_PACKAGES
+        .iter()
+        .copied()
+        .filter(|p| !dpkg_installed(p))
+        .collect();
+    for p in DEBIAN_TOOLCHAIN_PACKAGES
+        .iter()
+        .filter(|p| !missing.contains(p))
+    {
+        println!("found: Debian package {p}");
+        report.present.push(format!("{p} (apt)"));
+    }
+    if !missing.is_empty() {
+        println!(
+            "missing: Debian packages {}; installing them",
+            missing.join(" ")
+        );
+        apt.install(&missing)
+            .map_err(|e| format!("cannot install the fallback toolchain: {e}"))?;
+        report
+            .installed
+            .extend(missing.iter().map(|p| format!("{p} (apt)")));
+    }
+
+    let toolchains = process::output(Command::new("rustup").args(["toolchain", "list"]))?;
+    let linked = toolchains
+        .lines()
+        .any(|l| l.split_whitespace().next() == Some(DEBIAN_TOOLCHAIN));
+    if linked {
+        println!("found: rustup toolchain `{DEBIAN_TOOLCHAIN}`");
+        report
+            .present
+            .push(format!("rustup toolchain {DEBIAN_TOOLCHAIN}"));
+    } else {
+        process::run(Command::new("rustup").args(["toolchain", "link", DEBIAN_TOOLCHAIN, "/usr"]))?;
+        report
+            .installed
+            .push(format!("rustup toolchain {DEBIAN_TOOLCHAIN} -> /usr"));
+    }
+    let rustc = process::output(Command::new("rustup").args([
+        "run",
+        DEBIAN_TOOLCHAIN,
+        "rustc",
+        "--version",
+    ]))
+    .map_err(|e| format!("the Debian toolchain does not run: {e}"))?;
+    println!("using: {} (toolchain `{DEBIAN_TOOLCHAIN}`)", rustc.trim());
+    Ok(())
+}
+
+/// Writes the chosen mode to `target/xtask-toolchain`.
+fn record(root: &Path, toolchain: Toolchain) -> Result<()> {
+    let dir = root.join("target");
+    let file = dir.join("xtask-toolchain");
+    fs::create_dir_all(&dir)
+        .and_then(|()| fs::write(&file, format!("{}\n", toolchain.name())))
+        .map_err(|e| format!("cannot write {}: {e}", file.display()))
+}
+
+fn qemu(report: &mut Report, apt: &mut Apt) -> Result<()> {
+    let (package, binary) = QEMU;
+    if process::which(binary).is_some() {
+        let v = version(binary, &["--version"]).unwrap_or_default();
+        println!("found: {binary} ({v})");
+        report.present.push(format!("{package} (apt)"));
+        return Ok(());
+    }
+    println!("missing: {binary}; installing Debian package {package}");
+    apt.install(&[package])
+        .map_err(|e| format!("cannot install {package}: {e}"))?;
+    let v = version(binary, &["--version"])
+        .ok_or_else(|| format!("{package} was installed but `{binary} --version` does not run"))?;
+    println!("now present: {binary} ({v})");
+    report.installed.push(format!("{package} (apt)"));
+    Ok(())
+}
