@@ -1,1 +1,788 @@
-fn main() {}
+//! `decoy`: the towed-decoy solver on the command line.
+//!
+//! - `decoy pendulum`: the compound multi-pendulum validation case (DESIGN §7.1),
+//!   integrated with the O(N) tension recurrence or the dense mass-matrix reference,
+//!   sampled at chosen times.
+//! - `decoy trim`: the steady level-flight equilibrium of the configured towed
+//!   system (DESIGN §5): decoy pitch and position, cable tension profile.
+//!
+//! Human-readable output by default, `--json` for machines. Errors are one line
+//! `error: ...` on stderr; the exit code is 2 for usage and configuration errors and
+//! 1 when the solver fails.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use decoy_config::{ConfigError, SystemConfig};
+use serde::Serialize;
+use solver_core::dense::evaluate_dense;
+use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
+use solver_core::solver::connection_and_air;
+use solver_core::{
+    AircraftState, Derivative, Model, SegmentLayout, Solver, State, Uniform, Vec3, pendulum_energy,
+    pendulum_initial_state, reference_pendulum, trim,
+};
+
+/// Segment capacity of the pendulum solver.
+const PENDULUM_CAPACITY: usize = 512;
+/// Segment capacity of the towed-system model used by `trim`.
+const TRIM_CAPACITY: usize = 512;
+/// Stack of the worker thread (the fixed-capacity solver types are large values).
+const WORKER_STACK_BYTES: usize = 64 << 20;
+/// Altitude range accepted by `trim`, m.
+const ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
+/// Largest Mach number accepted by `trim`.
+const MAX_MACH: f64 = 2.0;
+/// Relative tolerance for a sample time to be a whole number of time steps.
+const TIME_MULTIPLE_TOLERANCE: f64 = 1e-9;
+/// Most time steps a pendulum run may take.
+const MAX_STEPS: f64 = 1e12;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "decoy",
+    version,
+    about = "Towed-decoy cable dynamics: pendulum validation runs and steady-flight trim"
+)]
+struct Cli {
+    /// System configuration TOML (default: the built-in reference system).
+    #[arg(long, global = true, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Print machine-readable JSON instead of the human-readable report.
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Compound multi-pendulum (N rods of 0.1 m and 0.5 kg hinged at a fixed point,
+    /// released at rest from -60 deg), sampled at the given times.
+    Pendulum(PendulumArgs),
+    /// Steady level-flight trim of the configured towed system.
+    Trim(TrimArgs),
+}
+
+#[derive(Args, Debug)]
+struct PendulumArgs {
+    /// Number of rods.
+    #[arg(long, value_name = "N")]
+    segments: usize,
+    /// End of the simulated interval, s.
+    #[arg(long, value_name = "T")]
+    t_end: f64,
+    /// RK4 time step, s.
+    #[arg(long, value_name = "DT")]
+    dt: f64,
+    /// Sample times, s, comma separated; each a whole number of time steps, at most --t-end.
+    #[arg(long, value_name = "t1,t2,...", value_delimiter = ',', num_args = 1.., required = true, allow_negative_numbers = true)]
+    times: Vec<f64>,
+    /// Which dynamics to integrate.
+    #[arg(long, value_enum, default_value_t = Method::Recurrence)]
+    solver: Method,
+}
+
+#[derive(Args, Debug)]
+struct TrimArgs {
+    /// Aircraft altitude, m (0 to 20000).
+    #[arg(long, value_name = "H", allow_negative_numbers = true)]
+    altitude: f64,
+    /// Aircraft Mach number (above 0, at most 2).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    mach: f64,
+    /// Number of cable segments (default: the configuration's solver.segments_host).
+    #[arg(long, value_name = "N")]
+    segments: Option<usize>,
+    /// Grade the segments geometrically by this length ratio, short at the decoy (1 = uniform).
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    grading: Option<f64>,
+}
+
+/// The dynamics `decoy pendulum` integrates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Method {
+    /// The O(N) two-sweep tension recurrence (the solver).
+    Recurrence,
+    /// The dense mass-matrix (Kane) reference, O(N^3) per evaluation.
+    Dense,
+}
+
+/// Why a command failed, and so its exit code.
+#[derive(Debug)]
+enum Failure {
+    /// Bad command line or configuration: exit code 2.
+    Usage(String),
+    /// The solver could not produce a result: exit code 1.
+    Solver(String),
+}
+
+impl Failure {
+    fn exit_code(&self) -> u8 {
+        match self {
+            Failure::Usage(_) => 2,
+            Failure::Solver(_) => 1,
+        }
+    }
+    fn message(&self) -> &str {
+        match self {
+            Failure::Usage(m) | Failure::Solver(m) => m,
+        }
+    }
+}
+
+impl From<ConfigError> for Failure {
+    fn from(e: ConfigError) -> Self {
+        Failure::Usage(e.to_string())
+    }
+}
+
+fn usage(message: impl Into<String>) -> Failure {
+    Failure::Usage(message.into())
+}
+
+fn solver_failure(context: &str, e: impl std::fmt::Display) -> Failure {
+    Failure::Solver(format!("{context}: {e}"))
+}
+
+fn step_failure(t: f64, e: impl std::fmt::Display) -> Failure {
+    Failure::Solver(format!(
+        "integration failed in the step from t = {t} s: {e} (is --dt too large?)"
+    ))
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                e.exit();
+            }
+            // clap's report spans several lines (message, tips, usage): keep the message's paragraph.
+            let rendered = e.render().to_string();
+            let paragraph = rendered
+                .trim_start()
+                .split("\n\n")
+                .next()
+                .unwrap_or_default();
+            let words: Vec<&str> = paragraph.split_whitespace().collect();
+            let message = words.join(" ");
+            let message = message.strip_prefix("error:").unwrap_or(&message).trim();
+            eprintln!("error: {message} (see `decoy --help`)");
+            return ExitCode::from(2);
+        }
+    };
+    let worker = std::thread::Builder::new()
+        .name("decoy".into())
+        .stack_size(WORKER_STACK_BYTES)
+        .spawn(move || run(&cli));
+    let result = match worker {
+        Ok(handle) => handle.join().unwrap_or_else(|_| {
+            Err(Failure::Solver(
+                "internal error: the solver panicked".into(),
+            ))
+        }),
+        Err(e) => Err(Failure::Solver(format!(
+            "cannot start the worker thread: {e}"
+        ))),
+    };
+    match result {
+        Ok(text) => {
+            let mut out = std::io::stdout().lock();
+            // A closed pipe (e.g. `| head`) is not an error of the command.
+            let _ = out.write_all(text.as_bytes()).and_then(|()| out.flush());
+            ExitCode::SUCCESS
+        }
+        Err(failure) => {
+            eprintln!("error: {}", failure.message().replace('\n', " "));
+            ExitCode::from(failure.exit_code())
+        }
+    }
+}
+
+fn run(cli: &Cli) -> Result<String, Failure> {
+    // An explicitly named configuration is loaded (and so checked) whatever the command.
+    let config = match &cli.config {
+        Some(path) => Some(SystemConfig::from_file(path)?),
+        None => None,
+    };
+    match &cli.command {
+        Command::Pendulum(args) => pendulum(args, cli.json),
+        Command::Trim(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            trim_command(&config, args, cli.json)
+        }
+    }
+}
+
+// ---------------------------------------------------------------- pendulum
+
+/// One pendulum sample, in the pendulum's frame (hinge at the origin, x horizontal, z up).
+#[derive(Serialize, Debug, Clone, Copy)]
+struct PendulumSample {
+    /// Time, s.
+    t: f64,
+    /// Position of the free end, `[x, z]`, m.
+    tip: [f64; 2],
+    /// Magnitude of the hinge force on rod 1, N.
+    #[serde(rename = "support_tension_N")]
+    support_tension_n: f64,
+    /// Kinetic plus potential energy (zero at hinge height), J.
+    #[serde(rename = "energy_J")]
+    energy_j: f64,
+}
+
+#[derive(Serialize, Debug)]
+struct PendulumReport {
+    segments: usize,
+    dt: f64,
+    samples: Vec<PendulumSample>,
+}
+
+type PendulumState = State<f64, PENDULUM_CAPACITY>;
+type PendulumModel = Model<f64, PENDULUM_CAPACITY>;
+
+/// Checks the arguments and returns the step count of each requested time.
+fn pendulum_steps(args: &PendulumArgs) -> Result<Vec<u64>, Failure> {
+    let n = args.segments;
+    if n == 0 {
+        return Err(usage("--segments must be at least 1"));
+    }
+    if n > PENDULUM_CAPACITY {
+        return Err(usage(format!(
+            "--segments {n}: the pendulum solver holds at most {PENDULUM_CAPACITY} segments"
+        )));
+    }
+    if !(args.dt.is_finite() && args.dt > 0.0) {
+        return Err(usage(format!(
+            "--dt must be a positive finite number of seconds, got {}",
+            args.dt
+        )));
+    }
+    if !(args.t_end.is_finite() && args.t_end > 0.0) {
+        return Err(usage(format!(
+            "--t-end must be a positive finite number of seconds, got {}",
+            args.t_end
+        )));
+    }
+    if args.t_end / args.dt > MAX_STEPS {
+        return Err(usage(format!(
+            "--t-end / --dt asks for more than {MAX_STEPS:e} steps"
+        )));
+    }
+    args.times
+        .iter()
+        .map(|&t| {
+            if !t.is_finite() {
+                return Err(usage(format!("--times: {t} is not a finite time")));
+            }
+            if t < 0.0 {
+                return Err(usage(format!("--times: {t} is negative")));
+            }
+            if t > args.t_end {
+                return Err(usage(format!(
+                    "--times: {t} is beyond --t-end {}",
+                    args.t_end
+                )));
+            }
+            let steps = (t / args.dt).round();
+            if (steps * args.dt - t).abs() > TIME_MULTIPLE_TOLERANCE * t.max(args.dt) {
+                return Err(usage(format!(
+                    "--times: {t} is not a whole number of time steps of --dt {}",
+                    args.dt
+                )));
+            }
+            Ok(steps as u64)
+        })
+        .collect()
+}
+
+fn pendulum(args: &PendulumArgs, json: bool) -> Result<String, Failure> {
+    let steps = pendulum_steps(args)?;
+    let n = args.segments;
+    let model: PendulumModel = reference_pendulum(n).map_err(|e| usage(e.to_string()))?;
+    let initial: PendulumState = pendulum_initial_state(n);
+    let values = match args.solver {
+        Method::Recurrence => integrate_recurrence(model, initial, args.dt, &steps)?,
+        Method::Dense => integrate_dense(&model, initial, args.dt, &steps)?,
+    };
+    let samples: Vec<PendulumSample> = args
+        .times
+        .iter()
+        .zip(values)
+        .map(|(&t, (tip, support_tension_n, energy_j))| PendulumSample {
+            t,
+            tip,
+            support_tension_n,
+            energy_j,
+        })
+        .collect();
+    let report = PendulumReport {
+        segments: n,
+        dt: args.dt,
+        samples,
+    };
+    if json {
+        return Ok(to_json(&report));
+    }
+    Ok(pendulum_text(&report, args.solver))
+}
+
+/// Tip, support tension, energy at a sample.
+type SampleValues = ([f64; 2], f64, f64);
+
+/// Distinct step counts in increasing order, and for each requested time its index among them.
+fn schedule(steps: &[u64]) -> (Vec<u64>, Vec<usize>) {
+    let mut distinct = steps.to_vec();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let index = steps
+        .iter()
+        .map(|s| distinct.binary_search(s).unwrap_or(0))
+        .collect();
+    (distinct, index)
+}
+
+/// Runs `step` up to each distinct sample step count and records `sample` there;
+/// returns the samples in the order of `steps`.
+fn sample_run(
+    steps: &[u64],
+    mut step: impl FnMut() -> Result<(), Failure>,
+    mut sample: impl FnMut() -> Result<SampleValues, Failure>,
+) -> Result<Vec<SampleValues>, Failure> {
+    let (distinct, index) = schedule(steps);
+    let mut recorded = Vec::with_capacity(distinct.len());
+    let mut done = 0u64;
+    for &target in &distinct {
+        while done < target {
+            step()?;
+            done += 1;
+        }
+        recorded.push(sample()?);
+    }
+    Ok(index.iter().map(|&i| recorded[i]).collect())
+}
+
+fn fixed_anchor() -> Uniform<f64> {
+    Uniform {
+        initial: AircraftState::fixed(Vec3::zeros()),
+    }
+}
+
+/// The pendulum frame: x horizontal, z up (the solver's NED z is down).
+fn pendulum_point(p: &Vec3<f64>) -> [f64; 2] {
+    [p.x, -p.z]
+}
+
+fn integrate_recurrence(
+    model: PendulumModel,
+    initial: PendulumState,
+    dt: f64,
+    steps: &[u64],
+) -> Result<Vec<SampleValues>, Failure> {
+    let n = model.segment_count();
+    let anchor = fixed_anchor();
+    let solver = std::cell::RefCell::new(Box::new(
+        Solver::new(model, initial).map_err(|e| solver_failure("initial state rejected", e))?,
+    ));
+    sample_run(
+        steps,
+        || {
+            let mut solver = solver.borrow_mut();
+            let t = solver.state().time;
+            solver.step(&anchor, dt).map_err(|e| step_failure(t, e))
+        },
+        || {
+            let mut solver = solver.borrow_mut();
+            let energy = pendulum_energy(solver.model(), solver.state());
+            let out = solver
+                .outputs(&anchor)
+                .map_err(|e| solver_failure("evaluation failed", e))?;
+            Ok((
+                pendulum_point(&out.joint_position(n)),
+                out.joint_force(0).norm(),
+                energy,
+            ))
+        },
+    )
+}
+
+/// `base + h d` over the first `n` segments (and the decoy entries).
+fn stage(
+    base: &PendulumState,
+    d: &Derivative<f64, PENDULUM_CAPACITY>,
+    h: f64,
+    n: usize,
+) -> PendulumState {
+    let mut s = *base;
+    for i in 0..n {
+        s.directions[i] = base.directions[i] + d.directions[i] * h;
+        s.rates[i] = base.rates[i] + d.rates[i] * h;
+    }
+    for k in 0..4 {
+        s.decoy_attitude[k] = base.decoy_attitude[k] + d.decoy_attitude[k] * h;
+    }
+    s.decoy_rate = base.decoy_rate + d.decoy_rate * h;
+    s
+}
+
+/// `acc += w d` over the first `n` segments (and the decoy entries).
+fn accumulate(
+    acc: &mut Derivative<f64, PENDULUM_CAPACITY>,
+    d: &Derivative<f64, PENDULUM_CAPACITY>,
+    w: f64,
+    n: usize,
+) {
+    for i in 0..n {
+        acc.directions[i] += d.directions[i] * w;
+        acc.rates[i] += d.rates[i] * w;
+    }
+    for k in 0..4 {
+        acc.decoy_attitude[k] += d.decoy_attitude[k] * w;
+    }
+    acc.decoy_rate += d.decoy_rate * w;
+}
+
+/// Unit directions, rates perpendicular to them, unit quaternion (as the solver does after each step).
+fn renormalise(s: &mut PendulumState, n: usize) {
+    for i in 0..n {
+        let e = s.directions[i] / s.directions[i].norm();
+        s.directions[i] = e;
+        s.rates[i] -= e * s.rates[i].dot(&e);
+    }
+    let norm = s.decoy_attitude.iter().map(|q| q * q).sum::<f64>().sqrt();
+    for q in &mut s.decoy_attitude {
+        *q /= norm;
+    }
+}
+
+fn integrate_dense(
+    model: &PendulumModel,
+    initial: PendulumState,
+    dt: f64,
+    steps: &[u64],
+) -> Result<Vec<SampleValues>, Failure> {
+    let n = model.segment_count();
+    let (connection, air) = connection_and_air(model, &fixed_anchor().initial)
+        .map_err(|e| solver_failure("anchor rejected", e))?;
+    let evaluate = |s: &PendulumState| evaluate_dense(model, s, &connection, &air);
+    let state = std::cell::RefCell::new(Box::new(initial));
+    sample_run(
+        steps,
+        || {
+            let mut y = state.borrow_mut();
+            let (half, sixth) = (0.5 * dt, dt / 6.0);
+            let slope = |s: &PendulumState| {
+                evaluate(s)
+                    .map(|d| d.derivative)
+                    .map_err(|e| step_failure(y.time, e))
+            };
+            let k1 = slope(&y)?;
+            let mut sum = k1;
+            let k2 = slope(&stage(&y, &k1, half, n))?;
+            accumulate(&mut sum, &k2, 2.0, n);
+            let k3 = slope(&stage(&y, &k2, half, n))?;
+            accumulate(&mut sum, &k3, 2.0, n);
+            let k4 = slope(&stage(&y, &k3, dt, n))?;
+            accumulate(&mut sum, &k4, 1.0, n);
+            let mut next = stage(&y, &sum, sixth, n);
+            next.time = y.time + dt;
+            renormalise(&mut next, n);
+            if !next.is_finite(n) {
+                return Err(step_failure(y.time, "non-finite state"));
+            }
+            **y = next;
+            Ok(())
+        },
+        || {
+            let y = state.borrow();
+            let solution =
+                evaluate(&y).map_err(|e| solver_failure("dense evaluation failed", e))?;
+            let tip = (0..n).fold(connection.position, |p, i| {
+                p + y.directions[i] * model.lengths()[i]
+            });
+            Ok((
+                pendulum_point(&tip),
+                solution.joint_forces[0].norm(),
+                pendulum_energy(model, &y),
+            ))
+        },
+    )
+}
+
+fn pendulum_text(report: &PendulumReport, method: Method) -> String {
+    let mut s = String::new();
+    let method = match method {
+        Method::Recurrence => "O(N) tension recurrence",
+        Method::Dense => "dense mass-matrix reference",
+    };
+    let _ = writeln!(
+        s,
+        "Compound pendulum: {} rods of {ROD_LENGTH} m and {ROD_MASS} kg, g = {GRAVITY} m/s^2, {method}, RK4 dt = {} s",
+        report.segments, report.dt
+    );
+    let _ = writeln!(
+        s,
+        "Frame: hinge at the origin, x horizontal, z up; released at rest, rods 60 deg toward -x."
+    );
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "{:>12}  {:>13}  {:>13}  {:>19}  {:>17}",
+        "t [s]", "tip x [m]", "tip z [m]", "support tension [N]", "energy [J]"
+    );
+    for p in &report.samples {
+        let _ = writeln!(
+            s,
+            "{:>12}  {:>13.9}  {:>13.9}  {:>19.9}  {:>17.12}",
+            p.t, p.tip[0], p.tip[1], p.support_tension_n, p.energy_j
+        );
+    }
+    let earliest = report.samples.iter().min_by(|a, b| a.t.total_cmp(&b.t));
+    if let (Some(first), true) = (earliest, report.samples.len() > 1) {
+        let scale = first.energy_j.abs().max(f64::MIN_POSITIVE);
+        let drift = report
+            .samples
+            .iter()
+            .map(|p| (p.energy_j - first.energy_j).abs())
+            .fold(0.0, f64::max)
+            / scale;
+        let _ = writeln!(
+            s,
+            "\nLargest energy change relative to t = {} s: {drift:.3e} (relative)",
+            first.t
+        );
+    }
+    s
+}
+
+// ---------------------------------------------------------------- trim
+
+#[derive(Serialize, Debug)]
+struct TrimReport {
+    /// Decoy pitch, degrees, positive nose-up.
+    decoy_pitch_deg: f64,
+    /// Tension at the connection point (joint 0), N.
+    #[serde(rename = "tension_connection_N")]
+    tension_connection_n: f64,
+    /// Tension at the towing point (joint N), N.
+    #[serde(rename = "tension_tow_N")]
+    tension_tow_n: f64,
+    /// Decoy CG behind the connection point along the flight path, m.
+    decoy_cg_behind_m: f64,
+    /// Decoy CG below the connection point, m.
+    decoy_cg_below_m: f64,
+    /// Tension at joints 0 (connection) to N (towing point), N.
+    #[serde(rename = "tension_profile_N")]
+    tension_profile_n: Vec<f64>,
+}
+
+fn trim_layout(config: &SystemConfig, args: &TrimArgs) -> Result<SegmentLayout<f64>, Failure> {
+    let count = args.segments.unwrap_or(config.solver.segments_host);
+    if count == 0 {
+        return Err(usage("--segments must be at least 1"));
+    }
+    if count > TRIM_CAPACITY {
+        return Err(usage(format!(
+            "--segments {count}: the solver holds at most {TRIM_CAPACITY} segments"
+        )));
+    }
+    match args.grading {
+        None => Ok(SegmentLayout::Uniform { count }),
+        Some(r) if !r.is_finite() => {
+            Err(usage(format!("--grading must be a finite number, got {r}")))
+        }
+        Some(r) if !(1.0..=10.0).contains(&r) => Err(usage(format!(
+            "--grading must be between 1 and 10, got {r}"
+        ))),
+        Some(1.0) => Ok(SegmentLayout::Uniform { count }),
+        Some(ratio) => Ok(SegmentLayout::Graded { count, ratio }),
+    }
+}
+
+fn trim_command(config: &SystemConfig, args: &TrimArgs, json: bool) -> Result<String, Failure> {
+    let (altitude, mach) = (args.altitude, args.mach);
+    let (h_min, h_max) = ALTITUDE_RANGE_M;
+    if !altitude.is_finite() || !(h_min..=h_max).contains(&altitude) {
+        return Err(usage(format!(
+            "--altitude must be between {h_min} and {h_max} m, got {altitude}"
+        )));
+    }
+    if !mach.is_finite() || mach <= 0.0 || mach > MAX_MACH {
+        return Err(usage(format!(
+            "--mach must be above 0 and at most {MAX_MACH}, got {mach}"
+        )));
+    }
+    let layout = trim_layout(config, args)?;
+    let model: Model<f64, TRIM_CAPACITY> = config.model(layout)?;
+    let n = model.segment_count();
+    let speed = config.mach_to_speed(altitude, mach)?;
+    let aircraft = AircraftState::level(altitude, speed);
+    let state = trim(&model, &aircraft).map_err(|e| solver_failure("no trim", e))?;
+    let mut solver =
+        Box::new(Solver::new(model, state).map_err(|e| solver_failure("trim state rejected", e))?);
+    let path = Uniform { initial: aircraft };
+    let out = solver
+        .outputs(&path)
+        .map_err(|e| solver_failure("evaluation at trim failed", e))?;
+    let decoy = out
+        .decoy()
+        .ok_or_else(|| Failure::Solver("the model has no decoy".into()))?;
+    let connection = out.joint_position(0);
+    let offset = decoy.cg_position - connection;
+    let report = TrimReport {
+        decoy_pitch_deg: decoy.euler.1.to_degrees(),
+        tension_connection_n: out.tension(0),
+        tension_tow_n: out.tension(n),
+        // Level flight heading north (+x): behind is -x, below is +z (NED).
+        decoy_cg_behind_m: -offset.x,
+        decoy_cg_below_m: offset.z,
+        tension_profile_n: (0..=n).map(|j| out.tension(j)).collect(),
+    };
+    if report.tension_profile_n.iter().any(|t| !t.is_finite()) {
+        return Err(Failure::Solver("trim produced non-finite tensions".into()));
+    }
+    if json {
+        return Ok(to_json(&report));
+    }
+    let lengths = solver.model().lengths().to_vec();
+    Ok(trim_text(
+        config,
+        &report,
+        &TrimCase {
+            altitude,
+            mach,
+            speed,
+            layout,
+            lengths: &lengths,
+        },
+    ))
+}
+
+struct TrimCase<'a> {
+    altitude: f64,
+    mach: f64,
+    speed: f64,
+    layout: SegmentLayout<f64>,
+    lengths: &'a [f64],
+}
+
+fn trim_text(config: &SystemConfig, r: &TrimReport, case: &TrimCase<'_>) -> String {
+    let mut s = String::new();
+    let n = case.lengths.len();
+    let layout = match case.layout {
+        SegmentLayout::Uniform { count } => format!("{count} uniform segments"),
+        SegmentLayout::Graded { count, ratio } => {
+            format!("{count} segments graded {ratio} (short at the decoy)")
+        }
+    };
+    let allowable = config.cable.allowable_tension;
+    let _ = writeln!(s, "Steady level-flight trim ({})", config.source);
+    let _ = writeln!(
+        s,
+        "  altitude                      {:>10.1} m",
+        case.altitude
+    );
+    let _ = writeln!(
+        s,
+        "  Mach                          {:>10.3}   ({:.2} m/s true airspeed)",
+        case.mach, case.speed
+    );
+    let _ = writeln!(
+        s,
+        "  cable                         {:>10.1} m in {layout}",
+        config.cable.length
+    );
+    let _ = writeln!(s, "Decoy");
+    let attitude = if r.decoy_pitch_deg >= 0.0 {
+        "nose up"
+    } else {
+        "nose down"
+    };
+    let _ = writeln!(
+        s,
+        "  pitch                         {:>10.3} deg ({attitude})",
+        r.decoy_pitch_deg
+    );
+    let _ = writeln!(
+        s,
+        "  CG behind connection point    {:>10.3} m",
+        r.decoy_cg_behind_m
+    );
+    let _ = writeln!(
+        s,
+        "  CG below connection point     {:>10.3} m",
+        r.decoy_cg_below_m
+    );
+    let _ = writeln!(s, "Cable tension");
+    let _ = writeln!(
+        s,
+        "  at the connection point       {:>10.3} N   ({:.1} % of the {allowable} N allowable)",
+        r.tension_connection_n,
+        100.0 * r.tension_connection_n / allowable
+    );
+    let _ = writeln!(
+        s,
+        "  at the towing point           {:>10.3} N",
+        r.tension_tow_n
+    );
+    let profile = &r.tension_profile_n;
+    let (jmin, tmin) = extreme(profile, |a, b| a < b);
+    let (jmax, tmax) = extreme(profile, |a, b| a > b);
+    let _ = writeln!(
+        s,
+        "  minimum                       {:>10.3} N   (joint {jmin})",
+        tmin
+    );
+    let _ = writeln!(
+        s,
+        "  maximum                       {:>10.3} N   (joint {jmax})",
+        tmax
+    );
+    let _ = writeln!(
+        s,
+        "Tension profile (joint 0 = connection point, joint {n} = towing point)"
+    );
+    let _ = writeln!(
+        s,
+        "  {:>7}  {:>16}  {:>12}",
+        "joint", "along cable [m]", "tension [N]"
+    );
+    let mut joints: Vec<usize> = (0..=4).map(|k| (k * n + 2) / 4).collect();
+    joints.dedup();
+    for j in joints {
+        let along = case.lengths[..j].iter().fold(0.0, |a, l| a + l);
+        let _ = writeln!(s, "  {j:>7}  {along:>16.3}  {:>12.3}", profile[j]);
+    }
+    s
+}
+
+/// Index and value of the entry that wins `better` (the first one on ties).
+fn extreme(values: &[f64], better: impl Fn(f64, f64) -> bool) -> (usize, f64) {
+    values
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, values[0]), |best, (j, v)| {
+            if better(v, best.1) { (j, v) } else { best }
+        })
+}
+
+fn to_json<T: Serialize>(value: &T) -> String {
+    let mut text =
+        serde_json::to_string(value).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
+    text.push('\n');
+    text
+}

@@ -1,0 +1,495 @@
+//! End-to-end tests of the `decoy` binary: output shapes, physics sanity, errors.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn decoy(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_decoy"))
+        .args(args)
+        .output()
+        .expect("the decoy binary runs")
+}
+
+fn stdout_of(args: &[&str]) -> String {
+    let out = decoy(args);
+    assert!(
+        out.status.success(),
+        "decoy {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "unexpected stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("UTF-8 output")
+}
+
+fn json(args: &[&str]) -> Value {
+    let text = stdout_of(args);
+    serde_json::from_str(&text)
+        .unwrap_or_else(|e| panic!("decoy {args:?}: invalid JSON ({e}): {text}"))
+}
+
+/// Runs a failing command; checks the exit code and the one-line `error:` message, returns it.
+fn error_of(args: &[&str], code: i32) -> String {
+    let out = decoy(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "decoy {args:?}: stderr {stderr}"
+    );
+    assert!(
+        out.stdout.is_empty(),
+        "decoy {args:?} printed to stdout on error"
+    );
+    assert!(stderr.starts_with("error: "), "decoy {args:?}: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "decoy {args:?}: not one line: {stderr}"
+    );
+    stderr
+}
+
+fn keys(v: &Value) -> BTreeSet<&str> {
+    v.as_object()
+        .expect("a JSON object")
+        .keys()
+        .map(String::as_str)
+        .collect()
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("`{key}` is not a number in {v}"))
+}
+
+fn tip(sample: &Value) -> [f64; 2] {
+    let t = sample["tip"].as_array().expect("tip is an array");
+    assert_eq!(t.len(), 2);
+    [t[0].as_f64().unwrap(), t[1].as_f64().unwrap()]
+}
+
+const TIMES: &str = "0,0.1,0.2,0.3,0.4,0.5";
+
+#[test]
+fn pendulum_json_shape_and_energy_conservation() {
+    let v = json(&[
+        "pendulum",
+        "--segments",
+        "10",
+        "--t-end",
+        "0.5",
+        "--dt",
+        "1e-4",
+        "--times",
+        TIMES,
+        "--json",
+    ]);
+    assert_eq!(keys(&v), BTreeSet::from(["segments", "dt", "samples"]));
+    assert_eq!(v["segments"], 10);
+    assert_eq!(num(&v, "dt"), 1e-4);
+    let samples = v["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 6);
+    for (s, t) in samples.iter().zip([0.0, 0.1, 0.2, 0.3, 0.4, 0.5]) {
+        assert_eq!(
+            keys(s),
+            BTreeSet::from(["t", "tip", "support_tension_N", "energy_J"])
+        );
+        assert_eq!(num(s, "t"), t);
+        let [x, z] = tip(s);
+        assert!(
+            x.hypot(z) <= 1.0 + 1e-12,
+            "tip outside the chain's reach: {s}"
+        );
+        assert!(num(s, "support_tension_N") > 0.0);
+    }
+    // Released at rest with every rod 60 deg toward -x: tip at (-sin 60, -cos 60) x 1 m, z up.
+    let [x0, z0] = tip(&samples[0]);
+    assert!(
+        (x0 + 3f64.sqrt() / 2.0).abs() < 1e-12 && (z0 + 0.5).abs() < 1e-12,
+        "initial tip {x0} {z0}"
+    );
+    // Energy at rest: sum of m g h_c = 0.5 * 9.81 * (-0.05) * sum(i - 1/2) = -12.2625 J.
+    let e0 = num(&samples[0], "energy_J");
+    assert!((e0 + 12.2625).abs() < 1e-9, "{e0}");
+    for s in samples {
+        let e = num(s, "energy_J");
+        assert!(
+            (e - e0).abs() <= 1e-6 * e0.abs(),
+            "energy drift at t = {}: {e} vs {e0}",
+            s["t"]
+        );
+    }
+    // The chain has moved: the tip swung through the bottom.
+    assert!(tip(&samples[5])[0] > 0.0);
+}
+
+#[test]
+fn dense_reference_agrees_with_the_recurrence() {
+    let run = |solver: &str| {
+        json(&[
+            "pendulum",
+            "--segments",
+            "5",
+            "--t-end",
+            "0.5",
+            "--dt",
+            "1e-4",
+            "--times",
+            TIMES,
+            "--solver",
+            solver,
+            "--json",
+        ])
+    };
+    let (recurrence, dense) = (run("recurrence"), run("dense"));
+    let (a, b) = (
+        recurrence["samples"].as_array().unwrap(),
+        dense["samples"].as_array().unwrap(),
+    );
+    assert_eq!(a.len(), b.len());
+    for (p, q) in a.iter().zip(b) {
+        let (tp, tq) = (tip(p), tip(q));
+        for k in 0..2 {
+            assert!(
+                (tp[k] - tq[k]).abs() < 1e-8,
+                "tip at t = {}: {tp:?} vs {tq:?}",
+                p["t"]
+            );
+        }
+        let (fp, fq) = (num(p, "support_tension_N"), num(q, "support_tension_N"));
+        assert!(
+            (fp - fq).abs() < 1e-6 * fp,
+            "support tension at t = {}: {fp} vs {fq}",
+            p["t"]
+        );
+        let (ep, eq) = (num(p, "energy_J"), num(q, "energy_J"));
+        assert!(
+            (ep - eq).abs() < 1e-8,
+            "energy at t = {}: {ep} vs {eq}",
+            p["t"]
+        );
+    }
+}
+
+#[test]
+fn pendulum_human_output_is_a_table_in_request_order() {
+    let text = stdout_of(&[
+        "pendulum",
+        "--segments",
+        "3",
+        "--t-end",
+        "0.1",
+        "--dt",
+        "1e-3",
+        "--times",
+        "0.1,0",
+    ]);
+    assert!(
+        text.contains("support tension [N]") && text.contains("energy [J]"),
+        "{text}"
+    );
+    let rows: Vec<&str> = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with(['0', '1']))
+        .collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    assert!(
+        rows[0].trim_start().starts_with("0.1") && rows[1].trim_start().starts_with("0 "),
+        "{text}"
+    );
+}
+
+fn trim_json(extra: &[&str]) -> Value {
+    let mut args = vec!["trim", "--altitude", "9000", "--mach", "0.8", "--json"];
+    args.extend_from_slice(extra);
+    json(&args)
+}
+
+#[test]
+fn trim_json_is_plausible() {
+    let v = trim_json(&[]);
+    assert_eq!(
+        keys(&v),
+        BTreeSet::from([
+            "decoy_pitch_deg",
+            "tension_connection_N",
+            "tension_tow_N",
+            "decoy_cg_behind_m",
+            "decoy_cg_below_m",
+            "tension_profile_N",
+        ])
+    );
+    let connection = num(&v, "tension_connection_N");
+    let tow = num(&v, "tension_tow_N");
+    assert!(
+        tow > 0.0 && connection > tow,
+        "connection {connection}, tow {tow}"
+    );
+    // The reference system is built for about 270 N at 9 km, Mach 0.8.
+    assert!((200.0..350.0).contains(&connection), "{connection}");
+    let pitch = num(&v, "decoy_pitch_deg");
+    assert!(pitch.abs() < 20.0, "{pitch}");
+    let behind = num(&v, "decoy_cg_behind_m");
+    assert!(behind > 90.0 && behind < 101.0, "{behind}");
+    let below = num(&v, "decoy_cg_below_m");
+    assert!(below > 0.0 && below < 50.0, "{below}");
+    let profile: Vec<f64> = v["tension_profile_N"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_f64().unwrap())
+        .collect();
+    assert_eq!(profile.len(), 301);
+    assert_eq!(profile[0], connection);
+    assert_eq!(profile[300], tow);
+    assert!(
+        profile.windows(2).all(|w| w[0] > w[1]),
+        "tension must fall from the aircraft to the decoy"
+    );
+}
+
+#[test]
+fn graded_16_segments_reproduce_300_uniform() {
+    let fine = trim_json(&[]);
+    let graded = trim_json(&["--segments", "16", "--grading", "1.3"]);
+    assert_eq!(graded["tension_profile_N"].as_array().unwrap().len(), 17);
+    for (key, tolerance) in [
+        ("tension_connection_N", 0.005),
+        ("tension_tow_N", 0.005),
+        ("decoy_cg_below_m", 0.01),
+    ] {
+        let (a, b) = (num(&fine, key), num(&graded, key));
+        assert!(
+            (a - b).abs() < tolerance * a.abs(),
+            "{key}: 300 uniform {a}, 16 graded {b}"
+        );
+    }
+    // --grading 1 is the uniform layout.
+    let uniform = trim_json(&["--segments", "16"]);
+    assert_eq!(uniform, trim_json(&["--segments", "16", "--grading", "1"]));
+}
+
+#[test]
+fn trim_human_output_has_units() {
+    let text = stdout_of(&[
+        "trim",
+        "--altitude",
+        "9000",
+        "--mach",
+        "0.8",
+        "--segments",
+        "16",
+        "--grading",
+        "1.3",
+    ]);
+    for needle in [
+        "pitch",
+        "deg",
+        "CG behind",
+        "CG below",
+        "connection point",
+        "towing point",
+        " N ",
+        "allowable",
+        "joint",
+    ] {
+        assert!(text.contains(needle), "missing `{needle}` in:\n{text}");
+    }
+}
+
+/// A copy of the reference system in a fresh directory, with `edit` applied to the TOML.
+fn config_copy(name: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("decoy-cli-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config");
+    let toml = std::fs::read_to_string(source.join("reference-system.toml")).unwrap();
+    std::fs::write(dir.join("system.toml"), edit(&toml)).unwrap();
+    std::fs::copy(source.join("decoy-aero.csv"), dir.join("decoy-aero.csv")).unwrap();
+    dir
+}
+
+#[test]
+fn config_file_is_used_and_checked() {
+    let dir = config_copy("short", |t| {
+        t.replacen("length = 100.0 ", "length = 80.0 ", 1)
+    });
+    let path = dir.join("system.toml");
+    let v = json(&[
+        "--config",
+        path.to_str().unwrap(),
+        "trim",
+        "--altitude",
+        "9000",
+        "--mach",
+        "0.8",
+        "--segments",
+        "40",
+        "--json",
+    ]);
+    let behind = num(&v, "decoy_cg_behind_m");
+    assert!(behind > 70.0 && behind < 81.0, "{behind}");
+
+    let bad = config_copy("bad", |t| t.replacen("mass = 4.0 ", "mass = -4.0 ", 1));
+    let bad_path = bad.join("system.toml");
+    let message = error_of(
+        &[
+            "trim",
+            "--altitude",
+            "9000",
+            "--mach",
+            "0.8",
+            "--config",
+            bad_path.to_str().unwrap(),
+        ],
+        2,
+    );
+    assert!(
+        message.contains("decoy.mass") && message.contains("system.toml"),
+        "{message}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+    let _ = std::fs::remove_dir_all(bad);
+}
+
+#[test]
+fn bad_input_is_a_one_line_error() {
+    let message = error_of(&["trim", "--altitude", "9000", "--mach", "nan"], 2);
+    assert!(message.contains("--mach"), "{message}");
+    let message = error_of(
+        &[
+            "trim",
+            "--altitude",
+            "9000",
+            "--mach",
+            "0.8",
+            "--segments",
+            "100000",
+        ],
+        2,
+    );
+    assert!(message.contains("100000"), "{message}");
+    let message = error_of(
+        &[
+            "pendulum",
+            "--segments",
+            "100000",
+            "--t-end",
+            "1",
+            "--dt",
+            "1e-3",
+            "--times",
+            "0",
+        ],
+        2,
+    );
+    assert!(message.contains("100000"), "{message}");
+    let message = error_of(
+        &[
+            "--config",
+            "/nonexistent/decoy.toml",
+            "trim",
+            "--altitude",
+            "9000",
+            "--mach",
+            "0.8",
+        ],
+        2,
+    );
+    assert!(message.contains("/nonexistent/decoy.toml"), "{message}");
+    let message = error_of(&["trim", "--altitude", "30000", "--mach", "0.8"], 2);
+    assert!(message.contains("--altitude"), "{message}");
+    let message = error_of(
+        &[
+            "trim",
+            "--altitude",
+            "9000",
+            "--mach",
+            "0.8",
+            "--grading",
+            "0.5",
+        ],
+        2,
+    );
+    assert!(message.contains("--grading"), "{message}");
+    let message = error_of(
+        &[
+            "pendulum",
+            "--segments",
+            "3",
+            "--t-end",
+            "1",
+            "--dt",
+            "0.1",
+            "--times",
+            "0.15",
+        ],
+        2,
+    );
+    assert!(message.contains("0.15"), "{message}");
+    error_of(
+        &[
+            "pendulum",
+            "--segments",
+            "3",
+            "--t-end",
+            "1",
+            "--dt",
+            "0.1",
+            "--times",
+            "1.1",
+        ],
+        2,
+    );
+    error_of(
+        &[
+            "pendulum",
+            "--segments",
+            "3",
+            "--t-end",
+            "1",
+            "--dt",
+            "0.1",
+            "--times",
+            "-0.1",
+        ],
+        2,
+    );
+    // Usage errors from the argument parser are one line too.
+    let message = error_of(&["trim", "--altitude", "9000"], 2);
+    assert!(message.contains("--mach"), "{message}");
+    error_of(
+        &["trim", "--altitude", "9000", "--mach", "0.8", "--bogus"],
+        2,
+    );
+}
+
+#[test]
+fn solver_failures_exit_with_1() {
+    // Far too slow to hold the decoy up: no trim.
+    let message = error_of(&["trim", "--altitude", "9000", "--mach", "0.01"], 1);
+    assert!(message.contains("trim"), "{message}");
+    // A time step far above the stable one breaks the integration.
+    let message = error_of(
+        &[
+            "pendulum",
+            "--segments",
+            "3",
+            "--t-end",
+            "1",
+            "--dt",
+            "0.1",
+            "--times",
+            "1",
+        ],
+        1,
+    );
+    assert!(message.contains("integration failed"), "{message}");
+}
