@@ -24,6 +24,7 @@ use setup::{Scope, TARGET, Toolchain};
 const MAIN_JOB: &[&str] = &[
     "trim --altitude 9000 --mach 0.8",
     "trim --altitude 9000 --mach 0.8 --segments 16 --grading 1.3",
+    "simulate --scenario acceleration --out out/acceleration",
 ];
 
 /// How `cargo` runs the `decoy` binary; a [`MAIN_JOB`] entry is appended.

@@ -5,8 +5,8 @@
 //!
 //! - the compound pendulum ([`pendulum_solver`]) hinged to a fixed anchor
 //!   ([`fixed_anchor`]), stepped with [`PENDULUM_DT`];
-//! - the reference towed system ([`reference_params`], the project's default
-//!   configuration built from literals, as in solver-core's tests), trimmed in
+//! - the reference towed system ([`reference_params`], the built-in
+//!   configuration from `decoy-config`), trimmed in
 //!   steady level flight at [`CRUISE_ALTITUDE`] and [`CRUISE_MACH`]
 //!   ([`towed_solver`], [`cruise_path`]), stepped with [`TOWED_DT`].
 //!
@@ -19,9 +19,8 @@
 //! `towed_rk4_step/f64/uniform300`, `tension_solve/{two_sweep,shooting,dense}/{N}`.
 
 use solver_core::{
-    AeroTable, AircraftState, Atmosphere, CableParams, DecoyParams, EndBody, Environment, Model,
-    ModelParams, Real, SegmentLayout, Solver, Uniform, Vec3, pendulum_initial_state,
-    reference_pendulum, trim,
+    AircraftState, Atmosphere, Model, ModelParams, Real, SegmentLayout, Solver, Uniform, Vec3,
+    pendulum_initial_state, reference_pendulum, trim,
 };
 
 /// Time step of the pendulum benchmarks, s.
@@ -37,52 +36,12 @@ pub const GRADED_COUNT: usize = 16;
 /// Length ratio between neighbouring segments of the graded towed model.
 pub const GRADED_RATIO: f64 = 1.3;
 
-/// The reference decoy aerodynamic table (alpha in degrees, cl, cd, cm).
-const AERO_CSV: &str = include_str!("../../../config/decoy-aero.csv");
-
-/// The reference towed system (the project's default configuration values) with the
-/// given segment layout, built from literals (a copy of solver-core's test fixture,
-/// `tests/common/mod.rs::reference_params`).
+/// The reference towed system (the built-in configuration, `config/`) with the given
+/// segment layout.
 pub fn reference_params<T: Real>(layout: SegmentLayout<T>) -> ModelParams<T> {
-    let rows: Vec<[f64; 4]> = AERO_CSV
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("alpha") && !l.trim().is_empty())
-        .map(|l| {
-            let v: Vec<f64> = l
-                .split(',')
-                .map(|x| x.trim().parse().expect("decoy-aero.csv: bad number"))
-                .collect();
-            [v[0], v[1], v[2], v[3]]
-        })
-        .collect();
-    ModelParams {
-        environment: Environment {
-            gravity: T::lit(9.80665),
-            wind: Vec3::zeros(),
-            atmosphere: Atmosphere::isa(),
-        },
-        connection_point: Vec3::new(T::lit(-4.0), T::zero(), T::lit(1.0)),
-        cable: CableParams {
-            length: T::lit(100.0),
-            diameter: T::lit(0.0025),
-            linear_density: T::lit(0.010),
-            cd_normal: T::lit(1.1),
-            cf_tangential: T::lit(0.022),
-        },
-        layout,
-        end: EndBody::Decoy(DecoyParams {
-            mass: T::lit(4.0),
-            length: T::lit(0.9),
-            diameter: T::lit(0.064),
-            x_cg: T::lit(0.27),
-            x_tow: T::lit(0.12),
-            x_mrp: T::lit(0.45),
-            inertia_cg: Vec3::new(T::lit(0.0025), T::lit(0.27), T::lit(0.27)),
-            cm_q: T::lit(-80.0),
-            cl_p: T::lit(-0.3),
-            aero: AeroTable::from_degrees(&rows).expect("decoy-aero.csv: bad table"),
-        }),
-    }
+    decoy_config::SystemConfig::builtin()
+        .and_then(|config| config.model_params(layout))
+        .expect("the built-in configuration is valid")
 }
 
 /// The 16-segment graded layout (ratio 1.3) of the towed benchmarks.

@@ -1,5 +1,8 @@
 //! `decoy`: the towed-decoy solver on the command line.
 //!
+//! - `decoy simulate`: the main job. Flies a scenario (steady flight, the paper's
+//!   acceleration, pull-up and turn, or a recorded flight) and writes the time
+//!   series, cable snapshots, a summary and plots (`decoy-sim`, `docs/outputs.md`).
 //! - `decoy pendulum`: the compound multi-pendulum validation case (DESIGN §7.1),
 //!   integrated with the O(N) tension recurrence or the dense mass-matrix reference,
 //!   sampled at chosen times.
@@ -11,12 +14,13 @@
 //! 1 when the solver fails.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
+use std::io::{IsTerminal as _, Write as _};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
+use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use serde::Serialize;
 use solver_core::dense::evaluate_dense;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
@@ -45,7 +49,7 @@ const MAX_STEPS: f64 = 1e12;
 #[command(
     name = "decoy",
     version,
-    about = "Towed-decoy cable dynamics: pendulum validation runs and steady-flight trim"
+    about = "Towed-decoy cable dynamics: flight simulations, pendulum validation runs and steady-flight trim"
 )]
 struct Cli {
     /// System configuration TOML (default: the built-in reference system).
@@ -60,6 +64,8 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Fly a scenario and write timeseries.csv, cable.csv, summary.json and plots.
+    Simulate(SimulateArgs),
     /// Compound multi-pendulum (N rods of 0.1 m and 0.5 kg hinged at a fixed point,
     /// released at rest from -60 deg), sampled at the given times.
     Pendulum(PendulumArgs),
@@ -102,6 +108,52 @@ struct TrimArgs {
     grading: Option<f64>,
 }
 
+#[derive(Args, Debug)]
+struct SimulateArgs {
+    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE")]
+    scenario: String,
+    /// Number of cable segments (default: the scenario's, else the configuration's solver.segments_host).
+    #[arg(long, value_name = "N")]
+    segments: Option<usize>,
+    /// Grade the segments geometrically by this length ratio, short at the decoy (1 = uniform).
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
+    grading: Option<f64>,
+    /// RK4 time step, s (default: the scenario's, else the configuration's solver.time_step_host).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    dt: Option<f64>,
+    /// Simulated time, s.
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    t_end: Option<f64>,
+    /// Initial altitude, m (0 to 20000).
+    #[arg(long, value_name = "H", allow_negative_numbers = true)]
+    altitude: Option<f64>,
+    /// Initial Mach number (above 0, at most 2).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    mach: Option<f64>,
+    /// Flight-path rotation rate of a pull-up or turn, rad/s (the paper's: 0.05, 0.10, 0.20).
+    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    rate: Option<f64>,
+    /// Initial state: the trim of the flight condition at t = 0, or a straight cable.
+    #[arg(long, value_enum, default_value_t = Initial::Trim)]
+    initial: Initial,
+    /// Output directory (default: out/NAME, NAME the scenario's name).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Do not draw the plots (CSV and JSON only).
+    #[arg(long)]
+    no_plots: bool,
+}
+
+/// How `decoy simulate` starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Initial {
+    /// The steady equilibrium of the flight condition at t = 0.
+    Trim,
+    /// Every segment trailing straight behind the connection point, the decoy along the flight direction.
+    Straight,
+}
+
 /// The dynamics `decoy pendulum` integrates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Method {
@@ -130,6 +182,16 @@ impl Failure {
     fn message(&self) -> &str {
         match self {
             Failure::Usage(m) | Failure::Solver(m) => m,
+        }
+    }
+}
+
+impl From<SimError> for Failure {
+    fn from(e: SimError) -> Self {
+        if e.is_usage() {
+            Failure::Usage(e.to_string())
+        } else {
+            Failure::Solver(e.to_string())
         }
     }
 }
@@ -216,6 +278,13 @@ fn run(cli: &Cli) -> Result<String, Failure> {
         None => None,
     };
     match &cli.command {
+        Command::Simulate(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            simulate_command(&config, args, cli.json)
+        }
         Command::Pendulum(args) => pendulum(args, cli.json),
         Command::Trim(args) => {
             let config = match config {
@@ -225,6 +294,187 @@ fn run(cli: &Cli) -> Result<String, Failure> {
             trim_command(&config, args, cli.json)
         }
     }
+}
+
+// ---------------------------------------------------------------- simulate
+
+/// Show a progress bar only for runs expected to last longer than this, s.
+const PROGRESS_BAR_MIN_S: f64 = 1.0;
+/// Time before the expected duration is judged, s.
+const PROGRESS_ESTIMATE_AFTER_S: f64 = 0.2;
+
+fn simulate_command(
+    config: &SystemConfig,
+    args: &SimulateArgs,
+    json: bool,
+) -> Result<String, Failure> {
+    let scenario = Scenario::load(&args.scenario)?;
+    let options = RunOptions {
+        segments: args.segments,
+        grading: args.grading,
+        dt: args.dt,
+        t_end: args.t_end,
+        altitude: args.altitude,
+        mach: args.mach,
+        rate: args.rate,
+        initial: match args.initial {
+            Initial::Trim => InitialState::Trim,
+            Initial::Straight => InitialState::Straight,
+        },
+        out_dir: args.out.clone(),
+        plots: !args.no_plots,
+    };
+    let show_progress = !json && std::io::stderr().is_terminal();
+    let started = std::time::Instant::now();
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    let result = decoy_sim::simulate(config, &scenario, &options, |fraction| {
+        if !show_progress {
+            return;
+        }
+        let elapsed = started.elapsed().as_secs_f64();
+        if bar.is_none()
+            && elapsed >= PROGRESS_ESTIMATE_AFTER_S
+            && fraction < 1.0
+            && elapsed / fraction.max(1e-9) > PROGRESS_BAR_MIN_S
+        {
+            let b = indicatif::ProgressBar::new(1000);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{spinner} simulating [{bar:40}] {percent:>3}% ({elapsed} elapsed)",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+            );
+            bar = Some(b);
+        }
+        if let Some(b) = &bar {
+            b.set_position((fraction * 1000.0).round() as u64);
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let run = result?;
+    if json {
+        let mut text = serde_json::to_string_pretty(&run.summary)
+            .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
+        text.push('\n');
+        return Ok(text);
+    }
+    Ok(simulate_text(config, &scenario, &run, args.initial))
+}
+
+fn simulate_text(
+    config: &SystemConfig,
+    scenario: &Scenario,
+    run: &RunOutput,
+    initial: Initial,
+) -> String {
+    let r = &run.summary;
+    let f = &r.final_values;
+    let allowable = config.cable.allowable_tension;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Simulation `{}` ({}, {})",
+        r.scenario,
+        scenario.origin.describe(),
+        config.source
+    );
+    if !scenario.description.is_empty() {
+        let _ = writeln!(s, "  {}", scenario.description);
+    }
+    let initial = match initial {
+        Initial::Trim => "trim",
+        Initial::Straight => "straight cable",
+    };
+    let _ = writeln!(
+        s,
+        "  {}, RK4 dt = {} s, {} s simulated, initial state: {initial}",
+        describe_layout(&run.plan.layout),
+        r.dt,
+        r.t_end
+    );
+    let _ = writeln!(s, "Connection-point tension");
+    let _ = writeln!(
+        s,
+        "  maximum                       {:>10.3} N at t = {} s ({:.1} % of the {allowable} N allowable)",
+        r.max_tension_connection_n,
+        r.t_at_max_tension_s,
+        100.0 * r.max_tension_connection_n / allowable
+    );
+    let _ = writeln!(
+        s,
+        "  final                         {:>10.3} N",
+        f.tension_connection_n
+    );
+    let settling = match r.settling_time_s {
+        Some(t) => format!("from t = {t} s"),
+        None => "not settled by the end of the run".to_owned(),
+    };
+    let _ = writeln!(s, "  within 2 % of its final value {settling}");
+    let _ = writeln!(
+        s,
+        "Towing-point tension, final     {:>10.3} N",
+        f.tension_tow_n
+    );
+    let _ = writeln!(s, "Decoy");
+    let _ = writeln!(
+        s,
+        "  pitch oscillation amplitude   {:>10.3} deg (half peak-to-peak from the manoeuvre start)",
+        r.pitch_oscillation_amplitude_deg
+    );
+    let _ = writeln!(
+        s,
+        "  final pitch                   {:>10.3} deg",
+        f.decoy_pitch_deg
+    );
+    let _ = writeln!(
+        s,
+        "  final CG behind the aircraft  {:>10.3} m",
+        f.decoy_cg_behind_m
+    );
+    let _ = writeln!(
+        s,
+        "  final CG below the flight path{:>10.3} m",
+        f.decoy_cg_below_m
+    );
+    let _ = writeln!(
+        s,
+        "  final CG lateral              {:>10.3} m (positive toward the outside of the turn / left)",
+        f.decoy_cg_lateral_m
+    );
+    let _ = writeln!(s, "Clearances (smallest over the run)");
+    let inside = if r.min_cable_clearance_to_exhaust_m < 0.0 {
+        " (inside the plume)"
+    } else {
+        ""
+    };
+    let _ = writeln!(
+        s,
+        "  cable to the exhaust plume    {:>10.3} m{inside}",
+        r.min_cable_clearance_to_exhaust_m
+    );
+    let _ = writeln!(
+        s,
+        "  decoy CG to the aircraft      {:>10.3} m",
+        r.min_decoy_clearance_to_aircraft_m
+    );
+    let speed = if r.wall_s > 0.0 {
+        format!(" ({:.0}x real time)", r.t_end / r.wall_s)
+    } else {
+        String::new()
+    };
+    let _ = writeln!(s, "Wall time {:.3} s{speed}", r.wall_s);
+    let _ = writeln!(s, "Files written to {}:", run.out_dir.display());
+    for file in &run.files {
+        let name = file.file_name().map_or_else(
+            || file.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let _ = writeln!(s, "  {name}");
+    }
+    s
 }
 
 // ---------------------------------------------------------------- pendulum

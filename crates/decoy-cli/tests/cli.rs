@@ -493,3 +493,161 @@ fn solver_failures_exit_with_1() {
     );
     assert!(message.contains("integration failed"), "{message}");
 }
+
+/// A fresh output directory for one `simulate` test.
+fn sim_out(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("decoy-cli-simulate")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+#[test]
+fn simulate_json_is_the_summary_and_the_files_are_written() {
+    let out = sim_out("steady-json");
+    let out_arg = out.to_str().unwrap();
+    let v = json(&[
+        "simulate",
+        "--scenario",
+        "steady",
+        "--segments",
+        "16",
+        "--grading",
+        "1.3",
+        "--t-end",
+        "2",
+        "--json",
+        "--out",
+        out_arg,
+    ]);
+    let expected: BTreeSet<&str> = [
+        "scenario",
+        "segments",
+        "dt",
+        "t_end",
+        "max_tension_connection_N",
+        "t_at_max_tension_s",
+        "pitch_oscillation_amplitude_deg",
+        "settling_time_s",
+        "final",
+        "min_cable_clearance_to_exhaust_m",
+        "min_decoy_clearance_to_aircraft_m",
+        "wall_s",
+    ]
+    .into_iter()
+    .collect();
+    assert_eq!(keys(&v), expected);
+    assert_eq!(v["scenario"], "steady");
+    assert_eq!(v["segments"], 16);
+    assert_eq!(num(&v, "t_end"), 2.0);
+    assert_eq!(num(&v, "dt"), 0.001);
+    // Steady flight from trim stays at trim (about 271 N at Mach 0.8, 9 km).
+    let tension = num(&v["final"], "tension_connection_N");
+    assert!((tension - 271.0).abs() < 5.0, "{tension}");
+    assert!((num(&v, "max_tension_connection_N") - tension).abs() < 1e-3 * tension);
+    // stdout is summary.json.
+    let file: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(file, v);
+    for name in [
+        "timeseries.csv",
+        "cable.csv",
+        "tensions.png",
+        "tensions.svg",
+        "attitude.png",
+        "cable-side.svg",
+        "cable-top.png",
+        "tension-profile.svg",
+    ] {
+        assert!(out.join(name).is_file(), "{name} missing");
+    }
+    let rows = std::fs::read_to_string(out.join("timeseries.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert_eq!(rows, 1 + 201, "header and a row every 10 ms");
+}
+
+#[test]
+fn simulate_human_output_lists_the_files() {
+    let out = sim_out("turn-text");
+    let text = stdout_of(&[
+        "simulate",
+        "--scenario",
+        "turn",
+        "--segments",
+        "16",
+        "--grading",
+        "1.3",
+        "--t-end",
+        "1",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    for expected in [
+        "Simulation `turn`",
+        "16 segments graded 1.3",
+        "Connection-point tension",
+        "N at t = ",
+        "cable to the exhaust plume",
+        "Files written to",
+        "timeseries.csv",
+        "summary.json",
+    ] {
+        assert!(text.contains(expected), "`{expected}` missing in:\n{text}");
+    }
+    assert!(!text.contains("tensions.png"), "--no-plots drew plots");
+}
+
+#[test]
+fn simulate_errors_are_one_line() {
+    let message = error_of(&["simulate", "--scenario", "barrel-roll"], 2);
+    assert!(
+        message.contains("unknown scenario `barrel-roll`") && message.contains("pull-up"),
+        "{message}"
+    );
+    let message = error_of(
+        &[
+            "simulate",
+            "--scenario",
+            "steady",
+            "--mach",
+            "2.5",
+            "--json",
+        ],
+        2,
+    );
+    assert!(message.contains("--mach"), "{message}");
+    let message = error_of(&["simulate", "--scenario", "steady", "--rate", "0.1"], 2);
+    assert!(message.contains("--rate does not apply"), "{message}");
+    let message = error_of(&["simulate", "--scenario", "/nonexistent.toml"], 2);
+    assert!(message.contains("/nonexistent.toml"), "{message}");
+    // A diverging run: exit 1, the outputs so far stay, summary.json says where it stopped.
+    let out = sim_out("diverged");
+    let message = error_of(
+        &[
+            "simulate",
+            "--scenario",
+            "steady",
+            "--segments",
+            "16",
+            "--grading",
+            "1.3",
+            "--dt",
+            "0.5",
+            "--t-end",
+            "10",
+            "--no-plots",
+            "--json",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        1,
+    );
+    assert!(message.contains("simulation stopped at t = "), "{message}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(summary["stopped"]["reason"].is_string(), "{summary}");
+}

@@ -118,13 +118,22 @@ mod tests {
     fn bad_messages_are_typed_errors() {
         let mut m = level();
         m.velocity_ned_mps[1] = f64::NAN;
-        assert_eq!(m.to_state::<f64>().unwrap_err(), InputError::NonFinite { field: "velocity" });
+        assert_eq!(
+            m.to_state::<f64>().unwrap_err(),
+            InputError::NonFinite { field: "velocity" }
+        );
         let mut m = level();
         m.attitude_wxyz = [0.0; 4];
-        assert_eq!(m.to_state::<f64>().unwrap_err(), InputError::DegenerateAttitude);
+        assert_eq!(
+            m.to_state::<f64>().unwrap_err(),
+            InputError::DegenerateAttitude
+        );
         let mut m = level();
         m.time_s = f64::INFINITY;
-        assert_eq!(m.to_state::<f64>().unwrap_err(), InputError::NonFinite { field: "time" });
+        assert_eq!(
+            m.to_state::<f64>().unwrap_err(),
+            InputError::NonFinite { field: "time" }
+        );
     }
 
     #[test]

@@ -8,7 +8,9 @@ fn main() {
         .spawn(|| {
             let model = reference_pendulum::<f64, 300>(300).unwrap();
             let mut solver = Box::new(Solver::new(model, pendulum_initial_state(300)).unwrap());
-            let anchor = Uniform { initial: AircraftState::fixed(Vec3::zeros()) };
+            let anchor = Uniform {
+                initial: AircraftState::fixed(Vec3::zeros()),
+            };
             for _ in 0..2000 {
                 solver.step(&anchor, 1e-4).unwrap();
             }
@@ -17,7 +19,10 @@ fn main() {
             for _ in 0..n {
                 solver.step(&anchor, 1e-4).unwrap();
             }
-            println!("pendulum f64 N=300: {:.2} us/step", t.elapsed().as_secs_f64() * 1e6 / n as f64);
+            println!(
+                "pendulum f64 N=300: {:.2} us/step",
+                t.elapsed().as_secs_f64() * 1e6 / n as f64
+            );
         })
         .unwrap()
         .join()

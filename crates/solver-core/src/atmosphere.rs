@@ -104,61 +104,63 @@ impl<T: Real> Atmosphere<T> {
             return Err(AtmosphereError::AltitudeOutOfRange { altitude_m: h });
         }
         Ok(isa_layer(
-            h,
+            altitude,
             h <= H_TROPOPAUSE_GEOMETRIC,
-            r.to_f64(),
-            gamma.to_f64(),
-            g0.to_f64(),
+            r,
+            gamma,
+            g0,
         ))
     }
 }
 
 /// ISA properties at geometric altitude `h_geometric` evaluated with the troposphere
-/// (`troposphere = true`) or stratosphere law; derivatives are with respect to geometric altitude.
+/// (`troposphere = true`) or stratosphere law; derivatives are with respect to
+/// geometric altitude. Evaluated in `T`: on the Cortex-M4F f64 is software-emulated
+/// and this runs at every RK4 stage.
 fn isa_layer<T: Real>(
-    h_geometric: f64,
+    h_geometric: T,
     troposphere: bool,
-    r: f64,
-    gamma: f64,
-    g0: f64,
+    r: T,
+    gamma: T,
+    g0: T,
 ) -> AirProperties<T> {
-    let h = EARTH_RADIUS * h_geometric / (EARTH_RADIUS + h_geometric);
+    let lit = T::lit;
+    let radius = lit(EARTH_RADIUS);
+    let (t0, lapse) = (lit(T0), lit(LAPSE));
+    let one = T::one();
+    let h = radius * h_geometric / (radius + h_geometric);
     // dH/dh and d2H/dh2 for the chain rule.
-    let ratio = EARTH_RADIUS / (EARTH_RADIUS + h_geometric);
+    let ratio = radius / (radius + h_geometric);
     let dh1 = ratio * ratio;
-    let dh2 = -2.0 * ratio * ratio / (EARTH_RADIUS + h_geometric);
-    {
-        // Evaluate in f64 whatever T is: this runs once per derivative evaluation.
-        let exponent = g0 / (LAPSE * r);
-        let (temperature, pressure, slope_factor, curvature_factor);
-        if troposphere {
-            temperature = T0 - LAPSE * h;
-            pressure = P0 * libm_pow(temperature / T0, exponent);
-            // rho ~ T^(n), n = exponent - 1: drho/dh = -n L rho / T, d2rho/dh2 = n (n-1) L^2 rho / T^2.
-            let n = exponent - 1.0;
-            slope_factor = -n * LAPSE / temperature;
-            curvature_factor = n * (n - 1.0) * LAPSE * LAPSE / (temperature * temperature);
-        } else {
-            let p11 = P0 * libm_pow(T_TROPOPAUSE / T0, exponent);
-            temperature = T_TROPOPAUSE;
-            let inv_scale_height = g0 / (r * T_TROPOPAUSE);
-            pressure = p11 * libm_exp(-(h - H_TROPOPAUSE) * inv_scale_height);
-            slope_factor = -inv_scale_height;
-            curvature_factor = inv_scale_height * inv_scale_height;
-        }
-        let density = pressure / (r * temperature);
-        let slope_geopotential = density * slope_factor;
-        let curvature_geopotential = density * curvature_factor;
-        AirProperties {
-            density: T::lit(density),
-            density_slope: T::lit(slope_geopotential * dh1),
-            density_curvature: T::lit(
-                curvature_geopotential * dh1 * dh1 + slope_geopotential * dh2,
-            ),
-            speed_of_sound: T::lit(libm_sqrt(gamma * r * temperature)),
-            temperature: T::lit(temperature),
-            pressure: T::lit(pressure),
-        }
+    let dh2 = -lit(2.0) * ratio * ratio / (radius + h_geometric);
+    let exponent = g0 / (lapse * r);
+    let (temperature, pressure, slope_factor, curvature_factor);
+    if troposphere {
+        temperature = t0 - lapse * h;
+        pressure = lit(P0) * (temperature / t0).powf(exponent);
+        // rho ~ T^(n), n = exponent - 1: drho/dH = -n L rho / T, d2rho/dH2 = n (n-1) L^2 rho / T^2.
+        let n = exponent - one;
+        slope_factor = -n * lapse / temperature;
+        curvature_factor = n * (n - one) * lapse * lapse / (temperature * temperature);
+    } else {
+        let t11 = lit(T_TROPOPAUSE);
+        let p11 = lit(P0) * (t11 / t0).powf(exponent);
+        temperature = t11;
+        let inv_scale_height = g0 / (r * t11);
+        pressure = p11 * (-(h - lit(H_TROPOPAUSE)) * inv_scale_height).exp();
+        slope_factor = -inv_scale_height;
+        curvature_factor = inv_scale_height * inv_scale_height;
+    }
+    let density = pressure / (r * temperature);
+    let slope_geopotential = density * slope_factor;
+    let curvature_geopotential = density * curvature_factor;
+    AirProperties {
+        density,
+        density_slope: slope_geopotential * dh1,
+        density_curvature: curvature_geopotential * dh1 * dh1 + slope_geopotential * dh2,
+        speed_of_sound: (gamma * r * temperature).sqrt(),
+        temperature,
+        pressure,
     }
 }
 
@@ -192,11 +194,11 @@ impl<T: Real> AirColumn<T> {
                 gamma,
                 gravity,
             } if (h - H_TROPOPAUSE_GEOMETRIC).abs() < 1000.0 => Some(isa_layer(
-                H_TROPOPAUSE_GEOMETRIC,
+                T::lit(H_TROPOPAUSE_GEOMETRIC),
                 h > H_TROPOPAUSE_GEOMETRIC,
-                gas_constant.to_f64(),
-                gamma.to_f64(),
-                gravity.to_f64(),
+                gas_constant,
+                gamma,
+                gravity,
             )),
             _ => None,
         };
@@ -222,16 +224,6 @@ impl<T: Real> AirColumn<T> {
         let rho = air.density + dh * (air.density_slope + half * dh * air.density_curvature);
         if rho > T::zero() { rho } else { T::zero() }
     }
-}
-
-fn libm_pow(x: f64, y: f64) -> f64 {
-    <f64 as nalgebra::ComplexField>::powf(x, y)
-}
-fn libm_exp(x: f64) -> f64 {
-    <f64 as nalgebra::ComplexField>::exp(x)
-}
-fn libm_sqrt(x: f64) -> f64 {
-    <f64 as nalgebra::ComplexField>::sqrt(x)
 }
 
 #[cfg(test)]

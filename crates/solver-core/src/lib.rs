@@ -44,6 +44,7 @@ pub mod error;
 pub mod model;
 pub mod motion;
 pub mod pendulum;
+pub mod profiles;
 pub mod scalar;
 pub mod solver;
 pub mod state;

@@ -77,6 +77,18 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// `dt` is f64 in every precision so that time advances identically for f32 and
     /// f64 solvers; the arithmetic of the step uses `dt` rounded to `T`.
     pub fn step<P: FlightPath<T> + ?Sized>(&mut self, path: &P, dt: f64) -> Result<(), SolveError> {
+        self.step_observed(path, dt, |_| {})
+    }
+
+    /// [`Solver::step`], calling `observe` with the outputs at the state *before* the
+    /// step. RK4's first stage evaluates the dynamics there anyway, so recording every
+    /// step this way costs no extra evaluation (calling [`Solver::outputs`] after each
+    /// step would cost a fifth one). `observe` is not called if that evaluation fails.
+    pub fn step_observed<P, F>(&mut self, path: &P, dt: f64, observe: F) -> Result<(), SolveError>
+    where
+        P: FlightPath<T> + ?Sized,
+        F: FnOnce(&Outputs<'_, T, N>),
+    {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(InputError::BadTimeStep.into());
         }
@@ -98,6 +110,12 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.ws,
             &mut self.slope,
         )?;
+        observe(&Outputs {
+            model: &self.model,
+            state: &self.state,
+            ws: &self.ws,
+            derivative: &self.slope,
+        });
         self.sum.assign(&self.slope, n);
         // k2 at y + dt/2 k1.
         self.stage.set_stage(&self.state, &self.slope, half, n);

@@ -87,6 +87,31 @@ fn same_inputs_give_bit_identical_outputs() {
 }
 
 #[test]
+fn observed_outputs_equal_a_separate_evaluation() {
+    let model = Model::<f64, 16>::new(reference_params(SegmentLayout::Graded {
+        count: 16,
+        ratio: 1.3,
+    }))
+    .unwrap();
+    let a = speed_of_sound(9000.0);
+    let path = Acceleration {
+        altitude: 9000.0,
+        v0: 0.6 * a,
+        v1: 0.8 * a,
+    };
+    let mut solver = Solver::new(model, trim(&model, &path.state_at(0.0)).unwrap()).unwrap();
+    for _ in 0..2100 {
+        solver.step(&path, 1e-3).unwrap();
+    }
+    let separate = solver.outputs(&path).unwrap().connection_tension();
+    let mut observed = f64::NAN;
+    solver
+        .step_observed(&path, 1e-3, |out| observed = out.connection_tension())
+        .unwrap();
+    assert_eq!(separate.to_bits(), observed.to_bits());
+}
+
+#[test]
 fn saved_state_restores_bit_identically() {
     let model = Model::<f64, 16>::new(reference_params(SegmentLayout::Graded {
         count: 16,

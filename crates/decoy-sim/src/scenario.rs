@@ -1,0 +1,677 @@
+//! Scenario files: what the aircraft does and for how long.
+//!
+//! A scenario is a small TOML file (`scenarios/*.toml` in the repository; the
+//! shipped ones are embedded, so `--scenario acceleration` works from any
+//! directory). Keys (unknown keys are errors):
+//!
+//! | key | kinds | meaning |
+//! |---|---|---|
+//! | `name` | all | the scenario's name (letters, digits, `-`, `_`, `.`); the default output directory is `out/<name>` |
+//! | `description` | all | one line for people (optional) |
+//! | `kind` | all | `steady`, `acceleration`, `pull-up`, `turn` or `recorded` |
+//! | `altitude_m` | all but recorded | initial altitude, m (0 to 20 000) |
+//! | `mach` | all but recorded | initial Mach number (above 0, at most 2) |
+//! | `final_mach` | acceleration | Mach number after the acceleration |
+//! | `accel_start_s` | acceleration | when the acceleration starts, s |
+//! | `acceleration_mps2` | acceleration | along-track acceleration, m/s^2 (> 0; slows down if `final_mach < mach`) |
+//! | `rate_radps` | pull-up, turn | flight-path rotation rate, rad/s (pull-up: positive up; turn: positive right); at most 1 in magnitude |
+//! | `start_s` | pull-up, turn | when the rotation starts, s (turn: optional, default 0) |
+//! | `duration_s` | pull-up | how long the flight path rotates, s; then the climb is held |
+//! | `file` | recorded | the recorded-flight CSV, relative to the scenario file |
+//! | `t_end_s` | all | simulated time, s |
+//! | `dt_s` | all | RK4 time step, s (optional, default: the configuration's `solver.time_step_host`) |
+//! | `segments` | all | cable segments (optional, default: the configuration's `solver.segments_host`) |
+//! | `grading` | all | segment length ratio, short at the decoy (optional, default 1 = uniform) |
+//!
+//! The command line's flags override the file's values ([`crate::RunOptions`]).
+//! [`Scenario::plan`] checks everything and builds the run's flight profile.
+
+use std::path::{Path, PathBuf};
+
+use decoy_config::SystemConfig;
+use serde::{Deserialize, Serialize};
+use solver_core::SegmentLayout;
+use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
+
+use crate::error::SimError;
+use crate::profile::FlightProfile;
+use crate::recorded::RecordedFlight;
+use crate::run::RunOptions;
+
+/// The shipped scenarios: name and TOML text (embedded from `scenarios/`).
+pub const BUILTIN_SCENARIOS: [(&str, &str); 5] = [
+    ("steady", include_str!("../../../scenarios/steady.toml")),
+    (
+        "acceleration",
+        include_str!("../../../scenarios/acceleration.toml"),
+    ),
+    ("pull-up", include_str!("../../../scenarios/pull-up.toml")),
+    ("turn", include_str!("../../../scenarios/turn.toml")),
+    ("recorded", include_str!("../../../scenarios/recorded.toml")),
+];
+
+/// The shipped recorded-flight example (`scenarios/recorded-example.csv`), which
+/// the built-in `recorded` scenario uses.
+pub const RECORDED_EXAMPLE_CSV: &str = include_str!("../../../scenarios/recorded-example.csv");
+/// The file name the built-in `recorded` scenario refers to.
+pub const RECORDED_EXAMPLE_NAME: &str = "recorded-example.csv";
+
+/// Capacity of the solver's segment arrays: the largest segment count a run may use.
+pub const MAX_SEGMENTS: usize = 512;
+/// Altitude range accepted, m (the ISA 1976 model's range above sea level).
+pub const ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
+/// Largest Mach number accepted.
+pub const MAX_MACH: f64 = 2.0;
+/// Largest flight-path rotation rate accepted, rad/s.
+pub const MAX_RATE_RADPS: f64 = 1.0;
+/// Most RK4 steps one run may take.
+pub const MAX_STEPS: f64 = 1e9;
+/// Grading ratios accepted (the solver's range).
+pub const GRADING_RANGE: (f64, f64) = (1.0, 10.0);
+
+/// What the aircraft does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScenarioKind {
+    /// Steady level flight.
+    Steady,
+    /// Level acceleration from `mach` to `final_mach`.
+    Acceleration,
+    /// Pull-up: the flight path rotates up at `rate_radps` for `duration_s`.
+    PullUp,
+    /// Level coordinated turn at `rate_radps`.
+    Turn,
+    /// A recorded flight from a CSV file.
+    Recorded,
+}
+
+impl ScenarioKind {
+    /// The name used in scenario files (`pull-up`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            ScenarioKind::Steady => "steady",
+            ScenarioKind::Acceleration => "acceleration",
+            ScenarioKind::PullUp => "pull-up",
+            ScenarioKind::Turn => "turn",
+            ScenarioKind::Recorded => "recorded",
+        }
+    }
+}
+
+/// Where a scenario came from (for messages and to resolve its `file`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum ScenarioOrigin {
+    /// One of [`BUILTIN_SCENARIOS`].
+    Builtin(String),
+    /// A file.
+    File(PathBuf),
+    /// Text given directly ([`Scenario::from_toml`]); `file` paths resolve
+    /// against the working directory.
+    #[default]
+    Text,
+}
+
+impl ScenarioOrigin {
+    /// How messages name it.
+    pub fn describe(&self) -> String {
+        match self {
+            ScenarioOrigin::Builtin(name) => format!("built-in scenario {name}.toml"),
+            ScenarioOrigin::File(path) => path.display().to_string(),
+            ScenarioOrigin::Text => "scenario".to_owned(),
+        }
+    }
+}
+
+/// A scenario file's contents (see the module docs for the keys).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Name; also the default output directory `out/<name>`.
+    pub name: String,
+    /// One line for people.
+    #[serde(default)]
+    pub description: String,
+    /// What the aircraft does.
+    pub kind: ScenarioKind,
+    /// Initial altitude, m.
+    pub altitude_m: Option<f64>,
+    /// Initial Mach number.
+    pub mach: Option<f64>,
+    /// Final Mach number (acceleration).
+    pub final_mach: Option<f64>,
+    /// Start of the acceleration, s.
+    pub accel_start_s: Option<f64>,
+    /// Along-track acceleration magnitude, m/s^2.
+    pub acceleration_mps2: Option<f64>,
+    /// Flight-path rotation rate, rad/s (pull-up, turn).
+    pub rate_radps: Option<f64>,
+    /// Start of the rotation, s (pull-up, turn).
+    pub start_s: Option<f64>,
+    /// Duration of the rotation, s (pull-up).
+    pub duration_s: Option<f64>,
+    /// Recorded-flight CSV, relative to the scenario file (recorded).
+    pub file: Option<String>,
+    /// Simulated time, s.
+    pub t_end_s: f64,
+    /// RK4 time step, s.
+    pub dt_s: Option<f64>,
+    /// Number of cable segments.
+    pub segments: Option<usize>,
+    /// Segment length ratio (1 = uniform).
+    pub grading: Option<f64>,
+    /// Where the scenario came from.
+    #[serde(skip)]
+    pub origin: ScenarioOrigin,
+}
+
+/// Everything a run needs, checked: produced by [`Scenario::plan`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunPlan {
+    /// Scenario name.
+    pub name: String,
+    /// Scenario kind.
+    pub kind: ScenarioKind,
+    /// The aircraft's trajectory.
+    pub profile: FlightProfile,
+    /// Cable discretisation.
+    pub layout: SegmentLayout<f64>,
+    /// RK4 time step, s.
+    pub dt: f64,
+    /// Simulated time, s (the run ends after `steps` steps, at `steps * dt` >= this).
+    pub t_end: f64,
+    /// Number of RK4 steps.
+    pub steps: u64,
+    /// +1 when the reported lateral offset is positive to the left of the flight
+    /// path, -1 when positive to the right (left turns, so that the outside of the
+    /// turn is positive).
+    pub lateral_sign: f64,
+}
+
+impl Scenario {
+    /// The names of the shipped scenarios.
+    pub fn builtin_names() -> Vec<String> {
+        BUILTIN_SCENARIOS
+            .iter()
+            .map(|(n, _)| (*n).to_owned())
+            .collect()
+    }
+
+    /// A shipped scenario by name.
+    pub fn builtin(name: &str) -> Result<Self, SimError> {
+        let (name, text) = BUILTIN_SCENARIOS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .ok_or_else(|| SimError::UnknownScenario {
+                name: name.to_owned(),
+                available: Self::builtin_names(),
+            })?;
+        Self::parse(text, ScenarioOrigin::Builtin((*name).to_owned()))
+    }
+
+    /// A scenario file.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self, SimError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| SimError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, ScenarioOrigin::File(path.to_owned()))
+    }
+
+    /// A scenario from TOML text.
+    pub fn from_toml(text: &str) -> Result<Self, SimError> {
+        Self::parse(text, ScenarioOrigin::Text)
+    }
+
+    /// `--scenario NAME|FILE`: a shipped scenario's name, else the path of a file.
+    /// Something that is neither a shipped name nor an existing file is an
+    /// [`SimError::UnknownScenario`] listing the shipped names (unless it looks
+    /// like a path, `*.toml` or with a `/`: then the read error).
+    pub fn load(name_or_path: &str) -> Result<Self, SimError> {
+        if BUILTIN_SCENARIOS.iter().any(|(n, _)| *n == name_or_path) {
+            return Self::builtin(name_or_path);
+        }
+        let path = Path::new(name_or_path);
+        let looks_like_path = name_or_path.ends_with(".toml")
+            || name_or_path.contains('/')
+            || name_or_path.contains(std::path::MAIN_SEPARATOR);
+        if looks_like_path || path.is_file() {
+            return Self::from_file(path);
+        }
+        Err(SimError::UnknownScenario {
+            name: name_or_path.to_owned(),
+            available: Self::builtin_names(),
+        })
+    }
+
+    fn parse(text: &str, origin: ScenarioOrigin) -> Result<Self, SimError> {
+        let mut scenario: Scenario =
+            toml::from_str(text).map_err(|e| toml_error(&origin.describe(), text, &e))?;
+        scenario.origin = origin;
+        Ok(scenario)
+    }
+
+    /// Applies the overrides of `options`, checks every value, and builds the run
+    /// plan (the flight profile is computed with `config`'s atmosphere and gravity;
+    /// a recorded flight's CSV is read and validated here).
+    pub fn plan(&self, config: &SystemConfig, options: &RunOptions) -> Result<RunPlan, SimError> {
+        check_options(options)?;
+        let origin = self.origin.describe();
+        let invalid = |field: &str, message: String| SimError::invalid(&origin, field, message);
+        let kind = self.kind;
+
+        // Overrides that do not apply to this kind are errors, not silently ignored.
+        let cli = "command line";
+        let applies = |flag: &str, given: bool, ok: bool, kinds: &str| {
+            if given && !ok {
+                Err(SimError::invalid(
+                    cli,
+                    flag,
+                    format!("does not apply to a {} scenario ({kinds})", kind.name()),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        let recorded = kind == ScenarioKind::Recorded;
+        let rotates = matches!(kind, ScenarioKind::PullUp | ScenarioKind::Turn);
+        applies(
+            "--altitude",
+            options.altitude.is_some(),
+            !recorded,
+            "a recorded flight has its own altitude",
+        )?;
+        applies(
+            "--mach",
+            options.mach.is_some(),
+            !recorded,
+            "a recorded flight has its own speed",
+        )?;
+        applies(
+            "--rate",
+            options.rate.is_some(),
+            rotates,
+            "only pull-up and turn scenarios have a rate",
+        )?;
+
+        // Which keys each kind needs (required) and allows.
+        use ScenarioKind as K;
+        let keys: [(&str, bool, &[K], &[K]); 9] = [
+            (
+                "altitude_m",
+                self.altitude_m.is_some(),
+                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
+                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
+            ),
+            (
+                "mach",
+                self.mach.is_some(),
+                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
+                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
+            ),
+            (
+                "final_mach",
+                self.final_mach.is_some(),
+                &[K::Acceleration],
+                &[K::Acceleration],
+            ),
+            (
+                "accel_start_s",
+                self.accel_start_s.is_some(),
+                &[K::Acceleration],
+                &[K::Acceleration],
+            ),
+            (
+                "acceleration_mps2",
+                self.acceleration_mps2.is_some(),
+                &[K::Acceleration],
+                &[K::Acceleration],
+            ),
+            (
+                "rate_radps",
+                self.rate_radps.is_some(),
+                &[K::PullUp, K::Turn],
+                &[K::PullUp, K::Turn],
+            ),
+            (
+                "start_s",
+                self.start_s.is_some(),
+                &[K::PullUp],
+                &[K::PullUp, K::Turn],
+            ),
+            (
+                "duration_s",
+                self.duration_s.is_some(),
+                &[K::PullUp],
+                &[K::PullUp],
+            ),
+            ("file", self.file.is_some(), &[K::Recorded], &[K::Recorded]),
+        ];
+        for (key, present, required, allowed) in keys {
+            if !present && required.contains(&kind) {
+                return Err(invalid(
+                    key,
+                    format!("is required for a {} scenario", kind.name()),
+                ));
+            }
+            if present && !allowed.contains(&kind) {
+                return Err(invalid(
+                    key,
+                    format!("does not apply to a {} scenario", kind.name()),
+                ));
+            }
+        }
+
+        let name = self.name.trim();
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+            || name.starts_with('.')
+        {
+            return Err(invalid(
+                "name",
+                format!(
+                    "must be letters, digits, `-`, `_` or `.` (it names the output directory), got `{}`",
+                    self.name
+                ),
+            ));
+        }
+
+        // Values: overrides first (already checked), then the file's.
+        let t_end = options.t_end.unwrap_or(self.t_end_s);
+        check_positive(&invalid, "t_end_s", t_end)?;
+        let dt = match options.dt.or(self.dt_s) {
+            Some(dt) => dt,
+            None => config.solver.time_step_host,
+        };
+        check_positive(&invalid, "dt_s", dt)?;
+        if dt > t_end {
+            return Err(SimError::invalid(
+                if options.dt.is_some() || options.t_end.is_some() {
+                    cli
+                } else {
+                    &origin
+                },
+                "time step",
+                format!("{dt} s is longer than the simulated time {t_end} s"),
+            ));
+        }
+        let steps = (t_end / dt * (1.0 - 1e-12)).ceil();
+        if steps > MAX_STEPS {
+            return Err(invalid(
+                "t_end_s / dt_s",
+                format!("asks for {steps:e} steps, more than {MAX_STEPS:e}"),
+            ));
+        }
+        let segments = options
+            .segments
+            .or(self.segments)
+            .unwrap_or(config.solver.segments_host);
+        check_segments(&invalid, "segments", segments)?;
+        let grading = options.grading.or(self.grading).unwrap_or(1.0);
+        check_grading(&invalid, "grading", grading)?;
+        let layout = if grading == 1.0 {
+            SegmentLayout::Uniform { count: segments }
+        } else {
+            SegmentLayout::Graded {
+                count: segments,
+                ratio: grading,
+            }
+        };
+
+        let altitude = options.altitude.or(self.altitude_m);
+        let mach = options.mach.or(self.mach);
+        let rate = options.rate.or(self.rate_radps);
+        let speed = |mach: f64, key: &str| -> Result<f64, SimError> {
+            check_mach(&invalid, key, mach)?;
+            let h = altitude.unwrap_or(0.0);
+            Ok(config.mach_to_speed(h, mach)?)
+        };
+        if let Some(h) = altitude {
+            check_altitude(&invalid, "altitude_m", h)?;
+        }
+        if let Some(w) = rate {
+            check_rate(&invalid, "rate_radps", w)?;
+        }
+        let mut lateral_sign = 1.0;
+        let profile = match kind {
+            ScenarioKind::Steady => {
+                let v = speed(mach.unwrap_or_default(), "mach")?;
+                FlightProfile::Level(LevelAcceleration::steady(altitude.unwrap_or_default(), v))
+            }
+            ScenarioKind::Acceleration => {
+                let v0 = speed(mach.unwrap_or_default(), "mach")?;
+                let v1 = speed(self.final_mach.unwrap_or_default(), "final_mach")?;
+                let start = self.accel_start_s.unwrap_or_default();
+                check_non_negative(&invalid, "accel_start_s", start)?;
+                let a = self.acceleration_mps2.unwrap_or_default();
+                check_positive(&invalid, "acceleration_mps2", a)?;
+                FlightProfile::Level(LevelAcceleration {
+                    altitude: altitude.unwrap_or_default(),
+                    initial_speed: v0,
+                    final_speed: v1,
+                    start,
+                    acceleration: a,
+                })
+            }
+            ScenarioKind::PullUp => {
+                let v = speed(mach.unwrap_or_default(), "mach")?;
+                let start = self.start_s.unwrap_or_default();
+                check_non_negative(&invalid, "start_s", start)?;
+                let duration = self.duration_s.unwrap_or_default();
+                check_positive(&invalid, "duration_s", duration)?;
+                FlightProfile::PullUp(PullUp {
+                    altitude: altitude.unwrap_or_default(),
+                    speed: v,
+                    start,
+                    rate: rate.unwrap_or_default(),
+                    duration,
+                })
+            }
+            ScenarioKind::Turn => {
+                let v = speed(mach.unwrap_or_default(), "mach")?;
+                let start = self.start_s.unwrap_or(0.0);
+                check_non_negative(&invalid, "start_s", start)?;
+                let w = rate.unwrap_or_default();
+                if w < 0.0 {
+                    lateral_sign = -1.0;
+                }
+                FlightProfile::Turn(LevelTurn {
+                    altitude: altitude.unwrap_or_default(),
+                    speed: v,
+                    start,
+                    rate: w,
+                    gravity: config.environment.gravity,
+                })
+            }
+            ScenarioKind::Recorded => {
+                let file = self.file.as_deref().unwrap_or_default();
+                let flight = self.load_recording(file)?;
+                let duration = flight.duration();
+                if t_end > duration * (1.0 + 1e-12) {
+                    return Err(SimError::invalid(
+                        if options.t_end.is_some() {
+                            cli
+                        } else {
+                            &origin
+                        },
+                        if options.t_end.is_some() {
+                            "--t-end"
+                        } else {
+                            "t_end_s"
+                        },
+                        format!("{t_end} s is longer than the recording `{file}` ({duration} s)"),
+                    ));
+                }
+                FlightProfile::Recorded(flight)
+            }
+        };
+        Ok(RunPlan {
+            name: name.to_owned(),
+            kind,
+            profile,
+            layout,
+            dt,
+            t_end,
+            steps: steps.max(1.0) as u64,
+            lateral_sign,
+        })
+    }
+
+    /// Reads the recording `file`: the embedded example for the built-in
+    /// scenario, else relative to the scenario file's directory.
+    fn load_recording(&self, file: &str) -> Result<RecordedFlight, SimError> {
+        if file.trim().is_empty() {
+            return Err(SimError::invalid(
+                self.origin.describe(),
+                "file",
+                "must name the recorded-flight CSV",
+            ));
+        }
+        let path = match &self.origin {
+            ScenarioOrigin::Builtin(_) if file == RECORDED_EXAMPLE_NAME => {
+                return RecordedFlight::parse(
+                    &format!("built-in {RECORDED_EXAMPLE_NAME}"),
+                    RECORDED_EXAMPLE_CSV,
+                );
+            }
+            ScenarioOrigin::File(scenario) => scenario
+                .parent()
+                .unwrap_or_else(|| Path::new("."))
+                .join(file),
+            _ => PathBuf::from(file),
+        };
+        let text = std::fs::read_to_string(&path).map_err(|source| SimError::Read {
+            path: path.clone(),
+            source,
+        })?;
+        RecordedFlight::parse(&path.display().to_string(), &text)
+    }
+}
+
+/// Checks the command-line overrides, naming the flags.
+fn check_options(o: &RunOptions) -> Result<(), SimError> {
+    let cli = |field: &str, message: String| SimError::invalid("command line", field, message);
+    if let Some(n) = o.segments {
+        check_segments(&cli, "--segments", n)?;
+    }
+    if let Some(r) = o.grading {
+        check_grading(&cli, "--grading", r)?;
+    }
+    if let Some(dt) = o.dt {
+        check_positive(&cli, "--dt", dt)?;
+    }
+    if let Some(t) = o.t_end {
+        check_positive(&cli, "--t-end", t)?;
+    }
+    if let Some(h) = o.altitude {
+        check_altitude(&cli, "--altitude", h)?;
+    }
+    if let Some(m) = o.mach {
+        check_mach(&cli, "--mach", m)?;
+    }
+    if let Some(w) = o.rate {
+        check_rate(&cli, "--rate", w)?;
+    }
+    Ok(())
+}
+
+type Invalid<'a> = dyn Fn(&str, String) -> SimError + 'a;
+
+fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("must be a finite number, got {v}")))
+    }
+}
+
+fn check_positive(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
+    check_finite(invalid, field, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("must be positive, got {v}")))
+    }
+}
+
+fn check_non_negative(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
+    check_finite(invalid, field, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("must not be negative, got {v}")))
+    }
+}
+
+fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Result<(), SimError> {
+    let (lo, hi) = ALTITUDE_RANGE_M;
+    if h.is_finite() && (lo..=hi).contains(&h) {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must be between {lo} and {hi} m, got {h}"),
+        ))
+    }
+}
+
+fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(), SimError> {
+    if m.is_finite() && m > 0.0 && m <= MAX_MACH {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must be above 0 and at most {MAX_MACH}, got {m}"),
+        ))
+    }
+}
+
+fn check_rate(invalid: &Invalid<'_>, field: &str, w: f64) -> Result<(), SimError> {
+    if w.is_finite() && w.abs() <= MAX_RATE_RADPS {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must be a rate between -{MAX_RATE_RADPS} and {MAX_RATE_RADPS} rad/s, got {w}"),
+        ))
+    }
+}
+
+fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Result<(), SimError> {
+    if (1..=MAX_SEGMENTS).contains(&n) {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must be between 1 and {MAX_SEGMENTS}, got {n}"),
+        ))
+    }
+}
+
+fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Result<(), SimError> {
+    let (lo, hi) = GRADING_RANGE;
+    if r.is_finite() && (lo..=hi).contains(&r) {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must be a length ratio between {lo} and {hi}, got {r}"),
+        ))
+    }
+}
+
+/// A one-line TOML error with the line of the problem.
+fn toml_error(file: &str, text: &str, error: &toml::de::Error) -> SimError {
+    let message = error.message().trim().replace('\n', " ");
+    let line = error.span().map(|span| {
+        let start = span.start.min(text.len());
+        text[..start].matches('\n').count() + 1
+    });
+    SimError::ScenarioSyntax {
+        file: file.to_owned(),
+        line,
+        message,
+    }
+}

@@ -1,0 +1,403 @@
+//! Running QEMU (or any program) with a time limit.
+//!
+//! A [`Supervised`] child is killed when its time is up and when it is dropped, so a
+//! firmware that never exits, or a test that panics, leaves no QEMU behind. Its
+//! stdout and stderr are read on threads, so a chatty child cannot block on a full
+//! pipe.
+
+use std::ffi::{OsStr, OsString};
+use std::fmt;
+use std::io::{self, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::thread::{self, JoinHandle};
+use std::time::{Duration, Instant};
+
+/// The QEMU binary for the Cortex-M boards.
+pub const QEMU: &str = "qemu-system-arm";
+
+/// Board and CPU: MPS2 AN386, Cortex-M4F (4 MiB flash at 0, 4 MiB RAM at 0x2000_0000).
+pub const BOARD_ARGS: &[&str] = &["-M", "mps2-an386", "-cpu", "cortex-m4"];
+
+/// No display or monitor; semihosting on (console and exit code to the host);
+/// virtual time 1 ns per executed instruction, so SysTick counts instructions
+/// deterministically. Mirrors `firmware/qemu-run.sh`.
+pub const HEADLESS_ARGS: &[&str] = &[
+    "-display",
+    "none",
+    "-monitor",
+    "none",
+    "-semihosting-config",
+    "enable=on,target=native",
+    "-icount",
+    "shift=0,align=off,sleep=off",
+];
+
+/// Pause between polls of a running child.
+const POLL: Duration = Duration::from_millis(5);
+
+/// What went wrong running a program.
+#[derive(Debug)]
+pub enum RunError {
+    /// The program is not installed (or not on `PATH`).
+    NotFound {
+        /// The program.
+        program: String,
+        /// What to do about it.
+        hint: &'static str,
+    },
+    /// The program could not be started or watched.
+    Io {
+        /// The program.
+        program: String,
+        /// The underlying error.
+        error: io::Error,
+    },
+    /// The program ran out of time and was killed.
+    TimedOut {
+        /// The program.
+        program: String,
+        /// The time limit.
+        timeout: Duration,
+        /// What it printed before it was killed.
+        output: Captured,
+    },
+}
+
+impl fmt::Display for RunError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RunError::NotFound { program, hint } => write!(f, "`{program}` not found: {hint}"),
+            RunError::Io { program, error } => write!(f, "cannot run `{program}`: {error}"),
+            RunError::TimedOut {
+                program,
+                timeout,
+                output,
+            } => write!(
+                f,
+                "`{program}` did not finish within {timeout:?} and was killed\n{}",
+                output.describe()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}
+
+/// What a finished program printed, and how it ended.
+#[derive(Clone, Debug)]
+pub struct Captured {
+    /// Exit status (for a killed program, the status after the kill).
+    pub status: ExitStatus,
+    /// Everything written to stdout.
+    pub stdout: Vec<u8>,
+    /// Everything written to stderr.
+    pub stderr: Vec<u8>,
+    /// Wall-clock time from spawn to exit.
+    pub elapsed: Duration,
+}
+
+impl Captured {
+    /// Stdout as text (invalid UTF-8 replaced).
+    pub fn stdout_text(&self) -> String {
+        String::from_utf8_lossy(&self.stdout).into_owned()
+    }
+
+    /// Stderr as text (invalid UTF-8 replaced).
+    pub fn stderr_text(&self) -> String {
+        String::from_utf8_lossy(&self.stderr).into_owned()
+    }
+
+    /// Status, stdout and stderr, for failure messages.
+    pub fn describe(&self) -> String {
+        format!(
+            "status: {}\n--- stdout ---\n{}--- stderr ---\n{}",
+            self.status,
+            self.stdout_text(),
+            self.stderr_text()
+        )
+    }
+}
+
+/// A running child with a deadline; killed on timeout and on drop.
+pub struct Supervised {
+    program: String,
+    child: Child,
+    started: Instant,
+    timeout: Duration,
+    stdout: Option<JoinHandle<Vec<u8>>>,
+    stderr: Option<JoinHandle<Vec<u8>>>,
+}
+
+impl Supervised {
+    /// Spawns `cmd` with stdout and stderr captured (stdin closed) and `timeout`
+    /// to live. `hint` tells the user what to do if the program is missing.
+    pub fn spawn(
+        cmd: &mut Command,
+        timeout: Duration,
+        hint: &'static str,
+    ) -> Result<Self, RunError> {
+        let program = cmd.get_program().to_string_lossy().into_owned();
+        let mut child = cmd
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|error| match error.kind() {
+                io::ErrorKind::NotFound => RunError::NotFound {
+                    program: program.clone(),
+                    hint,
+                },
+                _ => RunError::Io {
+                    program: program.clone(),
+                    error,
+                },
+            })?;
+        let stdout = child.stdout.take().map(reader);
+        let stderr = child.stderr.take().map(reader);
+        Ok(Supervised {
+            program,
+            child,
+            started: Instant::now(),
+            timeout,
+            stdout,
+            stderr,
+        })
+    }
+
+    /// The child's process id.
+    pub fn id(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Time left before the deadline.
+    pub fn remaining(&self) -> Duration {
+        self.timeout.saturating_sub(self.started.elapsed())
+    }
+
+    /// Waits for the child to exit, killing it at the deadline, and returns what it printed.
+    pub fn wait(mut self) -> Result<Captured, RunError> {
+        loop {
+            let polled = self.child.try_wait();
+            match polled {
+                Ok(Some(status)) => return Ok(self.collect(status)),
+                Ok(None) if self.started.elapsed() >= self.timeout => {
+                    let status = self.kill().map_err(|error| self.io_error(error))?;
+                    let output = self.collect(status);
+                    return Err(RunError::TimedOut {
+                        program: self.program.clone(),
+                        timeout: self.timeout,
+                        output,
+                    });
+                }
+                Ok(None) => thread::sleep(POLL.min(self.remaining())),
+                Err(error) => {
+                    // Best effort: the error being reported is the first one.
+                    let _ = self.kill();
+                    return Err(self.io_error(error));
+                }
+            }
+        }
+    }
+
+    /// Kills the child (if still running) and reaps it. Only the child itself: the
+    /// processes a killed `cargo` started (rustc) finish on their own.
+    fn kill(&mut self) -> io::Result<ExitStatus> {
+        // Killing a child that already exited fails harmlessly; `wait` reaps it either way.
+        let _ = self.child.kill();
+        self.child.wait()
+    }
+
+    fn io_error(&self, error: io::Error) -> RunError {
+        RunError::Io {
+            program: self.program.clone(),
+            error,
+        }
+    }
+
+    /// Joins the reader threads (their pipes close when the child exits).
+    fn collect(&mut self, status: ExitStatus) -> Captured {
+        let join =
+            |h: Option<JoinHandle<Vec<u8>>>| h.and_then(|h| h.join().ok()).unwrap_or_default();
+        Captured {
+            status,
+            stdout: join(self.stdout.take()),
+            stderr: join(self.stderr.take()),
+            elapsed: self.started.elapsed(),
+        }
+    }
+}
+
+impl Drop for Supervised {
+    fn drop(&mut self) {
+        if matches!(self.child.try_wait(), Ok(None)) {
+            // Nothing to report from a destructor; the child is gone either way.
+            let _ = self.kill();
+        }
+    }
+}
+
+/// Reads a pipe to its end on a thread.
+fn reader<R: Read + Send + 'static>(mut pipe: R) -> JoinHandle<Vec<u8>> {
+    thread::spawn(move || {
+        let mut buf = Vec::new();
+        // A read error ends the capture; what was read so far is kept.
+        let _ = pipe.read_to_end(&mut buf);
+        buf
+    })
+}
+
+/// Runs `cmd` to completion within `timeout`, capturing its output.
+pub fn run_with_timeout(
+    cmd: &mut Command,
+    timeout: Duration,
+    hint: &'static str,
+) -> Result<Captured, RunError> {
+    Supervised::spawn(cmd, timeout, hint)?.wait()
+}
+
+/// What to tell the user when QEMU is missing.
+pub const QEMU_MISSING_HINT: &str =
+    "QEMU for Arm is not installed; run `cargo xtask setup` (it installs qemu-system-arm)";
+
+/// A QEMU invocation on the firmware's board.
+#[derive(Clone, Debug)]
+pub struct Qemu {
+    program: PathBuf,
+    timeout: Duration,
+    serial: OsString,
+    extra: Vec<OsString>,
+}
+
+impl Default for Qemu {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Qemu {
+    /// `qemu-system-arm` from `PATH`, 120 s time limit, UART0 unconnected.
+    pub fn new() -> Self {
+        Qemu {
+            program: PathBuf::from(QEMU),
+            timeout: Duration::from_secs(120),
+            serial: OsString::from("none"),
+            extra: Vec::new(),
+        }
+    }
+
+    /// Sets the time limit of a run.
+    pub fn timeout(mut self, timeout: Duration) -> Self {
+        self.timeout = timeout;
+        self
+    }
+
+    /// Connects UART0 (QEMU's `-serial` value, for example
+    /// `tcp:127.0.0.1:PORT,nodelay=on`; default `none`).
+    pub fn serial(mut self, spec: impl AsRef<OsStr>) -> Self {
+        self.serial = spec.as_ref().to_owned();
+        self
+    }
+
+    /// Appends further QEMU arguments.
+    pub fn arg(mut self, arg: impl AsRef<OsStr>) -> Self {
+        self.extra.push(arg.as_ref().to_owned());
+        self
+    }
+
+    /// The command line that boots `elf`.
+    pub fn command(&self, elf: &Path) -> Command {
+        let mut cmd = Command::new(&self.program);
+        cmd.args(BOARD_ARGS)
+            .args(HEADLESS_ARGS)
+            .arg("-serial")
+            .arg(&self.serial)
+            .args(&self.extra)
+            .arg("-kernel")
+            .arg(elf);
+        cmd
+    }
+
+    /// Boots `elf` and leaves it running (for tests that talk to it while it runs).
+    pub fn spawn(&self, elf: &Path) -> Result<Supervised, RunError> {
+        Supervised::spawn(&mut self.command(elf), self.timeout, QEMU_MISSING_HINT)
+    }
+
+    /// Boots `elf` and waits for it to exit (through semihosting) or time out.
+    pub fn run(&self, elf: &Path) -> Result<Captured, RunError> {
+        self.spawn(elf)?.wait()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn captures_output_and_status() {
+        let out = run_with_timeout(
+            Command::new("sh").args(["-c", "echo out; echo err >&2; exit 3"]),
+            Duration::from_secs(10),
+            "",
+        )
+        .unwrap();
+        assert_eq!(out.stdout_text(), "out\n");
+        assert_eq!(out.stderr_text(), "err\n");
+        assert_eq!(out.status.code(), Some(3));
+    }
+
+    #[test]
+    fn kills_on_timeout() {
+        let started = Instant::now();
+        let err = run_with_timeout(
+            Command::new("sh").args(["-c", "echo before; exec sleep 30"]),
+            Duration::from_millis(200),
+            "",
+        )
+        .unwrap_err();
+        assert!(started.elapsed() < Duration::from_secs(10));
+        match err {
+            RunError::TimedOut { output, .. } => assert_eq!(output.stdout_text(), "before\n"),
+            other => panic!("expected a timeout, got {other}"),
+        }
+    }
+
+    #[test]
+    fn kills_on_drop() {
+        let child = Supervised::spawn(Command::new("sleep").arg("30"), Duration::from_secs(60), "")
+            .unwrap();
+        let pid = child.id();
+        drop(child);
+        // The process is reaped by the drop: no /proc entry, or not our sleep any more.
+        let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+        assert!(!cmdline.starts_with(b"sleep"), "pid {pid} still runs");
+    }
+
+    #[test]
+    fn missing_program_says_what_to_do() {
+        let err = run_with_timeout(
+            &mut Command::new("definitely-not-installed-hil"),
+            Duration::from_secs(1),
+            "install it",
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("install it"), "{err}");
+    }
+
+    #[test]
+    fn qemu_command_line() {
+        let cmd = Qemu::new().command(Path::new("fw.elf"));
+        let args: Vec<_> = cmd
+            .get_args()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        let line = args.join(" ");
+        assert!(line.starts_with("-M mps2-an386 -cpu cortex-m4"), "{line}");
+        assert!(
+            line.contains("-icount shift=0,align=off,sleep=off"),
+            "{line}"
+        );
+        assert!(line.contains("-serial none"), "{line}");
+        assert!(line.ends_with("-kernel fw.elf"), "{line}");
+    }
+}
