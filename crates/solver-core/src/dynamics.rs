@@ -339,69 +339,26 @@ fn joint_row<T: Real, const N: usize>(
     (block, rhs)
 }
 
-/// LDLᵀ factors of a symmetric positive-definite 3x3 matrix.
-#[derive(Clone, Copy, Debug)]
-struct Ldl3<T: Real> {
-    l21: T,
-    l31: T,
-    l32: T,
-    d1_inv: T,
-    d2_inv: T,
-    d3_inv: T,
-}
-
-impl<T: Real> Ldl3<T> {
-    /// Factors S = L D Lᵀ using the lower triangle; `None` when a pivot is not
-    /// positive (this also catches NaN).
-    #[inline(always)]
-    fn factor(s: &Mat3<T>) -> Option<Self> {
-        let zero = T::zero();
-        let d1 = s[(0, 0)];
-        if !(d1 > zero) {
-            return None;
-        }
-        let d1_inv = T::one() / d1;
-        let l21 = s[(1, 0)] * d1_inv;
-        let l31 = s[(2, 0)] * d1_inv;
-        let d2 = s[(1, 1)] - l21 * s[(1, 0)];
-        if !(d2 > zero) {
-            return None;
-        }
-        let d2_inv = T::one() / d2;
-        let l32 = (s[(2, 1)] - l31 * s[(1, 0)]) * d2_inv;
-        let d3 = s[(2, 2)] - l31 * s[(2, 0)] - l32 * l32 * d2;
-        if !(d3 > zero && d3.finite()) {
-            return None;
-        }
-        Some(Ldl3 {
-            l21,
-            l31,
-            l32,
-            d1_inv,
-            d2_inv,
-            d3_inv: T::one() / d3,
-        })
+/// Inverse of a symmetric 3x3 matrix (lower triangle read) by cofactors, or `None`
+/// unless it is positive definite by Sylvester's criterion (leading minors
+/// a, a d - b², det all positive; false for NaN too). One division.
+#[inline(always)]
+fn spd_inverse<T: Real>(s: &Mat3<T>) -> Option<Mat3<T>> {
+    let zero = T::zero();
+    let (a, b, c) = (s[(0, 0)], s[(1, 0)], s[(2, 0)]);
+    let (d, e, f) = (s[(1, 1)], s[(2, 1)], s[(2, 2)]);
+    let c00 = d * f - e * e;
+    let c01 = c * e - b * f;
+    let c02 = b * e - c * d;
+    let c22 = a * d - b * b;
+    let det = a * c00 + b * c01 + c * c02;
+    if !(a > zero && c22 > zero && det > zero && det.finite()) {
+        return None;
     }
-
-    #[inline(always)]
-    fn solve(&self, b: &Vec3<T>) -> Vec3<T> {
-        let y1 = b.x;
-        let y2 = b.y - self.l21 * y1;
-        let y3 = b.z - self.l31 * y1 - self.l32 * y2;
-        let x3 = y3 * self.d3_inv;
-        let x2 = y2 * self.d2_inv - self.l32 * x3;
-        let x1 = y1 * self.d1_inv - self.l21 * x2 - self.l31 * x3;
-        Vec3::new(x1, x2, x3)
-    }
-
-    #[inline(always)]
-    fn solve_matrix(&self, b: &Mat3<T>) -> Mat3<T> {
-        Mat3::from_columns(&[
-            self.solve(&b.column(0).into_owned()),
-            self.solve(&b.column(1).into_owned()),
-            self.solve(&b.column(2).into_owned()),
-        ])
-    }
+    let inv = T::one() / det;
+    let c11 = a * f - c * c;
+    let c12 = b * c - a * e;
+    Some(Mat3::new(c00, c01, c02, c01, c11, c12, c02, c12, c22) * inv)
 }
 
 /// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0).
@@ -415,37 +372,64 @@ fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
 ///
 /// Forward sweep (joint 0 toward the decoy): S_0 = D_0, y_0 = b_0, and for each joint
 /// X_j = S_j⁻¹ B_j, z_j = S_j⁻¹ y_j, S_{j+1} = D_{j+1} - B_j X_j, y_{j+1} = b_{j+1} - B_j z_j,
-/// where B_j = -(I - 3P_{j+1})/m_{j+1} is symmetric. Back sweep: T_last = S_last⁻¹ y_last,
-/// T_j = z_j - X_j T_{j+1}. Every S_j is a Schur complement of an SPD matrix and
-/// so SPD; a pivot that is not positive is reported with its joint.
+/// where B_j = -(I - 3P_{j+1})/m_{j+1} = (2I - 3 e eᵀ)/m is symmetric. Back sweep:
+/// T_last = S_last⁻¹ y_last, T_j = z_j - X_j T_{j+1}. Every S_j is a Schur complement of
+/// an SPD matrix and so SPD; a pivot block that is not positive definite is reported
+/// with its joint.
+///
+/// Structure used (the cost per joint matters on the microcontroller): S_j⁻¹ by
+/// cofactors (one division); with u = S_j⁻¹ e, X_j = (2 S_j⁻¹ - 3 u eᵀ)/m and
+/// B_j X_j = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m²; each segment's diagonal
+/// contribution (4I - 3 e eᵀ)/m is formed once and used for both of its joints.
 pub fn solve_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
     ws: &mut Workspace<T, N>,
 ) -> Result<(), SolveError> {
     let last = last_joint(model);
+    let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
-    let (mut s, mut y) = joint_row(model, state, ws, 0);
+    let (two, three, four, six, nine) = (
+        T::lit(2.0),
+        T::lit(3.0),
+        T::lit(4.0),
+        T::lit(6.0),
+        T::lit(9.0),
+    );
+    // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
+    let mut block = segment_block(&state.directions[0], inverse_masses[0]);
+    let mut s = block;
+    let mut y = ws.connection.acceleration - ws.specific_force[0] - ws.centripetal[0];
     for j in 0..last {
-        let ldl = Ldl3::factor(&s).ok_or(SolveError::NonPositivePivot { joint: j })?;
+        let s_inv = spd_inverse(&s).ok_or(SolveError::NonPositivePivot { joint: j })?;
+        // Segment j+1 (index j) couples joints j and j+1.
         let e = state.directions[j];
-        let inverse_mass = inverse_masses[j];
-        // X_j = S_j⁻¹ B_j with B_j = (2I - 3 e eᵀ)/m.
-        let mut b = e * e.transpose() * (T::lit(-3.0) * inverse_mass);
-        let two = T::lit(2.0) * inverse_mass;
-        b[(0, 0)] += two;
-        b[(1, 1)] += two;
-        b[(2, 2)] += two;
-        let x = ldl.solve_matrix(&b);
-        let z = ldl.solve(&y);
-        ws.elimination[j] = x;
+        let im = inverse_masses[j];
+        let u = s_inv * e;
+        let z = s_inv * y;
+        let et = e.transpose();
+        ws.elimination[j] = (s_inv * two - u * et * three) * im;
         ws.reduced_rhs[j] = z;
-        let (d_next, b_next) = joint_row(model, state, ws, j + 1);
-        s = d_next - coupling_times(&e, inverse_mass, &x);
-        y = b_next - coupling_times_vec(&e, inverse_mass, &z);
+        let coupled = (s_inv * four - (u * et + e * u.transpose()) * six
+            + e * et * (nine * e.dot(&u)))
+            * (im * im);
+        // D_{j+1} and b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
+        let mut d_next = block;
+        let mut b_next =
+            ws.specific_force[j] - ws.centripetal[j] - (z * two - e * (three * e.dot(&z))) * im;
+        if j + 1 < n {
+            block = segment_block(&state.directions[j + 1], inverse_masses[j + 1]);
+            d_next += block;
+            b_next -= ws.specific_force[j + 1] + ws.centripetal[j + 1];
+        } else {
+            d_next += ws.decoy.joint_block;
+            b_next += ws.decoy.joint_rhs;
+        }
+        s = d_next - coupled;
+        y = b_next;
     }
-    let ldl = Ldl3::factor(&s).ok_or(SolveError::NonPositivePivot { joint: last })?;
-    let mut t = ldl.solve(&y);
+    let s_inv = spd_inverse(&s).ok_or(SolveError::NonPositivePivot { joint: last })?;
+    let mut t = s_inv * y;
     set_joint_force(ws, last, t);
     for j in (0..last).rev() {
         t = ws.reduced_rhs[j] - ws.elimination[j] * t;

@@ -103,11 +103,12 @@ fn trim_16_graded_f64_and_f32_are_equilibria() {
             "16 graded f32: T0 {tc32:.3} N, |dw/dt| {accel:e}, moved {moved:e}, decoy rate {rate:e}"
         );
         assert!((tc32 - tc).abs() / tc < 1e-4);
-        // f32 round-off: ~3e-5 N on a 540 N hinge-force sum, over the 4.6 g, 0.46 m
-        // segment at the decoy (gain 6/(m l) = 2800), gives ~1e-2 rad/s^2. The state
-        // stays within a fraction of a degree of trim.
+        // f32 round-off: a few ulps (~5e-5 N) of the ~70 N hinge-force sum on the
+        // 4.6 g, 0.46 m segment at the decoy (gain 6/(m l) = 2800) give ~0.15 rad/s^2
+        // (measured 0.153 with cofactor pivot inverses, 0.022 with LDLᵀ pivots). The
+        // state stays within a fraction of a degree of trim over 10 s.
         assert!(
-            accel < 0.1 && moved < 1e-2 && rate < 1e-2,
+            accel < 0.3 && moved < 1e-2 && rate < 1e-2,
             "f32 accel {accel:e} moved {moved:e} rate {rate:e}"
         );
     });
