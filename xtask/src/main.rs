@@ -5,13 +5,15 @@
 //! - `test`: `setup`, then every test stage (fmt, clippy, host tests, the solver's
 //!   no_std cross build, the firmware build), failing fast.
 //! - `run`: the main job on the built-in reference system (see [`MAIN_JOB`]).
+//! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
+//!   [`bench_report`]).
 
 mod process;
 mod setup;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand};
 
@@ -47,6 +49,9 @@ enum Cmd {
     Test,
     /// Run the main job on the built-in reference system.
     Run,
+    /// Run the wall-clock and instruction-count benchmarks and the firmware under
+    /// QEMU, and write docs/benchmarks.md and docs/figures/bench-scaling.{png,svg}.
+    BenchReport,
 }
 
 fn main() -> ExitCode {
@@ -56,6 +61,7 @@ fn main() -> ExitCode {
         Cmd::Setup => setup::setup(&root, Scope::Full).map(drop),
         Cmd::Test => test(&root),
         Cmd::Run => run(&root),
+        Cmd::BenchReport => bench_report(&root),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -217,4 +223,94 @@ fn run(root: &Path) -> Result<()> {
         process::run(&mut cargo(root, &args))?;
     }
     Ok(())
+}
+
+/// The criterion run of `cargo xtask bench-report` (arguments after `cargo`).
+const BENCH_WALL: &[&str] = &[
+    "bench",
+    "-p",
+    "benches",
+    "--bench",
+    "rk4_step",
+    "--",
+    "--warm-up-time",
+    "1",
+    "--measurement-time",
+    "3",
+];
+
+/// The gungraun run of `cargo xtask bench-report`: summaries saved as JSON.
+const BENCH_INSTRUCTIONS: &[&str] = &[
+    "bench",
+    "-p",
+    "benches",
+    "--bench",
+    "instructions",
+    "--",
+    "--save-summary=json",
+];
+
+/// The optional Pinocchio reference, relative to the root.
+const PINOCCHIO_SCRIPT: &str = "crates/benches/pinocchio/aba_300.py";
+/// Where its result line goes, relative to the root.
+const PINOCCHIO_RESULT: &str = "target/bench-report/pinocchio.txt";
+/// Time limit of the Pinocchio script.
+const PINOCCHIO_TIMEOUT: Duration = Duration::from_secs(300);
+
+/// `cargo xtask bench-report`: setup (target toolchain and QEMU for the firmware,
+/// `gungraun-runner` of the library's version), the criterion and gungraun
+/// benchmarks, the optional Pinocchio reference (when `import pinocchio` works),
+/// then the `bench_report` binary, which runs the firmware under QEMU for several
+/// segment counts and writes `docs/benchmarks.md` and the scaling figure.
+fn bench_report(root: &Path) -> Result<()> {
+    setup::setup(root, Scope::Full)?;
+    setup::gungraun_runner()?;
+
+    println!();
+    println!("==> wall clock (criterion)");
+    process::run(&mut cargo(root, BENCH_WALL))?;
+    println!();
+    println!("==> instruction counts (gungraun)");
+    process::run(&mut cargo(root, BENCH_INSTRUCTIONS))?;
+
+    println!();
+    println!("==> external reference (Pinocchio, optional)");
+    let result = root.join(PINOCCHIO_RESULT);
+    // A stale result must not be reported as this run's.
+    let _ = std::fs::remove_file(&result);
+    if process::succeeds(Command::new("python3").args(["-c", "import pinocchio"])) {
+        let mut cmd = Command::new("python3");
+        cmd.arg(PINOCCHIO_SCRIPT).current_dir(root);
+        match process::output_with_timeout(&mut cmd, PINOCCHIO_TIMEOUT) {
+            Ok(line) => {
+                print!("{line}");
+                if let Some(dir) = result.parent() {
+                    std::fs::create_dir_all(dir)
+                        .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+                }
+                std::fs::write(&result, line)
+                    .map_err(|e| format!("cannot write {}: {e}", result.display()))?;
+            }
+            Err(e) => println!("warning: the Pinocchio reference failed, not reported: {e}"),
+        }
+    } else {
+        println!("skipped: the Python package `pin` is not installed (`pip install pin`)");
+    }
+
+    println!();
+    println!("==> firmware under QEMU, report");
+    process::run(&mut cargo(
+        root,
+        &[
+            "run",
+            "--release",
+            "-p",
+            "benches",
+            "--bin",
+            "bench_report",
+            "--",
+            "--pinocchio",
+            PINOCCHIO_RESULT,
+        ],
+    ))
 }

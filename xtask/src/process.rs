@@ -120,6 +120,52 @@ pub fn output(cmd: &mut Command) -> Result<String> {
     }
 }
 
+/// Like [`output`], but kills the command if it has not finished after `timeout`.
+///
+/// For commands that print little: the output is read after the command exits, so
+/// one that fills a pipe (64 KiB) stalls until the time limit.
+pub fn output_with_timeout(cmd: &mut Command, timeout: Duration) -> Result<String> {
+    println!("$ {}   (time limit {} s)", display(cmd), timeout.as_secs());
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| spawn_error(cmd, &e))?;
+    let start = Instant::now();
+    loop {
+        match child.try_wait() {
+            Ok(Some(_)) => break,
+            Ok(None) if start.elapsed() >= timeout => {
+                // Either may fail if the child exited in the meantime; that is fine.
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "command `{}` did not finish within {} s and was killed",
+                    display(cmd),
+                    timeout.as_secs()
+                ));
+            }
+            Ok(None) => thread::sleep(Duration::from_millis(100)),
+            Err(e) => return Err(format!("waiting for `{}` failed: {e}", display(cmd))),
+        }
+    }
+    // The child has exited: its pipes are at their ends and cannot block.
+    let out = child
+        .wait_with_output()
+        .map_err(|e| format!("reading the output of `{}`: {e}", display(cmd)))?;
+    if out.status.success() {
+        Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+    } else {
+        Err(format!(
+            "command `{}` failed with {}: {}",
+            display(cmd),
+            describe_status(out.status),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ))
+    }
+}
+
 /// Runs `cmd` quietly and reports only whether it exited with 0.
 pub fn succeeds(cmd: &mut Command) -> bool {
     cmd.stdin(Stdio::null())

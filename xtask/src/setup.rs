@@ -369,3 +369,39 @@ fn qemu(report: &mut Report, apt: &mut Apt) -> Result<()> {
     report.installed.push(format!("{package} (apt)"));
     Ok(())
 }
+
+/// The gungraun benchmark runner: crate, version (must equal the `gungraun` library
+/// version in `crates/benches/Cargo.toml`) and binary.
+pub const GUNGRAUN_RUNNER: (&str, &str) = ("gungraun-runner", "0.20.0");
+
+/// Time limit of `cargo install gungraun-runner` (about 6 minutes cold).
+const GUNGRAUN_INSTALL_TIMEOUT: Duration = Duration::from_secs(1800);
+
+/// Makes sure `gungraun-runner --version` reports [`GUNGRAUN_RUNNER`]'s version,
+/// installing that version with `cargo install --locked` otherwise (and saying so).
+pub fn gungraun_runner() -> Result<()> {
+    let (krate, wanted) = GUNGRAUN_RUNNER;
+    let found = version(krate, &["--version"]);
+    let matches = found
+        .as_deref()
+        .is_some_and(|v| v.split_whitespace().nth(1) == Some(wanted));
+    if matches {
+        println!("found: {krate} {wanted}");
+        return Ok(());
+    }
+    match &found {
+        Some(other) => {
+            println!("found `{other}`, need {krate} {wanted}; installing {krate}@{wanted}")
+        }
+        None => println!("missing: {krate}; installing {krate}@{wanted} (about 6 minutes)"),
+    }
+    process::run_with_timeout(
+        Command::new("cargo").args(["install", &format!("{krate}@{wanted}"), "--locked"]),
+        GUNGRAUN_INSTALL_TIMEOUT,
+    )?;
+    let now = version(krate, &["--version"]).ok_or_else(|| {
+        format!("{krate} was installed but does not run (is ~/.cargo/bin on PATH?)")
+    })?;
+    println!("installed: {now}");
+    Ok(())
+}

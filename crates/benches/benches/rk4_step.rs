@@ -3,7 +3,7 @@
 //! Groups (names are stable, they are quoted in the docs):
 //!
 //! - `pendulum_rk4_step/{f64,f32}/{N}`: one `Solver::step(&fixed_anchor, 1e-4)` on the
-//!   compound pendulum with N rods (capacity N), N = 16, 64, 300, 1024 (f64) and
+//!   compound pendulum with N rods (capacity N), N = 16, 64, 300, 1024, 2048, 4096 (f64) and
 //!   16, 64, 300 (f32).
 //! - `towed_rk4_step/{f32,f64}/graded16`, `towed_rk4_step/f64/uniform300`: one
 //!   `Solver::step(&cruise, 1e-3)` on the reference towed system trimmed at 9 km,
@@ -79,7 +79,7 @@ macro_rules! pendulum_step {
 /// `pendulum_rk4_step/{f64,f32}/{N}`.
 fn pendulum_rk4_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("pendulum_rk4_step");
-    pendulum_step!(group, f64, "f64", 16, 64, 300, 1024);
+    pendulum_step!(group, f64, "f64", 16, 64, 300, 1024, 2048, 4096);
     pendulum_step!(group, f32, "f32", 16, 64, 300);
     group.finish();
 }

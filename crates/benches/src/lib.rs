@@ -14,9 +14,14 @@
 //! `cargo bench -p benches --bench rk4_step -- --warm-up-time 1 --measurement-time 3`
 //! and the quick check with `cargo run --release -p benches --bin step_time`.
 //!
+//! [`report`] turns the results of one run into `docs/benchmarks.md` (the
+//! `bench-report` binary, run by `cargo xtask bench-report`).
+//!
 //! Benchmark names (stable, quoted in the docs):
 //! `pendulum_rk4_step/{f32,f64}/{N}`, `towed_rk4_step/{f32,f64}/graded16`,
 //! `towed_rk4_step/f64/uniform300`, `tension_solve/{two_sweep,shooting,dense}/{N}`.
+
+pub mod report;
 
 use solver_core::{
     AircraftState, Atmosphere, Model, ModelParams, Real, SegmentLayout, Solver, Uniform, Vec3,

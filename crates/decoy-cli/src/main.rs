@@ -8,19 +8,28 @@
 //!   sampled at chosen times.
 //! - `decoy trim`: the steady level-flight equilibrium of the configured towed
 //!   system (DESIGN §5): decoy pitch and position, cable tension profile.
+//! - `decoy sweep speed|altitude|tow-point|cg`: the paper's steady-flight and
+//!   decoy-station studies (Figs. 15-24), tables and plots.
+//! - `decoy study discretisation`: the segment-count study (Figs. 13-14) and the
+//!   choice of the embedded model.
+//! - `decoy report`: regenerates `docs/paper-reproduction.md` and its figures.
 //!
 //! Human-readable output by default, `--json` for machines. Errors are one line
 //! `error: ...` on stderr; the exit code is 2 for usage and configuration errors and
 //! 1 when the solver fails.
 
 use std::fmt::Write as _;
-use std::io::{IsTerminal as _, Write as _};
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+
+mod progress;
+mod studies;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
+use progress::Progress;
 use serde::Serialize;
 use solver_core::dense::evaluate_dense;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
@@ -71,6 +80,15 @@ enum Command {
     Pendulum(PendulumArgs),
     /// Steady level-flight trim of the configured towed system.
     Trim(TrimArgs),
+    /// Sweep a flight condition or a decoy station (the paper's Figs. 15-24):
+    /// a table (CSV, printed, or JSON) and plots.
+    Sweep(studies::SweepArgs),
+    /// A study: `discretisation` (the paper's Figs. 13-14) and the embedded
+    /// model's choice.
+    Study(studies::StudyArgs),
+    /// Regenerate the paper reproduction report (docs/paper-reproduction.md and
+    /// its figures).
+    Report(studies::ReportArgs),
 }
 
 #[derive(Args, Debug)]
@@ -293,15 +311,31 @@ fn run(cli: &Cli) -> Result<String, Failure> {
             };
             trim_command(&config, args, cli.json)
         }
+        Command::Sweep(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            studies::sweep_command(&config, args, cli.json)
+        }
+        Command::Study(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            studies::study_command(&config, args, cli.json)
+        }
+        Command::Report(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            studies::report_command(&config, args, cli.config.as_deref(), cli.json)
+        }
     }
 }
 
 // ---------------------------------------------------------------- simulate
-
-/// Show a progress bar only for runs expected to last longer than this, s.
-const PROGRESS_BAR_MIN_S: f64 = 1.0;
-/// Time before the expected duration is judged, s.
-const PROGRESS_ESTIMATE_AFTER_S: f64 = 0.2;
 
 fn simulate_command(
     config: &SystemConfig,
@@ -324,36 +358,9 @@ fn simulate_command(
         out_dir: args.out.clone(),
         plots: !args.no_plots,
     };
-    let show_progress = !json && std::io::stderr().is_terminal();
-    let started = std::time::Instant::now();
-    let mut bar: Option<indicatif::ProgressBar> = None;
-    let result = decoy_sim::simulate(config, &scenario, &options, |fraction| {
-        if !show_progress {
-            return;
-        }
-        let elapsed = started.elapsed().as_secs_f64();
-        if bar.is_none()
-            && elapsed >= PROGRESS_ESTIMATE_AFTER_S
-            && fraction < 1.0
-            && elapsed / fraction.max(1e-9) > PROGRESS_BAR_MIN_S
-        {
-            let b = indicatif::ProgressBar::new(1000);
-            b.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{spinner} simulating [{bar:40}] {percent:>3}% ({elapsed} elapsed)",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                .progress_chars("=> "),
-            );
-            bar = Some(b);
-        }
-        if let Some(b) = &bar {
-            b.set_position((fraction * 1000.0).round() as u64);
-        }
-    });
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let mut bar = Progress::new("simulating", json);
+    let result = decoy_sim::simulate(config, &scenario, &options, |f| bar.update(f));
+    bar.finish();
     let run = result?;
     if json {
         let mut text = serde_json::to_string_pretty(&run.summary)

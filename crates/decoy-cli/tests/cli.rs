@@ -651,3 +651,151 @@ fn simulate_errors_are_one_line() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert!(summary["stopped"]["reason"].is_string(), "{summary}");
 }
+
+/// Runs `decoy` in `dir` (so that default output directories land there).
+fn decoy_in(dir: &Path, args: &[&str]) -> Output {
+    std::fs::create_dir_all(dir).unwrap();
+    Command::new(env!("CARGO_BIN_EXE_decoy"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the decoy binary runs")
+}
+
+#[test]
+fn sweep_speed_json_is_the_table_and_writes_the_files() {
+    let dir = sim_out("sweep-speed");
+    let out = decoy_in(
+        &dir,
+        &[
+            "sweep", "speed", "--from", "0.6", "--to", "0.8", "--step", "0.1", "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stderr.is_empty());
+    let v: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["variable"], "speed");
+    assert_eq!(num(&v, "fixed_altitude_m"), 9000.0);
+    assert!(v["fixed_mach"].is_null());
+    assert_eq!(v["layout"], "300 uniform segments");
+    let points = v["points"].as_array().unwrap();
+    let mach: Vec<f64> = points.iter().map(|p| num(p, "mach")).collect();
+    assert_eq!(mach, vec![0.6, 0.7, 0.8]);
+    let tension: Vec<f64> = points
+        .iter()
+        .map(|p| num(p, "tension_connection_N"))
+        .collect();
+    let pitch: Vec<f64> = points.iter().map(|p| num(p, "decoy_pitch_deg")).collect();
+    assert!(
+        tension[0] < tension[1] && tension[1] < tension[2],
+        "{tension:?}"
+    );
+    assert!(pitch[0] > pitch[1] && pitch[1] > pitch[2], "{pitch:?}");
+    let expected: BTreeSet<&str> = [
+        "mach",
+        "altitude_m",
+        "speed_mps",
+        "tension_connection_N",
+        "tension_tow_N",
+        "tension_max_N",
+        "decoy_pitch_deg",
+        "decoy_aoa_deg",
+        "decoy_cg_behind_m",
+        "decoy_cg_below_m",
+    ]
+    .into_iter()
+    .collect();
+    assert_eq!(keys(&points[0]), expected);
+    // The default output directory: out/sweep-speed under the working directory.
+    let files = dir.join("out").join("sweep-speed");
+    let table = std::fs::read_to_string(files.join("sweep.csv")).unwrap();
+    assert_eq!(table.lines().count(), 4);
+    for name in [
+        "cable.csv",
+        "cable-shapes.png",
+        "tension-profiles.svg",
+        "decoy.png",
+        "tensions.svg",
+    ] {
+        assert!(files.join(name).is_file(), "{name}");
+    }
+    // Without --json: a table and the files.
+    let text = stdout_of(&[
+        "sweep",
+        "altitude",
+        "--from",
+        "6000",
+        "--to",
+        "8000",
+        "--step",
+        "1000",
+        "--no-plots",
+        "--out",
+        dir.join("alt").to_str().unwrap(),
+    ]);
+    assert!(text.contains("altitude sweep at Mach 0.7"), "{text}");
+    assert!(
+        text.contains("sweep.csv") && !text.contains(".png"),
+        "{text}"
+    );
+}
+
+#[test]
+fn sweep_errors_are_usage_errors() {
+    let out = sim_out("sweep-errors");
+    let out = out.to_str().unwrap();
+    for (args, expected) in [
+        (
+            vec!["sweep", "speed", "--step", "0"],
+            "--step must be positive",
+        ),
+        (
+            vec!["sweep", "speed", "--step", "-0.1"],
+            "--step must be positive",
+        ),
+        (
+            vec!["sweep", "speed", "--from", "0.9", "--to", "0.5"],
+            "--from 0.9 is above --to 0.5",
+        ),
+        (vec!["sweep", "speed", "--to", "3"], "--to must be above 0"),
+        (
+            vec!["sweep", "altitude", "--from", "-100"],
+            "--from must be between 0 and 20000",
+        ),
+        (
+            vec!["sweep", "speed", "--mach", "0.7"],
+            "--mach does not apply",
+        ),
+        (
+            vec!["sweep", "altitude", "--dt", "0.001"],
+            "--dt does not apply",
+        ),
+        (
+            vec!["sweep", "tow-point", "--to", "1.5"],
+            "decoy.x_tow must be on the decoy body",
+        ),
+        (
+            vec!["sweep", "cg", "--threshold", "0"],
+            "--threshold must be a positive",
+        ),
+        (
+            vec!["sweep", "cg", "--window", "20"],
+            "--window must be positive and shorter",
+        ),
+        (
+            vec!["sweep", "speed", "--segments", "0"],
+            "--segments must be between",
+        ),
+        (vec!["sweep", "sideways"], "invalid value 'sideways'"),
+        (vec!["study", "everything"], "invalid value 'everything'"),
+    ] {
+        let mut args = args.clone();
+        args.extend(["--out", out]);
+        let message = error_of(&args, 2);
+        assert!(message.contains(expected), "{args:?}: {message}");
+    }
+}

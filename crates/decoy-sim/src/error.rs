@@ -98,6 +98,15 @@ pub enum SimError {
         #[source]
         source: std::io::Error,
     },
+    /// One point of a sweep or study failed (for example no trim at that value).
+    #[error("{point}: {source}")]
+    AtPoint {
+        /// The point, in words (`Mach 0.95`, `decoy.x_tow = 0.6 m`).
+        point: String,
+        /// What went wrong there.
+        #[source]
+        source: Box<SimError>,
+    },
     /// A plot could not be drawn or written.
     #[error("cannot write the plot {}: {message}", stem.display())]
     Plot {
@@ -114,6 +123,9 @@ impl SimError {
     /// exits with code 2 for these and 1 for the others (no trim, integration
     /// stopped, writing the outputs, plotting).
     pub fn is_usage(&self) -> bool {
+        if let SimError::AtPoint { source, .. } = self {
+            return source.is_usage();
+        }
         matches!(
             self,
             SimError::UnknownScenario { .. }
@@ -123,6 +135,14 @@ impl SimError {
                 | SimError::Read { .. }
                 | SimError::Config(_)
         )
+    }
+
+    /// `self` as the failure of one point of a sweep.
+    pub(crate) fn at(self, point: impl Into<String>) -> Self {
+        SimError::AtPoint {
+            point: point.into(),
+            source: Box::new(self),
+        }
     }
 
     /// An [`SimError::InvalidInput`].

@@ -14,6 +14,14 @@
 //!   [`solver_core::FlightPath`].
 //! - [`simulate`]: runs a plan and writes `timeseries.csv`, `cable.csv`,
 //!   `summary.json` and the plots (columns and definitions in `docs/outputs.md`).
+//! - [`trace()`]: the same run kept in memory (optionally from a perturbed trim),
+//!   for the studies below.
+//! - [`sweep`]: the paper's steady-flight sweeps (speed, altitude; Figs. 15-22)
+//!   and the towing-point and CG settling sweeps (Figs. 23-24) (`decoy sweep`).
+//! - [`study`]: the discretisation study (Figs. 13-14) and the choice of the
+//!   embedded model (`decoy study discretisation`).
+//! - [`report`]: `docs/paper-reproduction.md`, every claim of the paper against
+//!   what the project computes (`decoy report`; outputs in `docs/sweeps.md`).
 //!
 //! Output frame: the *flight-path frame* ([`FlightPathFrame`]) at each instant,
 //! origin at the aircraft reference point, x along the aircraft's velocity, y
@@ -40,8 +48,12 @@ pub mod geometry;
 mod plots;
 pub mod profile;
 pub mod recorded;
+pub mod report;
 pub mod run;
 pub mod scenario;
+pub mod study;
+pub mod sweep;
+pub mod trace;
 
 pub use error::SimError;
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
@@ -49,9 +61,10 @@ pub use plots::PLOT_NAMES;
 pub use profile::FlightProfile;
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
 pub use run::{
-    CABLE_HEADER, FinalValues, InitialState, RunOptions, RunOutput, StoppedAt, Summary,
-    TIMESERIES_HEADER, describe_layout, simulate,
+    CABLE_HEADER, FinalValues, InitialState, RunOptions, RunOutput, Sample, Snapshot, StoppedAt,
+    Summary, TIMESERIES_HEADER, describe_layout, simulate,
 };
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,
 };
+pub use trace::{Start, Trace, TraceOptions, pitched_attitude, trace};

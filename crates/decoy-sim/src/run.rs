@@ -169,21 +169,34 @@ pub struct RunOutput {
     pub plan: RunPlan,
 }
 
-/// The quantities recorded at every step.
+/// The quantities measured at every step (one row of `timeseries.csv`; frames and
+/// signs in `docs/outputs.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Sample {
+pub struct Sample {
+    /// Simulation time, s.
     pub t: f64,
+    /// Connection-point tension (joint 0), N.
     pub tension_connection: f64,
+    /// Towing-point tension (joint N), N.
     pub tension_tow: f64,
-    /// Decoy CG from the aircraft reference point: behind, lateral, below, m.
+    /// Decoy CG from the aircraft reference point, flight-path frame: behind,
+    /// lateral (positive toward the outside of the scenario's turn, else left),
+    /// below, m.
     pub cg: [f64; 3],
-    /// Decoy roll, pitch, yaw (unwrapped), deg.
+    /// Decoy roll, pitch, yaw (unwrapped), deg, relative to NED.
     pub euler_deg: [f64; 3],
+    /// Decoy total angle of attack, deg.
     pub aoa_deg: f64,
+    /// Smallest distance from the cable to the exhaust plume's surface, m
+    /// (negative inside).
     pub exhaust_clearance: f64,
+    /// Where on the cable that closest point is, m from the connection point.
     pub exhaust_along: f64,
+    /// Decoy CG to the aircraft's collision envelope, m (negative inside).
     pub decoy_clearance: f64,
+    /// Aircraft ground speed, m/s.
     pub speed: f64,
+    /// Aircraft reference point altitude, m.
     pub altitude: f64,
 }
 
@@ -215,10 +228,14 @@ impl Sample {
     }
 }
 
-/// One cable snapshot: per joint (along, behind, lateral, below, tension).
+/// One cable snapshot (the rows of `cable.csv` at one time).
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Snapshot {
+pub struct Snapshot {
+    /// Snapshot time, s.
     pub t: f64,
+    /// Per joint, 0 (connection point) to N (towing point): distance along the
+    /// cable from the connection point, then behind, lateral and below the
+    /// aircraft reference point (flight-path frame), m, and the tension, N.
     pub joints: Vec<[f64; 5]>,
 }
 
@@ -229,12 +246,12 @@ pub(crate) struct Recorded<'a> {
 }
 
 /// The fixed geometry every measurement needs.
-struct Probe {
+pub(crate) struct Probe {
     plume: ExhaustPlume,
     envelope: Envelope,
     lateral_sign: f64,
     /// Distance along the cable of joint j, m.
-    joint_along: Vec<f64>,
+    pub joint_along: Vec<f64>,
 }
 
 impl Probe {
@@ -329,14 +346,14 @@ impl Probe {
 }
 
 /// Running statistics for the summary.
-struct Statistics {
+pub(crate) struct Statistics {
     manoeuvre_start: f64,
-    max_tension: f64,
-    t_at_max: f64,
+    pub max_tension: f64,
+    pub t_at_max: f64,
     pitch_range: Option<(f64, f64)>,
     pitch_range_all: Option<(f64, f64)>,
-    min_exhaust: f64,
-    min_decoy: f64,
+    pub min_exhaust: f64,
+    pub min_decoy: f64,
 }
 
 impl Statistics {
@@ -369,7 +386,7 @@ impl Statistics {
         self.min_decoy = self.min_decoy.min(s.decoy_clearance);
     }
 
-    fn pitch_amplitude(&self) -> f64 {
+    pub(crate) fn pitch_amplitude(&self) -> f64 {
         self.pitch_range
             .or(self.pitch_range_all)
             .map_or(f64::NAN, |(lo, hi)| 0.5 * (hi - lo))
@@ -378,7 +395,7 @@ impl Statistics {
 
 /// A CSV file written row by row, each row with one `write` so that the file
 /// stays valid (whole rows) if the run stops.
-struct CsvFile {
+pub(crate) struct CsvFile {
     file: File,
     path: PathBuf,
 }
@@ -409,7 +426,7 @@ impl CsvFile {
 /// Time from which the connection tension of `samples` (the rows of
 /// `timeseries.csv`) stays within the settling band about its last value; `None`
 /// unless it then stayed there for [`SETTLING_HOLD_S`].
-fn settling_time(samples: &[Sample]) -> Option<f64> {
+pub(crate) fn settling_time(samples: &[Sample]) -> Option<f64> {
     let last = samples.last()?;
     let final_tension = last.tension_connection;
     let band = SETTLING_BAND * final_tension.abs();
@@ -444,28 +461,60 @@ fn write_snapshot(csv: &mut CsvFile, snapshot: &Snapshot) -> Result<(), SimError
 ///
 /// It is fed the outputs of RK4's first stage ([`Solver::step_observed`]), which
 /// evaluates the dynamics at the state before each step anyway, so measuring every
-/// step costs no extra evaluation.
-struct Recorder<'a> {
-    path: &'a FlightProfile,
-    probe: Probe,
-    timeseries: CsvFile,
-    cable: CsvFile,
-    statistics: Statistics,
-    samples: Vec<Sample>,
-    snapshots: Vec<Snapshot>,
+/// step costs no extra evaluation. The CSV files are optional: an in-memory run
+/// ([`crate::trace()`]) keeps only the samples and snapshots.
+pub(crate) struct Recorder<'a> {
+    pub path: &'a FlightProfile,
+    pub probe: Probe,
+    pub timeseries: Option<CsvFile>,
+    pub cable: Option<CsvFile>,
+    pub statistics: Statistics,
+    pub samples: Vec<Sample>,
+    pub snapshots: Vec<Snapshot>,
     /// The last good sample.
-    last: Sample,
-    last_written: bool,
-    sample_every: u64,
-    snapshot_every: u64,
-    steps: u64,
-    dt: f64,
+    pub last: Sample,
+    pub last_written: bool,
+    pub sample_every: u64,
+    pub snapshot_every: u64,
+    pub steps: u64,
+    pub dt: f64,
 }
 
 /// Why a run stopped early: the reason in words and the solver's error.
-type Stop = (String, Option<SolveError>);
+pub(crate) type Stop = (String, Option<SolveError>);
 
-impl Recorder<'_> {
+impl<'a> Recorder<'a> {
+    /// A recorder for `plan` keeping a sample every `sample_interval` s and a
+    /// snapshot every `snapshot_interval` s (both at least every step), writing
+    /// the CSV files given.
+    pub(crate) fn new(
+        plan: &'a RunPlan,
+        probe: Probe,
+        files: Option<(CsvFile, CsvFile)>,
+        sample_interval: f64,
+        snapshot_interval: f64,
+    ) -> Self {
+        let (timeseries, cable) = match files {
+            Some((t, c)) => (Some(t), Some(c)),
+            None => (None, None),
+        };
+        Recorder {
+            path: &plan.profile,
+            probe,
+            timeseries,
+            cable,
+            statistics: Statistics::new(plan.profile.manoeuvre_start()),
+            samples: Vec::new(),
+            snapshots: Vec::new(),
+            last: Sample::default(),
+            last_written: false,
+            sample_every: ((sample_interval / plan.dt).round() as u64).max(1),
+            snapshot_every: ((snapshot_interval / plan.dt).round() as u64).max(1),
+            steps: plan.steps,
+            dt: plan.dt,
+        }
+    }
+
     /// Records the evaluation `out` of the state after step `k`. `Ok(Some)` when the
     /// state cannot be used (the run stops at the previous one).
     fn record<const N: usize>(
@@ -494,20 +543,26 @@ impl Recorder<'_> {
         self.statistics.add(&sample);
         self.last_written = write_row;
         if write_row {
-            self.timeseries.write(&sample.csv_row())?;
+            if let Some(csv) = &mut self.timeseries {
+                csv.write(&sample.csv_row())?;
+            }
             self.samples.push(sample);
         }
         if let Some(snapshot) = snapshot {
-            write_snapshot(&mut self.cable, &snapshot)?;
+            if let Some(csv) = &mut self.cable {
+                write_snapshot(csv, &snapshot)?;
+            }
             self.snapshots.push(snapshot);
         }
         Ok(None)
     }
 
-    /// Writes the last good state's row if it fell between rows.
+    /// Keeps (and writes) the last good state's row if it fell between rows.
     fn finish(&mut self) -> Result<(), SimError> {
         if !self.last_written {
-            self.timeseries.write(&self.last.csv_row())?;
+            if let Some(csv) = &mut self.timeseries {
+                csv.write(&self.last.csv_row())?;
+            }
             self.samples.push(self.last);
             self.last_written = true;
         }
@@ -515,95 +570,38 @@ impl Recorder<'_> {
     }
 }
 
-/// Runs `scenario` on the system `config` with the overrides in `options` and
-/// writes `timeseries.csv`, `cable.csv`, `summary.json` and (with
-/// `options.plots`) the plots to the output directory. `progress` is called with
-/// the fraction of steps done (0 to 1) now and then.
-///
-/// The model is a `Model<f64, 512>` (a `Model<f64, 32>` for up to 32 segments,
-/// which gives the same numbers with less to copy); the initial state the trim of the flight
-/// condition at t = 0 (or a straight cable, [`InitialState::Straight`]). Every
-/// step's state is measured, from RK4's own first-stage evaluation;
-/// `timeseries.csv` gets a row every
-/// [`SAMPLE_INTERVAL_S`], `cable.csv` a snapshot every [`SNAPSHOT_INTERVAL_S`],
-/// both the final state.
-///
-/// On a failure while stepping (the state diverged, the recurrence met a
-/// non-positive pivot, the aircraft left the atmosphere) the CSV files hold every
-/// row up to the last good state, `summary.json` records `"stopped"`, the plots
-/// are drawn from what there is, and the result is [`SimError::Stopped`].
-pub fn simulate(
+/// The measuring geometry of a run of `model` (plume, envelope, distances along
+/// the cable).
+pub(crate) fn probe<const N: usize>(
     config: &SystemConfig,
-    scenario: &Scenario,
-    options: &RunOptions,
-    progress: impl FnMut(f64),
-) -> Result<RunOutput, SimError> {
-    let wall = Instant::now();
-    let plan = scenario.plan(config, options)?;
-    if plan.layout.count() <= SMALL_CAPACITY {
-        simulate_with::<SMALL_CAPACITY>(config, plan, options, progress, wall)
-    } else {
-        simulate_with::<MAX_SEGMENTS>(config, plan, options, progress, wall)
-    }
-}
-
-/// [`simulate`] with a model of capacity `N`.
-fn simulate_with<const N: usize>(
-    config: &SystemConfig,
-    plan: RunPlan,
-    options: &RunOptions,
-    mut progress: impl FnMut(f64),
-    wall: Instant,
-) -> Result<RunOutput, SimError> {
-    let out_dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(&plan.name));
-    let model: Model<f64, N> = config.model(plan.layout)?;
-    let n = model.segment_count();
-    let initial = plan.profile.initial_condition();
-    let state = match options.initial {
-        InitialState::Trim => trim(&model, &initial).map_err(SimError::NoTrim)?,
-        InitialState::Straight => straight_state(&model, &initial),
-    };
-    let mut joint_along = Vec::with_capacity(n + 1);
+    model: &Model<f64, N>,
+    lateral_sign: f64,
+) -> Probe {
+    let mut joint_along = Vec::with_capacity(model.segment_count() + 1);
     joint_along.push(0.0);
     for l in model.lengths() {
         joint_along.push(joint_along[joint_along.len() - 1] + l);
     }
-    let probe = Probe {
+    Probe {
         plume: ExhaustPlume::from_config(&config.aircraft),
         envelope: Envelope::from_config(&config.aircraft),
-        lateral_sign: plan.lateral_sign,
+        lateral_sign,
         joint_along,
-    };
-    let mut solver: Box<Solver<f64, N>> =
-        Box::new(Solver::new(model, state).map_err(SimError::Initial)?);
+    }
+}
 
-    std::fs::create_dir_all(&out_dir).map_err(|source| SimError::Io {
-        action: "create the directory",
-        path: out_dir.clone(),
-        source,
-    })?;
-    let timeseries_path = out_dir.join("timeseries.csv");
-    let cable_path = out_dir.join("cable.csv");
+/// Integrates `plan.steps` steps from the solver's state, recording every
+/// evaluated state with `recorder`; `progress` gets the fraction done now and
+/// then. Returns why it stopped early, if it did (the recorder then holds every
+/// state up to the last good one).
+pub(crate) fn integrate<const N: usize>(
+    solver: &mut Solver<f64, N>,
+    plan: &RunPlan,
+    recorder: &mut Recorder<'_>,
+    mut progress: impl FnMut(f64),
+) -> Result<Option<Stop>, SimError> {
     let path = &plan.profile;
     let steps = plan.steps;
-    let mut recorder = Recorder {
-        path,
-        probe,
-        timeseries: CsvFile::create(timeseries_path.clone(), TIMESERIES_HEADER)?,
-        cable: CsvFile::create(cable_path.clone(), CABLE_HEADER)?,
-        statistics: Statistics::new(path.manoeuvre_start()),
-        samples: Vec::new(),
-        snapshots: Vec::new(),
-        last: Sample::default(),
-        last_written: false,
-        sample_every: ((SAMPLE_INTERVAL_S / plan.dt).round() as u64).max(1),
-        snapshot_every: ((SNAPSHOT_INTERVAL_S / plan.dt).round() as u64).max(1),
-        steps,
-        dt: plan.dt,
-    };
     let initial = match solver.outputs(path) {
         Ok(out) => recorder.record(0, &out)?,
         Err(e) => return Err(SimError::Initial(e)),
@@ -643,11 +641,87 @@ fn simulate_with<const N: usize>(
             Err(e) => Some((stop_reason(&e, plan.dt), Some(e))),
         };
     }
-
     recorder.finish()?;
     if stopped.is_none() {
         progress(1.0);
     }
+    Ok(stopped)
+}
+
+/// Runs `scenario` on the system `config` with the overrides in `options` and
+/// writes `timeseries.csv`, `cable.csv`, `summary.json` and (with
+/// `options.plots`) the plots to the output directory. `progress` is called with
+/// the fraction of steps done (0 to 1) now and then.
+///
+/// The model is a `Model<f64, 512>` (a `Model<f64, 32>` for up to 32 segments,
+/// which gives the same numbers with less to copy); the initial state the trim of the flight
+/// condition at t = 0 (or a straight cable, [`InitialState::Straight`]). Every
+/// step's state is measured, from RK4's own first-stage evaluation;
+/// `timeseries.csv` gets a row every
+/// [`SAMPLE_INTERVAL_S`], `cable.csv` a snapshot every [`SNAPSHOT_INTERVAL_S`],
+/// both the final state.
+///
+/// On a failure while stepping (the state diverged, the recurrence met a
+/// non-positive pivot, the aircraft left the atmosphere) the CSV files hold every
+/// row up to the last good state, `summary.json` records `"stopped"`, the plots
+/// are drawn from what there is, and the result is [`SimError::Stopped`].
+pub fn simulate(
+    config: &SystemConfig,
+    scenario: &Scenario,
+    options: &RunOptions,
+    progress: impl FnMut(f64),
+) -> Result<RunOutput, SimError> {
+    let wall = Instant::now();
+    let plan = scenario.plan(config, options)?;
+    if plan.layout.count() <= SMALL_CAPACITY {
+        simulate_with::<SMALL_CAPACITY>(config, plan, options, progress, wall)
+    } else {
+        simulate_with::<MAX_SEGMENTS>(config, plan, options, progress, wall)
+    }
+}
+
+/// [`simulate`] with a model of capacity `N`.
+fn simulate_with<const N: usize>(
+    config: &SystemConfig,
+    plan: RunPlan,
+    options: &RunOptions,
+    progress: impl FnMut(f64),
+    wall: Instant,
+) -> Result<RunOutput, SimError> {
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(&plan.name));
+    let model: Model<f64, N> = config.model(plan.layout)?;
+    let n = model.segment_count();
+    let initial = plan.profile.initial_condition();
+    let state = match options.initial {
+        InitialState::Trim => trim(&model, &initial).map_err(SimError::NoTrim)?,
+        InitialState::Straight => straight_state(&model, &initial),
+    };
+    let probe = probe(config, &model, plan.lateral_sign);
+    let mut solver: Box<Solver<f64, N>> =
+        Box::new(Solver::new(model, state).map_err(SimError::Initial)?);
+
+    std::fs::create_dir_all(&out_dir).map_err(|source| SimError::Io {
+        action: "create the directory",
+        path: out_dir.clone(),
+        source,
+    })?;
+    let timeseries_path = out_dir.join("timeseries.csv");
+    let cable_path = out_dir.join("cable.csv");
+    let files = (
+        CsvFile::create(timeseries_path.clone(), TIMESERIES_HEADER)?,
+        CsvFile::create(cable_path.clone(), CABLE_HEADER)?,
+    );
+    let mut recorder = Recorder::new(
+        &plan,
+        probe,
+        Some(files),
+        SAMPLE_INTERVAL_S,
+        SNAPSHOT_INTERVAL_S,
+    );
+    let stopped = integrate(&mut solver, &plan, &mut recorder, progress)?;
     let Recorder {
         timeseries,
         cable,
@@ -739,7 +813,7 @@ fn stop_reason(e: &SolveError, dt: f64) -> String {
 
 /// Every segment along the air's velocity relative to the connection point, the
 /// decoy aligned with the flight direction, wings level, nothing rotating.
-fn straight_state<const N: usize>(
+pub(crate) fn straight_state<const N: usize>(
     model: &Model<f64, N>,
     aircraft: &AircraftState<f64>,
 ) -> State<f64, N> {
@@ -771,7 +845,7 @@ fn straight_state<const N: usize>(
 }
 
 /// A time summed from steps, rounded to the nanosecond (8.076 rather than 8.076000000000963).
-fn round_time(t: f64) -> f64 {
+pub(crate) fn round_time(t: f64) -> f64 {
     (t * 1e9).round() / 1e9
 }
 

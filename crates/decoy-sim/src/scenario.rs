@@ -577,9 +577,9 @@ fn check_options(o: &RunOptions) -> Result<(), SimError> {
     Ok(())
 }
 
-type Invalid<'a> = dyn Fn(&str, String) -> SimError + 'a;
+pub(crate) type Invalid<'a> = dyn Fn(&str, String) -> SimError + 'a;
 
-fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
+pub(crate) fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
     if v.is_finite() {
         Ok(())
     } else {
@@ -587,7 +587,7 @@ fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimErr
     }
 }
 
-fn check_positive(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
+pub(crate) fn check_positive(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
     check_finite(invalid, field, v)?;
     if v > 0.0 {
         Ok(())
@@ -605,7 +605,7 @@ fn check_non_negative(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), 
     }
 }
 
-fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Result<(), SimError> {
+pub(crate) fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Result<(), SimError> {
     let (lo, hi) = ALTITUDE_RANGE_M;
     if h.is_finite() && (lo..=hi).contains(&h) {
         Ok(())
@@ -617,7 +617,7 @@ fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Result<(), SimE
     }
 }
 
-fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(), SimError> {
+pub(crate) fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(), SimError> {
     if m.is_finite() && m > 0.0 && m <= MAX_MACH {
         Ok(())
     } else {
@@ -639,7 +639,7 @@ fn check_rate(invalid: &Invalid<'_>, field: &str, w: f64) -> Result<(), SimError
     }
 }
 
-fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Result<(), SimError> {
+pub(crate) fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Result<(), SimError> {
     if (1..=MAX_SEGMENTS).contains(&n) {
         Ok(())
     } else {
@@ -650,7 +650,7 @@ fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Result<(), Si
     }
 }
 
-fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Result<(), SimError> {
+pub(crate) fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Result<(), SimError> {
     let (lo, hi) = GRADING_RANGE;
     if r.is_finite() && (lo..=hi).contains(&r) {
         Ok(())

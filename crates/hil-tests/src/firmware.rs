@@ -53,6 +53,8 @@ pub enum BuildError {
     Failed(Captured),
     /// Cargo succeeded but the ELF is not where expected.
     MissingElf(PathBuf),
+    /// The sources of a [`build_with_segments`] variant could not be prepared.
+    Variant(String),
 }
 
 impl fmt::Display for BuildError {
@@ -71,6 +73,7 @@ impl fmt::Display for BuildError {
                     path.display()
                 )
             }
+            BuildError::Variant(message) => f.write_str(message),
         }
     }
 }
@@ -90,7 +93,12 @@ fn debian_toolchain() -> bool {
 /// would override that configuration when inherited from an outer `cargo test`
 /// (`RUSTFLAGS`, a shared target directory, a build target) are removed.
 pub fn build_command() -> Command {
-    let dir = firmware_dir();
+    build_command_in(&firmware_dir())
+}
+
+/// [`build_command`] for a firmware workspace at `dir` (the firmware itself, or a
+/// [`build_with_segments`] copy of it).
+fn build_command_in(dir: &Path) -> Command {
     let manifest = dir.join("Cargo.toml");
     let mut cmd = if debian_toolchain() {
         let mut cmd = Command::new("rustup");
@@ -108,7 +116,7 @@ pub fn build_command() -> Command {
         cmd.args(["build", "--release"]);
         cmd
     };
-    cmd.arg("--manifest-path").arg(manifest).current_dir(&dir);
+    cmd.arg("--manifest-path").arg(manifest).current_dir(dir);
     for var in [
         "RUSTFLAGS",
         "CARGO_ENCODED_RUSTFLAGS",
@@ -139,6 +147,151 @@ pub fn build_release(timeout: Duration) -> Result<PathBuf, BuildError> {
     } else {
         Err(BuildError::MissingElf(elf))
     }
+}
+
+/// The segment counts [`build_with_segments`] accepts: the firmware's solver has
+/// room for [`crate::scenario::SEGMENT_CAPACITY`] segments.
+pub const MAX_SEGMENTS: usize = crate::scenario::SEGMENT_CAPACITY;
+
+/// Where [`build_with_segments`] puts its copies, their shared target directory and
+/// the ELFs: `target/firmware-variants/` of the root workspace.
+pub fn variants_dir() -> PathBuf {
+    workspace_root().join("target").join("firmware-variants")
+}
+
+/// Builds the firmware, unchanged, for a reference system with `segments` graded
+/// segments instead of the configured `solver.segments_embedded`, and returns the
+/// ELF (`target/firmware-variants/decoy-firmware-<segments>seg`).
+///
+/// The firmware takes its segment count from `config/reference-system.toml` at
+/// build time (`firmware/build.rs` reads `../config/reference-system.toml`). This
+/// copies the firmware's sources into
+/// `target/firmware-variants/segments-<n>/firmware/`, writes beside them a
+/// `config/` whose `segments_embedded` line says `segments` (all other values and
+/// the aerodynamic table unchanged), links `crates/` to the workspace's crates, adds
+/// an empty `[workspace]` table to the copied manifest (the root manifest excludes
+/// only `firmware/` itself), and builds there (shared target directory `target/firmware-variants/target`, so the
+/// dependencies build once). Neither `firmware/` nor `config/` is modified.
+///
+/// Panics if `segments` is 0 or more than [`MAX_SEGMENTS`].
+pub fn build_with_segments(segments: usize, timeout: Duration) -> Result<PathBuf, BuildError> {
+    assert!(
+        (1..=MAX_SEGMENTS).contains(&segments),
+        "the firmware's solver holds 1 to {MAX_SEGMENTS} segments, not {segments}"
+    );
+    let variants = variants_dir();
+    let root = variants.join(format!("segments-{segments}"));
+    let io = |what: &str, e: std::io::Error| {
+        BuildError::Variant(format!("{what} for the {segments}-segment firmware: {e}"))
+    };
+    prepare_variant(&root, segments).map_err(|e| io("preparing the sources", e))?;
+
+    let target_dir = variants.join("target");
+    let mut cmd = build_command_in(&root.join("firmware"));
+    cmd.env("CARGO_TARGET_DIR", &target_dir);
+    let out = run_with_timeout(
+        &mut cmd,
+        timeout,
+        "cargo is not on PATH; install Rust with rustup",
+    )
+    .map_err(BuildError::Run)?;
+    if !out.status.success() {
+        return Err(BuildError::Failed(out));
+    }
+    let built = target_dir.join(TARGET).join("release").join(BINARY);
+    if !built.is_file() {
+        return Err(BuildError::MissingElf(built));
+    }
+    let elf = variants.join(format!("{BINARY}-{segments}seg"));
+    fs::copy(&built, &elf).map_err(|e| io("copying the ELF", e))?;
+    Ok(elf)
+}
+
+/// Lays out `root/{firmware,config,crates}` for [`build_with_segments`]. Files are
+/// rewritten only when their content changes, so repeated builds stay incremental.
+fn prepare_variant(root: &Path, segments: usize) -> std::io::Result<()> {
+    let workspace = workspace_root();
+    copy_tree(
+        &firmware_dir(),
+        &root.join("firmware"),
+        &["target", "Cargo.toml"],
+    )?;
+    // `firmware/` is a workspace of its own because the root manifest excludes it;
+    // the copy sits under the root workspace's directory, so it says so itself.
+    let manifest = fs::read_to_string(firmware_dir().join("Cargo.toml"))?;
+    write_if_changed(
+        &root.join("firmware").join("Cargo.toml"),
+        format!("{manifest}\n# Added by hil_tests::firmware::build_with_segments.\n[workspace]\n")
+            .as_bytes(),
+    )?;
+    let config = workspace.join("config");
+    copy_tree(&config, &root.join("config"), &[])?;
+    let toml_path = root.join("config").join("reference-system.toml");
+    let text = fs::read_to_string(config.join("reference-system.toml"))?;
+    let replaced = with_segments(&text, segments).ok_or_else(|| {
+        std::io::Error::other("config/reference-system.toml has no `segments_embedded =` line")
+    })?;
+    write_if_changed(&toml_path, replaced.as_bytes())?;
+    let link = root.join("crates");
+    if fs::read_link(&link).ok().as_deref() != Some(workspace.join("crates").as_path()) {
+        // A stale link or a leftover directory: replace it.
+        let _ = fs::remove_file(&link);
+        let _ = fs::remove_dir_all(&link);
+        std::os::unix::fs::symlink(workspace.join("crates"), &link)?;
+    }
+    Ok(())
+}
+
+/// `text` (the reference-system TOML) with its `segments_embedded` value replaced
+/// by `segments`, its comment kept; `None` if there is no such line.
+pub fn with_segments(text: &str, segments: usize) -> Option<String> {
+    let mut found = false;
+    let lines: Vec<String> = text
+        .lines()
+        .map(|line| {
+            let trimmed = line.trim_start();
+            let key = trimmed.split('=').next().unwrap_or("").trim();
+            if key == "segments_embedded" && !found {
+                found = true;
+                let comment = line.find('#').map(|i| &line[i..]).unwrap_or("");
+                let indent = &line[..line.len() - trimmed.len()];
+                format!("{indent}segments_embedded = {segments} {comment}")
+                    .trim_end()
+                    .to_owned()
+            } else {
+                line.to_owned()
+            }
+        })
+        .collect();
+    found.then(|| lines.join("\n") + "\n")
+}
+
+/// Copies the files under `from` to `to` (creating directories), skipping the
+/// top-level entries named in `skip`; unchanged files are left untouched.
+fn copy_tree(from: &Path, to: &Path, skip: &[&str]) -> std::io::Result<()> {
+    fs::create_dir_all(to)?;
+    for entry in fs::read_dir(from)? {
+        let entry = entry?;
+        let name = entry.file_name();
+        if skip.iter().any(|s| name == *s) {
+            continue;
+        }
+        let (source, dest) = (entry.path(), to.join(&name));
+        if entry.file_type()?.is_dir() {
+            copy_tree(&source, &dest, &[])?;
+        } else {
+            write_if_changed(&dest, &fs::read(&source)?)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` unless it already holds exactly them.
+fn write_if_changed(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if fs::read(path).is_ok_and(|old| old == bytes) {
+        return Ok(());
+    }
+    fs::write(path, bytes)
 }
 
 /// Static memory of an ELF, as `size` (Berkeley format) counts it.
@@ -204,4 +357,29 @@ pub fn memory_usage(path: &Path) -> Result<MemoryUsage, String> {
         }
     }
     Ok(usage)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segments_line_is_replaced_and_nothing_else() {
+        let text = "[solver]\nsegments_host = 300\nsegments_embedded = 16       # reduced\nx = 1\n";
+        let out = with_segments(text, 32).unwrap();
+        assert_eq!(
+            out,
+            "[solver]\nsegments_host = 300\nsegments_embedded = 32 # reduced\nx = 1\n"
+        );
+        assert!(with_segments("[solver]\nsegments_host = 300\n", 8).is_none());
+    }
+
+    #[test]
+    fn the_real_configuration_has_the_line() {
+        let text = fs::read_to_string(workspace_root().join("config/reference-system.toml"))
+            .expect("config/reference-system.toml");
+        let out = with_segments(&text, 8).unwrap();
+        assert!(out.contains("segments_embedded = 8 "), "{out}");
+        assert_eq!(out.lines().count(), text.lines().count());
+    }
 }

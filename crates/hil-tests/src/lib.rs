@@ -7,7 +7,8 @@
 //!
 //! - [`qemu`]: run a program with a time limit, killed on timeout and on drop;
 //!   the QEMU command line of the board.
-//! - [`firmware`]: build the firmware, locate its ELF, read its memory use.
+//! - [`firmware`]: build the firmware (also with another segment count, for the
+//!   benchmark report), locate its ELF, read its memory use.
 //! - [`report`]: parse the firmware's semihosting output.
 //! - [`scenario`]: the scenario the firmware runs (the same source file).
 #![deny(missing_docs)]
