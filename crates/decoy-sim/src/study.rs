@@ -389,17 +389,36 @@ impl EmbeddedChoice {
                         " The configuration's embedded model is {n} segments graded {ratio}"
                     ));
                     match self.candidate(n, ratio) {
-                        Some(c) => s.push_str(&format!(
-                            ": trim tension {} off, depth {} off, peak tension {} off ({}).\n",
-                            percent(c.error_trim_tension),
-                            percent(c.error_trim_depth),
-                            percent(c.error_peak_tension),
-                            if c.within_tolerances {
-                                "also within the tolerances, with more margin"
-                            } else {
-                                "outside the tolerances"
+                        Some(configured) => {
+                            s.push_str(&format!(
+                                ": trim tension {} off, depth {} off, peak tension {} off, pitch amplitude {} off ({}).\n",
+                                percent(configured.error_trim_tension),
+                                percent(configured.error_trim_depth),
+                                percent(configured.error_peak_tension),
+                                percent(configured.error_pitch_amplitude),
+                                if configured.within_tolerances {
+                                    "also within the tolerances, with more margin"
+                                } else {
+                                    "outside the tolerances"
+                                }
+                            ));
+                            if configured.within_tolerances {
+                                s.push_str(&format!(
+                                    "\nThe product keeps {n} segments graded {ratio} as its embedded default: \
+                                     the smallest model meets the tolerances with less margin (decoy depth {} off \
+                                     against {}, pitch amplitude {} off against {}), and the configured model fits \
+                                     the firmware's instruction budget (`docs/benchmarks.md`). A system that needs \
+                                     the cheaper model sets `solver.segments_embedded = {}` and \
+                                     `solver.grading_ratio_embedded = {}` in its configuration.\n",
+                                    percent(c.error_trim_depth),
+                                    percent(configured.error_trim_depth),
+                                    percent(c.error_pitch_amplitude),
+                                    percent(configured.error_pitch_amplitude),
+                                    m.segments,
+                                    m.grading,
+                                ));
                             }
-                        )),
+                        }
                         None => s.push_str(" (not among the candidates).\n"),
                     }
                 }
