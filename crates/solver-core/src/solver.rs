@@ -100,12 +100,15 @@ impl<T: Real, const N: usize> Solver<T, N> {
         let full = T::lit(dt);
         let two = T::lit(2.0);
 
+        // The flight path and the air column are sampled once per distinct time:
+        // k2 and k3 both evaluate at t0 + dt/2.
+        let (start, start_air) = connection_and_air(&self.model, &path.state_at(t0))?;
         // k1 at the current state.
-        evaluate_at(
+        dynamics::evaluate(
             &self.model,
             &self.state,
-            path,
-            t0,
+            &start,
+            &start_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
@@ -117,13 +120,14 @@ impl<T: Real, const N: usize> Solver<T, N> {
             derivative: &self.slope,
         });
         self.sum.assign(&self.slope, n);
+        let (middle, middle_air) = connection_and_air(&self.model, &path.state_at(t_half))?;
         // k2 at y + dt/2 k1.
         self.stage.set_stage(&self.state, &self.slope, half, n);
-        evaluate_at(
+        dynamics::evaluate(
             &self.model,
             &self.stage,
-            path,
-            t_half,
+            &middle,
+            &middle_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
@@ -131,23 +135,24 @@ impl<T: Real, const N: usize> Solver<T, N> {
         self.sum.add_scaled(&self.slope, two, n);
         // k3 at y + dt/2 k2.
         self.stage.set_stage(&self.state, &self.slope, half, n);
-        evaluate_at(
+        dynamics::evaluate(
             &self.model,
             &self.stage,
-            path,
-            t_half,
+            &middle,
+            &middle_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
         )?;
         self.sum.add_scaled(&self.slope, two, n);
         // k4 at y + dt k3.
+        let (end, end_air) = connection_and_air(&self.model, &path.state_at(t_end))?;
         self.stage.set_stage(&self.state, &self.slope, full, n);
-        evaluate_at(
+        dynamics::evaluate(
             &self.model,
             &self.stage,
-            path,
-            t_end,
+            &end,
+            &end_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
@@ -166,7 +171,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
                 .map_or(n, |i| i + 1);
             return Err(SolveError::NonFinite { joint });
         }
-        self.state = self.stage;
+        // Only the used segments: the arrays hold capacity N, the model uses n of them.
+        self.state.copy_used(&self.stage, n);
         Ok(())
     }
 

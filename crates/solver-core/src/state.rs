@@ -69,23 +69,46 @@ impl<T: Real, const N: usize> State<T, N> {
 
     /// `self = base + h * d` over the first `count` segments (RK4 stage).
     pub(crate) fn set_stage(&mut self, base: &Self, d: &Derivative<T, N>, h: T, count: usize) {
-        for i in 0..count {
-            self.directions[i] = base.directions[i] + d.directions[i] * h;
-            self.rates[i] = base.rates[i] + d.rates[i] * h;
-        }
-        for k in 0..4 {
-            self.decoy_attitude[k] = base.decoy_attitude[k] + d.decoy_attitude[k] * h;
+        axpy(
+            &mut self.directions[..count],
+            &base.directions[..count],
+            &d.directions[..count],
+            h,
+        );
+        axpy(
+            &mut self.rates[..count],
+            &base.rates[..count],
+            &d.rates[..count],
+            h,
+        );
+        for ((q, b), dq) in self
+            .decoy_attitude
+            .iter_mut()
+            .zip(&base.decoy_attitude)
+            .zip(&d.decoy_attitude)
+        {
+            *q = *b + *dq * h;
         }
         self.decoy_rate = base.decoy_rate + d.decoy_rate * h;
     }
 
+    /// `self = other` over the first `count` segments (entries beyond stay as they are).
+    pub(crate) fn copy_used(&mut self, other: &Self, count: usize) {
+        self.time = other.time;
+        self.directions[..count].copy_from_slice(&other.directions[..count]);
+        self.rates[..count].copy_from_slice(&other.rates[..count]);
+        self.decoy_attitude = other.decoy_attitude;
+        self.decoy_rate = other.decoy_rate;
+    }
+
     /// Restores the invariants: unit directions, rates perpendicular to them, unit quaternion.
     pub(crate) fn renormalise(&mut self, count: usize) {
-        for i in 0..count {
-            let e = self.directions[i] / self.directions[i].norm();
-            self.directions[i] = e;
-            let w = self.rates[i];
-            self.rates[i] = w - e * w.dot(&e);
+        for (e, w) in self.directions[..count]
+            .iter_mut()
+            .zip(self.rates[..count].iter_mut())
+        {
+            *e /= e.norm();
+            *w -= *e * w.dot(e);
         }
         let n = self
             .decoy_attitude
@@ -120,13 +143,26 @@ impl<T: Real, const N: usize> Derivative<T, N> {
 
     /// `self += w * d` (RK4 weighted sum).
     pub(crate) fn add_scaled(&mut self, d: &Self, w: T, count: usize) {
-        for i in 0..count {
-            self.directions[i] += d.directions[i] * w;
-            self.rates[i] += d.rates[i] * w;
+        for (a, b) in self.directions[..count]
+            .iter_mut()
+            .zip(&d.directions[..count])
+        {
+            *a += b * w;
         }
-        for k in 0..4 {
-            self.decoy_attitude[k] += d.decoy_attitude[k] * w;
+        for (a, b) in self.rates[..count].iter_mut().zip(&d.rates[..count]) {
+            *a += b * w;
+        }
+        for (a, b) in self.decoy_attitude.iter_mut().zip(&d.decoy_attitude) {
+            *a += *b * w;
         }
         self.decoy_rate += d.decoy_rate * w;
+    }
+}
+
+/// `out[i] = base[i] + h d[i]` over equal-length slices.
+#[inline(always)]
+fn axpy<T: Real>(out: &mut [Vec3<T>], base: &[Vec3<T>], d: &[Vec3<T>], h: T) {
+    for ((o, b), v) in out.iter_mut().zip(base).zip(d) {
+        *o = b + v * h;
     }
 }
