@@ -158,7 +158,7 @@ fn isa_layer<T: Real>(
         density,
         density_slope: slope_geopotential * dh1,
         density_curvature: curvature_geopotential * dh1 * dh1 + slope_geopotential * dh2,
-        speed_of_sound: (gamma * r * temperature).sqrt(),
+        speed_of_sound: (gamma * r * temperature).square_root(),
         temperature,
         pressure,
     }

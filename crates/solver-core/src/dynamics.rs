@@ -30,7 +30,7 @@ use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
-use crate::scalar::{Mat3, Real, Vec3, vec_finite};
+use crate::scalar::{Mat3, Real, Vec3, norm, vec_finite};
 use crate::state::{Derivative, State};
 
 /// Per-evaluation scratch and results. Read after an evaluation through
@@ -140,8 +140,8 @@ pub fn cable_drag<T: Real>(
     let k = T::lit(0.5) * density * model_cable.diameter * length;
     let ut = direction * relative_air.dot(direction);
     let un = relative_air - ut;
-    un * (k * model_cable.cd_normal * un.norm())
-        + ut * (k * T::pi() * model_cable.cf_tangential * ut.norm())
+    un * (k * model_cable.cd_normal * norm(&un))
+        + ut * (k * T::pi() * model_cable.cf_tangential * norm(&ut))
 }
 
 /// Aerodynamic force and moment on the decoy, DESIGN §2.
@@ -165,7 +165,7 @@ pub fn decoy_aero<T: Real>(
     density: T,
 ) -> (Vec3<T>, Vec3<T>, T, T, T) {
     let vb = rotation.inverse_transform_vector(&(cg_velocity - wind));
-    let speed = vb.norm();
+    let speed = norm(&vb);
     let zero = Vec3::zeros();
     if !(speed > T::lit(1e-6)) || !(density > T::zero()) {
         return (zero, zero, T::zero(), speed, T::zero());
@@ -175,7 +175,7 @@ pub fn decoy_aero<T: Real>(
     let x = Vec3::x();
     let cos_a = vhat.x.clamp(-T::one(), T::one());
     let perp = x - vhat * cos_a;
-    let sin_a = perp.norm();
+    let sin_a = norm(&perp);
     let alpha = sin_a.atan2(cos_a);
     let c = decoy.aero.at(alpha);
     let qs = q * derived.reference_area;

@@ -1,6 +1,6 @@
 //! The aircraft's prescribed motion and the connection point it drives.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 
 use crate::error::InputError;
 use crate::scalar::{Real, Vec3, vec_finite};
@@ -82,8 +82,7 @@ impl<T: Real> AircraftState<T> {
 
     /// The attitude as a unit quaternion (normalised).
     pub fn rotation(&self) -> UnitQuaternion<T> {
-        let [w, x, y, z] = self.attitude;
-        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+        crate::scalar::unit_quaternion(self.attitude)
     }
 
     /// Kinematics of a point fixed in the aircraft body at `r` (FRD, m):

@@ -304,7 +304,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         let f = self.joint_force(j);
         let n = self.model.segment_count();
         let e = self.state.directions[if j == 0 { 0 } else { (j - 1).min(n - 1) }];
-        let magnitude = f.norm();
+        let magnitude = crate::scalar::norm(&f);
         if f.dot(&e) > T::zero() {
             -magnitude
         } else {

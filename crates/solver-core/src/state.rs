@@ -1,6 +1,6 @@
 //! The integrated state: a plain value that can be copied, saved and restored.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 
 use crate::scalar::{Real, Vec3};
 
@@ -63,8 +63,7 @@ impl<T: Real, const N: usize> Default for Derivative<T, N> {
 impl<T: Real, const N: usize> State<T, N> {
     /// The decoy attitude as a unit quaternion.
     pub fn decoy_rotation(&self) -> UnitQuaternion<T> {
-        let [w, x, y, z] = self.decoy_attitude;
-        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+        crate::scalar::unit_quaternion(self.decoy_attitude)
     }
 
     /// `self = base + h * d` over the first `count` segments (RK4 stage).
@@ -107,14 +106,14 @@ impl<T: Real, const N: usize> State<T, N> {
             .iter_mut()
             .zip(self.rates[..count].iter_mut())
         {
-            *e /= e.norm();
+            *e /= crate::scalar::norm(e);
             *w -= *e * w.dot(e);
         }
         let n = self
             .decoy_attitude
             .iter()
             .fold(T::zero(), |a, q| a + *q * *q)
-            .sqrt();
+            .square_root();
         for q in &mut self.decoy_attitude {
             *q /= n;
         }
