@@ -50,8 +50,12 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) specific_force: [Vec3<T>; N],
     /// Centripetal term c = -(l/2) w x (w x e) of segment i+1.
     pub(crate) centripetal: [Vec3<T>; N],
-    /// Elimination: X_j = S_j⁻¹ B_j for joint j = i.
+    /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (the shooting reference
+    /// keeps its affine carriers U_j here instead).
     pub(crate) elimination: [Mat3<T>; N],
+    /// Elimination: u_j = S_j⁻¹ e_{j+1} for joint j = i, so that
+    /// X_j = S_j⁻¹ B_j = (2 S_j⁻¹ - 3 u_j e_{j+1}ᵀ)/m_{j+1}.
+    pub(crate) pivot_direction: [Vec3<T>; N],
     /// Elimination: z_j = S_j⁻¹ y_j for joint j = i.
     pub(crate) reduced_rhs: [Vec3<T>; N],
     /// T_{i+1}: force of segment i+1 on the next body at joint i+1.
@@ -99,6 +103,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
             specific_force: [z; N],
             centripetal: [z; N],
             elimination: [Mat3::zeros(); N],
+            pivot_direction: [z; N],
             reduced_rhs: [z; N],
             joint_force: [z; N],
             connection_force: z,
@@ -339,26 +344,102 @@ fn joint_row<T: Real, const N: usize>(
     (block, rhs)
 }
 
-/// Inverse of a symmetric 3x3 matrix (lower triangle read) by cofactors, or `None`
-/// unless it is positive definite by Sylvester's criterion (leading minors
-/// a, a d - b², det all positive; false for NaN too). One division.
-#[inline(always)]
-fn spd_inverse<T: Real>(s: &Mat3<T>) -> Option<Mat3<T>> {
-    let zero = T::zero();
-    let (a, b, c) = (s[(0, 0)], s[(1, 0)], s[(2, 0)]);
-    let (d, e, f) = (s[(1, 1)], s[(2, 1)], s[(2, 2)]);
-    let c00 = d * f - e * e;
-    let c01 = c * e - b * f;
-    let c02 = b * e - c * d;
-    let c22 = a * d - b * b;
-    let det = a * c00 + b * c01 + c * c02;
-    if !(a > zero && c22 > zero && det > zero && det.finite()) {
-        return None;
+/// A symmetric 3x3 matrix, six entries (the pivot blocks S_j and their inverses).
+#[derive(Clone, Copy, Debug)]
+struct Sym3<T: Real> {
+    xx: T,
+    yy: T,
+    zz: T,
+    xy: T,
+    xz: T,
+    yz: T,
+}
+
+impl<T: Real> Sym3<T> {
+    /// The lower triangle of `m` (which must be symmetric).
+    #[inline(always)]
+    fn from_lower(m: &Mat3<T>) -> Self {
+        Sym3 {
+            xx: m[(0, 0)],
+            yy: m[(1, 1)],
+            zz: m[(2, 2)],
+            xy: m[(1, 0)],
+            xz: m[(2, 0)],
+            yz: m[(2, 1)],
+        }
     }
-    let inv = T::one() / det;
-    let c11 = a * f - c * c;
-    let c12 = b * c - a * e;
-    Some(Mat3::new(c00, c01, c02, c01, c11, c12, c02, c12, c22) * inv)
+
+    /// The segment contribution (I + 3P)/m = (4I - 3 e eᵀ)/m to a joint's diagonal block.
+    #[inline(always)]
+    fn segment(e: &Vec3<T>, inverse_mass: T) -> Self {
+        let d = T::lit(4.0) * inverse_mass;
+        let f = e * (-T::lit(3.0) * inverse_mass);
+        Sym3 {
+            xx: d + f.x * e.x,
+            yy: d + f.y * e.y,
+            zz: d + f.z * e.z,
+            xy: f.x * e.y,
+            xz: f.x * e.z,
+            yz: f.y * e.z,
+        }
+    }
+
+    #[inline(always)]
+    fn add(&self, o: &Self) -> Self {
+        Sym3 {
+            xx: self.xx + o.xx,
+            yy: self.yy + o.yy,
+            zz: self.zz + o.zz,
+            xy: self.xy + o.xy,
+            xz: self.xz + o.xz,
+            yz: self.yz + o.yz,
+        }
+    }
+
+    #[inline(always)]
+    fn mul(&self, v: &Vec3<T>) -> Vec3<T> {
+        Vec3::new(
+            self.xx * v.x + self.xy * v.y + self.xz * v.z,
+            self.xy * v.x + self.yy * v.y + self.yz * v.z,
+            self.xz * v.x + self.yz * v.y + self.zz * v.z,
+        )
+    }
+
+    #[inline(always)]
+    fn to_mat(self) -> Mat3<T> {
+        Mat3::new(
+            self.xx, self.xy, self.xz, self.xy, self.yy, self.yz, self.xz, self.yz, self.zz,
+        )
+    }
+
+    /// Inverse by cofactors, or `None` unless positive definite by Sylvester's
+    /// criterion (leading minors a, a d - b², det all positive; false for NaN too).
+    /// One division.
+    #[inline(always)]
+    fn spd_inverse(&self) -> Option<Self> {
+        let zero = T::zero();
+        let (a, b, c) = (self.xx, self.xy, self.xz);
+        let (d, e, f) = (self.yy, self.yz, self.zz);
+        let c00 = d * f - e * e;
+        let c01 = c * e - b * f;
+        let c02 = b * e - c * d;
+        let c22 = a * d - b * b;
+        let det = a * c00 + b * c01 + c * c02;
+        if !(a > zero && c22 > zero && det > zero && det.finite()) {
+            return None;
+        }
+        let inv = T::one() / det;
+        let c11 = a * f - c * c;
+        let c12 = b * c - a * e;
+        Some(Sym3 {
+            xx: c00 * inv,
+            yy: c11 * inv,
+            zz: c22 * inv,
+            xy: c01 * inv,
+            xz: c02 * inv,
+            yz: c12 * inv,
+        })
+    }
 }
 
 /// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0).
@@ -377,10 +458,19 @@ fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
 /// an SPD matrix and so SPD; a pivot block that is not positive definite is reported
 /// with its joint.
 ///
-/// Structure used (the cost per joint matters on the microcontroller): S_j⁻¹ by
-/// cofactors (one division); with u = S_j⁻¹ e, X_j = (2 S_j⁻¹ - 3 u eᵀ)/m and
-/// B_j X_j = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m²; each segment's diagonal
-/// contribution (4I - 3 e eᵀ)/m is formed once and used for both of its joints.
+/// Structure used (the cost per joint matters on the microcontroller): the pivots are
+/// symmetric and kept as six entries; S_j⁻¹ by cofactors (one division). With
+/// e = e_{j+1}, m = m_{j+1}, u = S_j⁻¹ e:
+///
+/// ```text
+///   X_j T       = (2 S_j⁻¹ T - 3 u (e·T))/m                     (never formed)
+///   B_j X_j     = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m²
+///   S_{j+1}     = 4/m I - 4/m² S_j⁻¹ + w eᵀ + e wᵀ + (segment j+2 or decoy block)
+///   w           = (6 u - 4.5 (e·u) e)/m² - 1.5 e/m
+/// ```
+///
+/// (the last two fold segment j+1's own diagonal contribution (4I - 3 e eᵀ)/m into the
+/// rank-2 update).
 pub fn solve_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
@@ -389,50 +479,59 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let last = last_joint(model);
     let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
-    let (two, three, four, six, nine) = (
-        T::lit(2.0),
-        T::lit(3.0),
-        T::lit(4.0),
-        T::lit(6.0),
-        T::lit(9.0),
-    );
+    let directions = &state.directions;
+    let (two, three, four, six) = (T::lit(2.0), T::lit(3.0), T::lit(4.0), T::lit(6.0));
+    let (one_and_half, four_and_half) = (T::lit(1.5), T::lit(4.5));
     // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
-    let mut block = segment_block(&state.directions[0], inverse_masses[0]);
-    let mut s = block;
+    let mut s = Sym3::segment(&directions[0], inverse_masses[0]);
     let mut y = ws.connection.acceleration - ws.specific_force[0] - ws.centripetal[0];
     for j in 0..last {
-        let s_inv = spd_inverse(&s).ok_or(SolveError::NonPositivePivot { joint: j })?;
+        let inv = s
+            .spd_inverse()
+            .ok_or(SolveError::NonPositivePivot { joint: j })?;
         // Segment j+1 (index j) couples joints j and j+1.
-        let e = state.directions[j];
+        let e = directions[j];
         let im = inverse_masses[j];
-        let u = s_inv * e;
-        let z = s_inv * y;
-        let et = e.transpose();
-        ws.elimination[j] = (s_inv * two - u * et * three) * im;
+        let u = inv.mul(&e);
+        let z = inv.mul(&y);
+        ws.elimination[j] = inv.to_mat();
+        ws.pivot_direction[j] = u;
         ws.reduced_rhs[j] = z;
-        let coupled = (s_inv * four - (u * et + e * u.transpose()) * six
-            + e * et * (nine * e.dot(&u)))
-            * (im * im);
-        // D_{j+1} and b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
-        let mut d_next = block;
+        let im2 = im * im;
+        let w = u * (six * im2) - e * (four_and_half * im2 * e.dot(&u) + one_and_half * im);
+        let d = four * im;
+        let k = -four * im2;
+        let mut s_next = Sym3 {
+            xx: d + k * inv.xx + two * w.x * e.x,
+            yy: d + k * inv.yy + two * w.y * e.y,
+            zz: d + k * inv.zz + two * w.z * e.z,
+            xy: k * inv.xy + w.x * e.y + e.x * w.y,
+            xz: k * inv.xz + w.x * e.z + e.x * w.z,
+            yz: k * inv.yz + w.y * e.z + e.y * w.z,
+        };
+        // b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
         let mut b_next =
             ws.specific_force[j] - ws.centripetal[j] - (z * two - e * (three * e.dot(&z))) * im;
         if j + 1 < n {
-            block = segment_block(&state.directions[j + 1], inverse_masses[j + 1]);
-            d_next += block;
+            s_next = s_next.add(&Sym3::segment(&directions[j + 1], inverse_masses[j + 1]));
             b_next -= ws.specific_force[j + 1] + ws.centripetal[j + 1];
         } else {
-            d_next += ws.decoy.joint_block;
+            s_next = s_next.add(&Sym3::from_lower(&ws.decoy.joint_block));
             b_next += ws.decoy.joint_rhs;
         }
-        s = d_next - coupled;
+        s = s_next;
         y = b_next;
     }
-    let s_inv = spd_inverse(&s).ok_or(SolveError::NonPositivePivot { joint: last })?;
-    let mut t = s_inv * y;
+    let inv = s
+        .spd_inverse()
+        .ok_or(SolveError::NonPositivePivot { joint: last })?;
+    let mut t = inv.mul(&y);
     set_joint_force(ws, last, t);
     for j in (0..last).rev() {
-        t = ws.reduced_rhs[j] - ws.elimination[j] * t;
+        let e = directions[j];
+        let x_t = (ws.elimination[j] * t * two - ws.pivot_direction[j] * (three * e.dot(&t)))
+            * inverse_masses[j];
+        t = ws.reduced_rhs[j] - x_t;
         set_joint_force(ws, j, t);
     }
     finish_tensions(model, ws)
