@@ -24,7 +24,7 @@
 //! (`D_0 = (I + 3P_1)/m_1`, `b_0 = a_0 - F_1/m_1 - c_1`) and at joint N by the decoy's
 //! Newton-Euler equations (`D_N += I/m_d + [r]xᵀ I_d⁻¹ [r]x`), or by T_N = 0 for a free end.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::Quaternion;
 
 use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
@@ -83,6 +83,8 @@ pub struct DecoyScratch<T: Real> {
     pub airspeed: T,
     /// Dynamic pressure, Pa.
     pub dynamic_pressure: T,
+    /// Decoy attitude as a rotation matrix (body FRD to NED), from the normalised quaternion.
+    pub(crate) rotation: Mat3<T>,
     /// Decoy block of joint N: I/m_d + [r]xᵀ I⁻¹ [r]x (NED).
     pub(crate) joint_block: Mat3<T>,
     /// Decoy part of b_N.
@@ -115,6 +117,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
                 angle_of_attack: T::zero(),
                 airspeed: T::zero(),
                 dynamic_pressure: T::zero(),
+                rotation: Mat3::identity(),
                 joint_block: Mat3::zeros(),
                 joint_rhs: z,
             },
@@ -134,7 +137,7 @@ pub enum TensionMethod {
 /// Cable cross-flow drag on a segment (DESIGN §2): with the air velocity relative to
 /// the segment centre u split into u_t = (u.e)e and u_n = u - u_t,
 /// `F = 0.5 rho d l (C_n |u_n| u_n + pi C_f |u_t| u_t)`.
-#[inline]
+#[inline(always)]
 pub fn cable_drag<T: Real>(
     model_cable: &crate::model::CableParams<T>,
     density: T,
@@ -151,7 +154,7 @@ pub fn cable_drag<T: Real>(
 
 /// Aerodynamic force and moment on the decoy, DESIGN §2.
 ///
-/// Inputs: decoy attitude (body FRD to NED), body rate, CG velocity over the
+/// Inputs: decoy attitude as the rotation matrix R (body FRD to NED), body rate, CG velocity over the
 /// ground, wind, local density. Output: force (NED), moment about the CG (body
 /// frame), total angle of attack, airspeed, dynamic pressure.
 ///
@@ -163,13 +166,13 @@ pub fn cable_drag<T: Real>(
 pub fn decoy_aero<T: Real>(
     decoy: &crate::model::DecoyParams<T>,
     derived: &crate::model::DecoyDerived<T>,
-    rotation: &UnitQuaternion<T>,
+    rotation: &Mat3<T>,
     body_rate: &Vec3<T>,
     cg_velocity: &Vec3<T>,
     wind: &Vec3<T>,
     density: T,
 ) -> (Vec3<T>, Vec3<T>, T, T, T) {
-    let vb = rotation.inverse_transform_vector(&(cg_velocity - wind));
+    let vb = rotation.tr_mul(&(cg_velocity - wind));
     let speed = norm(&vb);
     let zero = Vec3::zeros();
     if !(speed > T::lit(1e-6)) || !(density > T::zero()) {
@@ -244,23 +247,17 @@ pub fn prepare<T: Real, const N: usize>(
     }
 
     if let Some((decoy, derived)) = model.decoy() {
-        let rotation = state.decoy_rotation();
+        // One normalisation and one rotation matrix per evaluation (also used by pass 3).
+        let r = *state.decoy_rotation().to_rotation_matrix().matrix();
         let wb = state.decoy_rate;
         let tow = ws.joint_position[n - 1];
         let tow_velocity = ws.joint_velocity[n - 1];
-        let r_world = rotation * derived.tow_from_cg;
+        let r_world = r * derived.tow_from_cg;
         let cg_position = tow - r_world;
-        let cg_velocity = tow_velocity - rotation * wb.cross(&derived.tow_from_cg);
+        let cg_velocity = tow_velocity - r * wb.cross(&derived.tow_from_cg);
         let density = air.density(-cg_position.z);
-        let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) = decoy_aero(
-            decoy,
-            derived,
-            &rotation,
-            &wb,
-            &cg_velocity,
-            &env.wind,
-            density,
-        );
+        let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) =
+            decoy_aero(decoy, derived, &r, &wb, &cg_velocity, &env.wind, density);
         let inertia = decoy.inertia_cg;
         let gyroscopic = wb.cross(&inertia.component_mul(&wb));
         // Towing-point acceleration from the decoy side (a_tow = a_cg + dw x r + w x (w x r)):
@@ -271,9 +268,8 @@ pub fn prepare<T: Real, const N: usize>(
             wb.cross(&wb.cross(&derived.tow_from_cg)) - derived.tow_from_cg.cross(&free_angular);
         let inverse_mass = T::one() / decoy.mass;
         let force = aero_force + gravity * decoy.mass;
-        let rot = rotation.to_rotation_matrix();
-        let r = rot.matrix();
         ws.decoy = DecoyScratch {
+            rotation: r,
             cg_position,
             cg_velocity,
             aero_force,
@@ -666,9 +662,8 @@ pub fn accelerations<T: Real, const N: usize>(
         upstream = downstream;
     }
     if let Some((decoy, derived)) = model.decoy() {
-        let rotation = state.decoy_rotation();
         let wb = state.decoy_rate;
-        let tension_body = rotation.inverse_transform_vector(&ws.joint_force[n - 1]);
+        let tension_body = ws.decoy.rotation.tr_mul(&ws.joint_force[n - 1]);
         let inertia = decoy.inertia_cg;
         let torque = ws.decoy.aero_moment_body + derived.tow_from_cg.cross(&tension_body)
             - wb.cross(&inertia.component_mul(&wb));

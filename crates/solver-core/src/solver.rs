@@ -120,7 +120,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
             derivative: &self.slope,
         });
         self.sum.assign(&self.slope, n);
-        let (middle, middle_air) = connection_and_air(&self.model, &path.state_at(t_half))?;
+        let (middle, middle_air) =
+            connection_and_air_reusing(&self.model, &path.state_at(t_half), &start_air)?;
         // k2 at y + dt/2 k1.
         self.stage.set_stage(&self.state, &self.slope, half, n);
         dynamics::evaluate(
@@ -146,7 +147,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
         )?;
         self.sum.add_scaled(&self.slope, two, n);
         // k4 at y + dt k3.
-        let (end, end_air) = connection_and_air(&self.model, &path.state_at(t_end))?;
+        let (end, end_air) =
+            connection_and_air_reusing(&self.model, &path.state_at(t_end), &middle_air)?;
         self.stage.set_stage(&self.state, &self.slope, full, n);
         dynamics::evaluate(
             &self.model,
@@ -242,6 +244,25 @@ pub fn connection_and_air<T: Real, const N: usize>(
         &model.params().environment.atmosphere,
         -connection.position.z,
     )?;
+    Ok((connection, air))
+}
+
+/// [`connection_and_air`], reusing `previous` when the connection point is at its
+/// reference altitude (level flight): the column is a function of that altitude
+/// alone, so the result is the same, without another ISA evaluation.
+fn connection_and_air_reusing<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    aircraft: &AircraftState<T>,
+    previous: &AirColumn<T>,
+) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
+    aircraft.validate()?;
+    let connection = aircraft.point(&model.params().connection_point);
+    let altitude = -connection.position.z;
+    let air = if altitude == previous.reference_altitude {
+        *previous
+    } else {
+        AirColumn::new(&model.params().environment.atmosphere, altitude)?
+    };
     Ok((connection, air))
 }
 
