@@ -421,10 +421,12 @@ impl<T: Real> Sym3<T> {
         let c02 = b * e - c * d;
         let c22 = a * d - b * b;
         let det = a * c00 + b * c01 + c * c02;
-        if !(a > zero && c22 > zero && det > zero && det.finite()) {
+        let inv = T::one() / det;
+        // det in (0, inf) as `det > 0 && 1/det > 0`: float compares (LLVM turns
+        // `det.finite()` into a bitwise classification of about 20 instructions).
+        if !(a > zero && c22 > zero && det > zero && inv > zero) {
             return None;
         }
-        let inv = T::one() / det;
         let c11 = a * f - c * c;
         let c12 = b * c - a * e;
         Some(Sym3 {
