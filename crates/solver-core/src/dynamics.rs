@@ -30,7 +30,7 @@ use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
-use crate::scalar::{Mat3, Real, Vec3, norm, vec_finite};
+use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite};
 use crate::state::{Derivative, State};
 
 /// Per-evaluation scratch and results. Read after an evaluation through
@@ -207,6 +207,7 @@ pub fn decoy_aero<T: Real>(
 ///
 /// Joint 0 is the connection point; `p_i = p_{i-1} + l_i e_i`,
 /// `v_i = v_{i-1} + l_i w_i x e_i`. Cable loads act at segment centres.
+#[inline(never)]
 pub fn prepare<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
@@ -214,6 +215,7 @@ pub fn prepare<T: Real, const N: usize>(
     air: &AirColumn<T>,
     ws: &mut Workspace<T, N>,
 ) {
+    let (model, state, ws) = opaque((model, state, ws));
     let n = model.segment_count();
     let params = model.params();
     let env = &params.environment;
@@ -469,11 +471,13 @@ fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
 ///
 /// (the last two fold segment j+1's own diagonal contribution (4I - 3 e eᵀ)/m into the
 /// rank-2 update).
+#[inline(never)]
 pub fn solve_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
     ws: &mut Workspace<T, N>,
 ) -> Result<(), SolveError> {
+    let (model, state, ws) = opaque((model, state, ws));
     let last = last_joint(model);
     let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
@@ -647,12 +651,14 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
 /// Segment i: dw_i/dt = -(6/(m_i l_i)) e_i x (T_{i-1} + T_i) (hinge torques about the
 /// centre over the thin-rod inertia m l²/12), de_i/dt = w_i x e_i.
 /// Decoy: I dw/dt = M + r x T_N - w x I w (body frame), dq/dt = q ⊗ (0, w)/2.
+#[inline(never)]
 pub fn accelerations<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
     ws: &Workspace<T, N>,
     out: &mut Derivative<T, N>,
 ) {
+    let (model, state, ws, out) = opaque((model, state, ws, out));
     let n = model.segment_count();
     let gains = model.rate_gains();
     let mut upstream = ws.connection_force;

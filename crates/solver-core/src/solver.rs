@@ -119,11 +119,11 @@ impl<T: Real, const N: usize> Solver<T, N> {
             ws: &self.ws,
             derivative: &self.slope,
         });
-        self.sum.assign(&self.slope, n);
         let (middle, middle_air) =
             connection_and_air_reusing(&self.model, &path.state_at(t_half), &start_air)?;
-        // k2 at y + dt/2 k1.
-        self.stage.set_stage(&self.state, &self.slope, half, n);
+        // k2 at y + dt/2 k1 (sum = k1).
+        self.stage
+            .set_stage_accumulating(&self.state, &self.slope, half, &mut self.sum, None, n);
         dynamics::evaluate(
             &self.model,
             &self.stage,
@@ -133,9 +133,15 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.ws,
             &mut self.slope,
         )?;
-        self.sum.add_scaled(&self.slope, two, n);
-        // k3 at y + dt/2 k2.
-        self.stage.set_stage(&self.state, &self.slope, half, n);
+        // k3 at y + dt/2 k2 (sum += 2 k2).
+        self.stage.set_stage_accumulating(
+            &self.state,
+            &self.slope,
+            half,
+            &mut self.sum,
+            Some(two),
+            n,
+        );
         dynamics::evaluate(
             &self.model,
             &self.stage,
@@ -145,11 +151,17 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.ws,
             &mut self.slope,
         )?;
-        self.sum.add_scaled(&self.slope, two, n);
-        // k4 at y + dt k3.
+        // k4 at y + dt k3 (sum += 2 k3).
         let (end, end_air) =
             connection_and_air_reusing(&self.model, &path.state_at(t_end), &middle_air)?;
-        self.stage.set_stage(&self.state, &self.slope, full, n);
+        self.stage.set_stage_accumulating(
+            &self.state,
+            &self.slope,
+            full,
+            &mut self.sum,
+            Some(two),
+            n,
+        );
         dynamics::evaluate(
             &self.model,
             &self.stage,
@@ -159,12 +171,12 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.ws,
             &mut self.slope,
         )?;
-        self.sum.add_scaled(&self.slope, T::one(), n);
         // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
-        self.stage.set_stage(&self.state, &self.sum, sixth, n);
+        self.stage
+            .set_final(&self.state, &self.sum, &self.slope, sixth, n);
         self.stage.time = t_end;
-        self.stage.renormalise(n);
-        if !self.stage.is_finite(n) {
+        let probe = self.stage.renormalise(n);
+        if !(probe.finite() && t_end.is_finite()) && !self.stage.is_finite(n) {
             let joint = (0..n)
                 .find(|&i| {
                     !(crate::scalar::vec_finite(&self.stage.directions[i])

@@ -66,29 +66,62 @@ impl<T: Real, const N: usize> State<T, N> {
         crate::scalar::unit_quaternion(self.decoy_attitude)
     }
 
-    /// `self = base + h * d` over the first `count` segments (RK4 stage).
-    pub(crate) fn set_stage(&mut self, base: &Self, d: &Derivative<T, N>, h: T, count: usize) {
-        axpy(
-            &mut self.directions[..count],
-            &base.directions[..count],
-            &d.directions[..count],
-            h,
-        );
-        axpy(
-            &mut self.rates[..count],
-            &base.rates[..count],
-            &d.rates[..count],
-            h,
-        );
-        for ((q, b), dq) in self
+    /// RK4 stage and weighted sum in one pass over the first `count` segments:
+    /// `self = base + h k`, and `sum = k` (`weight` = `None`, the first stage) or
+    /// `sum += weight k`.
+    #[inline(never)]
+    pub(crate) fn set_stage_accumulating(
+        &mut self,
+        base: &Self,
+        k: &Derivative<T, N>,
+        h: T,
+        sum: &mut Derivative<T, N>,
+        weight: Option<T>,
+        count: usize,
+    ) {
+        let (this, base, k, sum) = crate::scalar::opaque((self, base, k, sum));
+        match weight {
+            None => stage_pass(this, base, k, h, sum, count, |_, k| k),
+            Some(w) => stage_pass(this, base, k, h, sum, count, |s, k| s + k * w),
+        }
+    }
+
+    /// The RK4 result `self = base + h (sum + k)` over the first `count` segments
+    /// (`sum` holds k1 + 2 k2 + 2 k3, `k` is k4, `h` = dt/6).
+    #[inline(never)]
+    pub(crate) fn set_final(
+        &mut self,
+        base: &Self,
+        sum: &Derivative<T, N>,
+        k: &Derivative<T, N>,
+        h: T,
+        count: usize,
+    ) {
+        let (this, base, sum, k) = crate::scalar::opaque((self, base, sum, k));
+        let pairs = this.directions[..count]
+            .iter_mut()
+            .zip(&base.directions[..count])
+            .zip(sum.directions[..count].iter().zip(&k.directions[..count]));
+        for ((o, b), (s, d)) in pairs {
+            *o = b + (s + d) * h;
+        }
+        let pairs = this.rates[..count]
+            .iter_mut()
+            .zip(&base.rates[..count])
+            .zip(sum.rates[..count].iter().zip(&k.rates[..count]));
+        for ((o, b), (s, d)) in pairs {
+            *o = b + (s + d) * h;
+        }
+        for (((o, b), s), d) in this
             .decoy_attitude
             .iter_mut()
             .zip(&base.decoy_attitude)
-            .zip(&d.decoy_attitude)
+            .zip(&sum.decoy_attitude)
+            .zip(&k.decoy_attitude)
         {
-            *q = *b + *dq * h;
+            *o = *b + (*s + *d) * h;
         }
-        self.decoy_rate = base.decoy_rate + d.decoy_rate * h;
+        this.decoy_rate = base.decoy_rate + (sum.decoy_rate + k.decoy_rate) * h;
     }
 
     /// `self = other` over the first `count` segments (entries beyond stay as they are).
@@ -101,22 +134,32 @@ impl<T: Real, const N: usize> State<T, N> {
     }
 
     /// Restores the invariants: unit directions, rates perpendicular to them, unit quaternion.
-    pub(crate) fn renormalise(&mut self, count: usize) {
-        for (e, w) in self.directions[..count]
+    ///
+    /// Returns the sum of every used direction, rate, quaternion and decoy-rate
+    /// component: finite only if all of them are (a cheap probe; when it is not
+    /// finite, [`State::is_finite`] decides).
+    #[inline(never)]
+    pub(crate) fn renormalise(&mut self, count: usize) -> T {
+        let this = crate::scalar::opaque(self);
+        let mut probe = T::zero();
+        for (e, w) in this.directions[..count]
             .iter_mut()
-            .zip(self.rates[..count].iter_mut())
+            .zip(this.rates[..count].iter_mut())
         {
             *e /= crate::scalar::norm(e);
             *w -= *e * w.dot(e);
+            probe += (e.x + e.y + e.z) + (w.x + w.y + w.z);
         }
-        let n = self
+        let n = this
             .decoy_attitude
             .iter()
             .fold(T::zero(), |a, q| a + *q * *q)
             .square_root();
-        for q in &mut self.decoy_attitude {
+        for q in &mut this.decoy_attitude {
             *q /= n;
+            probe += *q;
         }
+        probe + (this.decoy_rate.x + this.decoy_rate.y + this.decoy_rate.z)
     }
 
     /// True when every used value is finite.
@@ -131,37 +174,52 @@ impl<T: Real, const N: usize> State<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> Derivative<T, N> {
-    /// `self = d` (first RK4 stage of the weighted sum).
-    pub(crate) fn assign(&mut self, d: &Self, count: usize) {
-        self.directions[..count].copy_from_slice(&d.directions[..count]);
-        self.rates[..count].copy_from_slice(&d.rates[..count]);
-        self.decoy_attitude = d.decoy_attitude;
-        self.decoy_rate = d.decoy_rate;
-    }
-
-    /// `self += w * d` (RK4 weighted sum).
-    pub(crate) fn add_scaled(&mut self, d: &Self, w: T, count: usize) {
-        for (a, b) in self.directions[..count]
-            .iter_mut()
-            .zip(&d.directions[..count])
-        {
-            *a += b * w;
-        }
-        for (a, b) in self.rates[..count].iter_mut().zip(&d.rates[..count]) {
-            *a += b * w;
-        }
-        for (a, b) in self.decoy_attitude.iter_mut().zip(&d.decoy_attitude) {
-            *a += *b * w;
-        }
-        self.decoy_rate += d.decoy_rate * w;
-    }
-}
-
-/// `out[i] = base[i] + h d[i]` over equal-length slices.
+/// One pass of [`State::set_stage_accumulating`]: `out = base + h k`, and every
+/// component of `sum` becomes `acc(sum, k)`.
 #[inline(always)]
-fn axpy<T: Real>(out: &mut [Vec3<T>], base: &[Vec3<T>], d: &[Vec3<T>], h: T) {
-    for ((o, b), v) in out.iter_mut().zip(base).zip(d) {
-        *o = b + v * h;
+fn stage_pass<T: Real, const N: usize>(
+    out: &mut State<T, N>,
+    base: &State<T, N>,
+    k: &Derivative<T, N>,
+    h: T,
+    sum: &mut Derivative<T, N>,
+    count: usize,
+    acc: impl Fn(T, T) -> T,
+) {
+    let acc3 = |s: &mut Vec3<T>, d: &Vec3<T>| {
+        *s = Vec3::new(acc(s.x, d.x), acc(s.y, d.y), acc(s.z, d.z));
+    };
+    let rows = out.directions[..count]
+        .iter_mut()
+        .zip(&base.directions[..count])
+        .zip(
+            k.directions[..count]
+                .iter()
+                .zip(sum.directions[..count].iter_mut()),
+        );
+    for ((o, b), (d, s)) in rows {
+        let d = *d;
+        *o = b + d * h;
+        acc3(s, &d);
     }
+    let rows = out.rates[..count]
+        .iter_mut()
+        .zip(&base.rates[..count])
+        .zip(k.rates[..count].iter().zip(sum.rates[..count].iter_mut()));
+    for ((o, b), (d, s)) in rows {
+        let d = *d;
+        *o = b + d * h;
+        acc3(s, &d);
+    }
+    let rows = out
+        .decoy_attitude
+        .iter_mut()
+        .zip(&base.decoy_attitude)
+        .zip(k.decoy_attitude.iter().zip(sum.decoy_attitude.iter_mut()));
+    for ((o, b), (d, s)) in rows {
+        *o = *b + *d * h;
+        *s = acc(*s, *d);
+    }
+    out.decoy_rate = base.decoy_rate + k.decoy_rate * h;
+    acc3(&mut sum.decoy_rate, &k.decoy_rate);
 }
