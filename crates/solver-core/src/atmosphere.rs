@@ -212,12 +212,16 @@ impl<T: Real> AirColumn<T> {
     /// Density at altitude `h` (m, positive up), never negative.
     #[inline]
     pub fn density(&self, h: T) -> T {
-        let tropopause = T::lit(H_TROPOPAUSE_GEOMETRIC);
         let (h_ref, air) = match &self.across_tropopause {
-            Some(other) if (h > tropopause) != (self.reference_altitude > tropopause) => {
-                (tropopause, other)
+            None => (self.reference_altitude, &self.air),
+            Some(other) => {
+                let tropopause = T::lit(H_TROPOPAUSE_GEOMETRIC);
+                if (h > tropopause) != (self.reference_altitude > tropopause) {
+                    (tropopause, other)
+                } else {
+                    (self.reference_altitude, &self.air)
+                }
             }
-            _ => (self.reference_altitude, &self.air),
         };
         let dh = h - h_ref;
         let half = T::lit(0.5);

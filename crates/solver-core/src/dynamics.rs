@@ -226,7 +226,7 @@ pub fn prepare<T: Real, const N: usize>(
     let mut p = connection.position;
     let mut v = connection.velocity;
     let lengths = model.lengths();
-    let inverse_masses = model.inverse_masses();
+    let (normal_drag, tangential_drag) = model.drag_factors();
     for i in 0..n {
         let e = state.directions[i];
         let w = state.rates[i];
@@ -234,11 +234,15 @@ pub fn prepare<T: Real, const N: usize>(
         let we = w.cross(&e);
         let mut specific = gravity;
         if has_air {
+            // cable_drag(..)/m_i with the per-unit-mass factors of the model.
             let centre_altitude = -(p.z + e.z * (half * l));
             let centre_velocity = v + we * (half * l);
             let density = air.density(centre_altitude);
-            specific += cable_drag(&params.cable, density, l, &e, &(env.wind - centre_velocity))
-                * inverse_masses[i];
+            let u = env.wind - centre_velocity;
+            let ut = e * u.dot(&e);
+            let un = u - ut;
+            specific += (un * (normal_drag[i] * norm(&un)) + ut * (tangential_drag[i] * norm(&ut)))
+                * density;
         }
         ws.specific_force[i] = specific;
         ws.centripetal[i] = -w.cross(&we) * (half * l);

@@ -86,11 +86,13 @@ impl Real for f64 {
 /// then s = x y_2 and one Newton step on the root itself, s + (x - s²) y_2 / 2.
 #[inline(always)]
 pub fn sqrt_f32_soft(x: f32) -> f32 {
-    if !(x >= f32::MIN_POSITIVE && x <= f32::MAX) {
+    let bits = x.to_bits();
+    // Positive normal finite: biased exponent 1..=254 and sign 0, one integer compare.
+    if bits.wrapping_sub(0x0080_0000) >= 0x7f00_0000 {
         return <f32 as nalgebra::ComplexField>::sqrt(x);
     }
     let half_x = 0.5 * x;
-    let mut y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
+    let mut y = f32::from_bits(0x5f37_5a86 - (bits >> 1));
     y *= 1.5 - half_x * y * y;
     y *= 1.5 - half_x * y * y;
     let s = x * y;
