@@ -203,6 +203,51 @@ pub fn decoy_aero<T: Real>(
     (rotation * force_b, moment_b, alpha, speed, q)
 }
 
+/// The segment loop of [`prepare`]: `p_i = p_{i-1} + l_i e_i`, `v_i = v_{i-1} + l_i w_i x e_i`,
+/// gravity and cable drag per unit mass at each segment centre, and the centripetal term.
+#[inline(always)]
+fn cable_loads<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    has_air: bool,
+    ws: &mut Workspace<T, N>,
+    density_at: impl Fn(T) -> T,
+) {
+    let n = model.segment_count();
+    let env = &model.params().environment;
+    let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
+    let half = T::lit(0.5);
+    let mut p = connection.position;
+    let mut v = connection.velocity;
+    let lengths = model.lengths();
+    let (normal_drag, tangential_drag) = model.drag_factors();
+    for i in 0..n {
+        let e = state.directions[i];
+        let w = state.rates[i];
+        let l = lengths[i];
+        let we = w.cross(&e);
+        let mut specific = gravity;
+        if has_air {
+            // cable_drag(..)/m_i with the per-unit-mass factors of the model.
+            let centre_altitude = -(p.z + e.z * (half * l));
+            let centre_velocity = v + we * (half * l);
+            let density = density_at(centre_altitude);
+            let u = env.wind - centre_velocity;
+            let ut = e * u.dot(&e);
+            let un = u - ut;
+            specific += (un * (normal_drag[i] * norm(&un)) + ut * (tangential_drag[i] * norm(&ut)))
+                * density;
+        }
+        ws.specific_force[i] = specific;
+        ws.centripetal[i] = -w.cross(&we) * (half * l);
+        p += e * l;
+        v += we * l;
+        ws.joint_position[i] = p;
+        ws.joint_velocity[i] = v;
+    }
+}
+
 /// Pass 1: kinematics, loads and the velocity terms.
 ///
 /// Joint 0 is the connection point; `p_i = p_{i-1} + l_i e_i`,
@@ -221,35 +266,11 @@ pub fn prepare<T: Real, const N: usize>(
     let env = &params.environment;
     let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
     let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
-    let half = T::lit(0.5);
     ws.connection = *connection;
-    let mut p = connection.position;
-    let mut v = connection.velocity;
-    let lengths = model.lengths();
-    let (normal_drag, tangential_drag) = model.drag_factors();
-    for i in 0..n {
-        let e = state.directions[i];
-        let w = state.rates[i];
-        let l = lengths[i];
-        let we = w.cross(&e);
-        let mut specific = gravity;
-        if has_air {
-            // cable_drag(..)/m_i with the per-unit-mass factors of the model.
-            let centre_altitude = -(p.z + e.z * (half * l));
-            let centre_velocity = v + we * (half * l);
-            let density = air.density(centre_altitude);
-            let u = env.wind - centre_velocity;
-            let ut = e * u.dot(&e);
-            let un = u - ut;
-            specific += (un * (normal_drag[i] * norm(&un)) + ut * (tangential_drag[i] * norm(&ut)))
-                * density;
-        }
-        ws.specific_force[i] = specific;
-        ws.centripetal[i] = -w.cross(&we) * (half * l);
-        p += e * l;
-        v += we * l;
-        ws.joint_position[i] = p;
-        ws.joint_velocity[i] = v;
+    // The layer choice of the air column, once per evaluation rather than per segment.
+    match air.single_layer() {
+        Some(layer) => cable_loads(model, state, connection, has_air, ws, |h| layer.density(h)),
+        None => cable_loads(model, state, connection, has_air, ws, |h| air.density(h)),
     }
 
     if let Some((decoy, derived)) = model.decoy() {
