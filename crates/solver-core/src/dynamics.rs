@@ -48,8 +48,11 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) joint_velocity: [Vec3<T>; N],
     /// External force per unit mass on segment i+1 (gravity + drag), F/m.
     pub(crate) specific_force: [Vec3<T>; N],
-    /// Centripetal term c = -(l/2) w x (w x e) of segment i+1.
-    pub(crate) centripetal: [Vec3<T>; N],
+    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
+    /// connection-point acceleration), assembled with the loads in pass 1.
+    pub(crate) joint_rhs: [Vec3<T>; N],
+    /// Right-hand side b_N of the towing-point joint (with the decoy's part).
+    pub(crate) tow_rhs: Vec3<T>,
     /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (the shooting reference
     /// keeps its affine carriers U_j here instead).
     pub(crate) elimination: [Mat3<T>; N],
@@ -103,7 +106,8 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
             joint_position: [z; N],
             joint_velocity: [z; N],
             specific_force: [z; N],
-            centripetal: [z; N],
+            joint_rhs: [z; N],
+            tow_rhs: z,
             elimination: [Mat3::zeros(); N],
             pivot_direction: [z; N],
             reduced_rhs: [z; N],
@@ -204,7 +208,10 @@ pub fn decoy_aero<T: Real>(
 }
 
 /// The segment loop of [`prepare`]: `p_i = p_{i-1} + l_i e_i`, `v_i = v_{i-1} + l_i w_i x e_i`,
-/// gravity and cable drag per unit mass at each segment centre, and the centripetal term.
+/// gravity and cable drag per unit mass F_i/m_i at each segment centre, the
+/// centripetal term c_i = -(l_i/2) w_i x (w_i x e_i), and the joint right-hand sides
+/// b_{i-1} += -(F_i/m_i + c_i), b_i += F_i/m_i - c_i (b_0 starts from a_0). Returns the
+/// last segment's share F_N/m_N - c_N of b_N.
 #[inline(always)]
 fn cable_loads<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -213,7 +220,7 @@ fn cable_loads<T: Real, const N: usize>(
     has_air: bool,
     ws: &mut Workspace<T, N>,
     density_at: impl Fn(T) -> T,
-) {
+) -> Vec3<T> {
     let n = model.segment_count();
     let env = &model.params().environment;
     let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
@@ -222,6 +229,7 @@ fn cable_loads<T: Real, const N: usize>(
     let mut v = connection.velocity;
     let lengths = model.lengths();
     let (normal_drag, tangential_drag) = model.drag_factors();
+    let mut carry = connection.acceleration;
     for i in 0..n {
         let e = state.directions[i];
         let w = state.rates[i];
@@ -240,12 +248,15 @@ fn cable_loads<T: Real, const N: usize>(
                 * density;
         }
         ws.specific_force[i] = specific;
-        ws.centripetal[i] = -w.cross(&we) * (half * l);
+        let centripetal = -w.cross(&we) * (half * l);
+        ws.joint_rhs[i] = carry - (specific + centripetal);
+        carry = specific - centripetal;
         p += e * l;
         v += we * l;
         ws.joint_position[i] = p;
         ws.joint_velocity[i] = v;
     }
+    carry
 }
 
 /// Pass 1: kinematics, loads and the velocity terms.
@@ -268,10 +279,10 @@ pub fn prepare<T: Real, const N: usize>(
     let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
     ws.connection = *connection;
     // The layer choice of the air column, once per evaluation rather than per segment.
-    match air.single_layer() {
+    ws.tow_rhs = match air.single_layer() {
         Some(layer) => cable_loads(model, state, connection, has_air, ws, |h| layer.density(h)),
         None => cable_loads(model, state, connection, has_air, ws, |h| air.density(h)),
-    }
+    };
 
     if let Some((decoy, derived)) = model.decoy() {
         // One normalisation and one rotation matrix per evaluation (also used by pass 3).
@@ -309,6 +320,7 @@ pub fn prepare<T: Real, const N: usize>(
             // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
             joint_rhs: -(force * inverse_mass) - r * rhs_body,
         };
+        ws.tow_rhs += ws.decoy.joint_rhs;
     }
 }
 
@@ -348,23 +360,18 @@ fn joint_row<T: Real, const N: usize>(
     let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
     let mut block = Mat3::zeros();
-    let mut rhs = Vec3::zeros();
-    if j == 0 {
-        rhs += ws.connection.acceleration;
-    } else {
+    if j > 0 {
         // Upstream segment j (index j-1) seen from its downstream end.
         block += segment_block(&state.directions[j - 1], inverse_masses[j - 1]);
-        rhs += ws.specific_force[j - 1] - ws.centripetal[j - 1];
     }
     if j < n {
         // Downstream segment j+1 (index j) seen from its upstream end.
         block += segment_block(&state.directions[j], inverse_masses[j]);
-        rhs -= ws.specific_force[j] + ws.centripetal[j];
+        (block, ws.joint_rhs[j])
     } else {
         block += ws.decoy.joint_block;
-        rhs += ws.decoy.joint_rhs;
+        (block, ws.tow_rhs)
     }
-    (block, rhs)
 }
 
 /// A symmetric 3x3 matrix, six entries (the pivot blocks S_j and their inverses).
@@ -511,7 +518,7 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let (one_and_half, four_and_half) = (T::lit(1.5), T::lit(4.5));
     // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
     let mut s = Sym3::segment(&directions[0], inverse_masses[0]);
-    let mut y = ws.connection.acceleration - ws.specific_force[0] - ws.centripetal[0];
+    let mut y = ws.joint_rhs[0];
     for j in 0..last {
         let inv = s
             .spd_inverse()
@@ -537,15 +544,16 @@ pub fn solve_tensions<T: Real, const N: usize>(
             yz: k * inv.yz + w.y * e.z + e.y * w.z,
         };
         // b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
-        let mut b_next =
-            ws.specific_force[j] - ws.centripetal[j] - (z * two - e * (three * e.dot(&z))) * im;
+        let b_next;
         if j + 1 < n {
             s_next = s_next.add(&Sym3::segment(&directions[j + 1], inverse_masses[j + 1]));
-            b_next -= ws.specific_force[j + 1] + ws.centripetal[j + 1];
+            b_next = ws.joint_rhs[j + 1];
         } else {
             s_next = s_next.add(&Sym3::from_lower(&ws.decoy.joint_block));
-            b_next += ws.decoy.joint_rhs;
+            b_next = ws.tow_rhs;
         }
+        // y_{j+1} = b_{j+1} - B_j z_j.
+        let b_next = b_next - (z * two - e * (three * e.dot(&z))) * im;
         s = s_next;
         y = b_next;
     }
@@ -554,14 +562,16 @@ pub fn solve_tensions<T: Real, const N: usize>(
         .ok_or(SolveError::NonPositivePivot { joint: last })?;
     let mut t = inv.mul(&y);
     set_joint_force(ws, last, t);
+    let mut probe = t.x + t.y + t.z;
     for j in (0..last).rev() {
         let e = directions[j];
         let x_t = (ws.elimination[j] * t * two - ws.pivot_direction[j] * (three * e.dot(&t)))
             * inverse_masses[j];
         t = ws.reduced_rhs[j] - x_t;
+        probe += t.x + t.y + t.z;
         set_joint_force(ws, j, t);
     }
-    finish_tensions(model, ws)
+    finish_tensions(model, ws, probe)
 }
 
 #[inline(always)]
@@ -574,29 +584,29 @@ fn set_joint_force<T: Real, const N: usize>(ws: &mut Workspace<T, N>, j: usize, 
 }
 
 /// Clears T_N for a free end and checks every force is finite.
+///
+/// `probe` is the sum of every component of the forces T_0..T_last just computed: finite
+/// only if they all are (when it is not, the forces are searched for the culprit).
 fn finish_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
     ws: &mut Workspace<T, N>,
+    probe: T,
 ) -> Result<(), SolveError> {
     let n = model.segment_count();
     if model.decoy().is_none() {
         ws.joint_force[n - 1] = Vec3::zeros();
     }
-    let mut sum = ws.connection_force.x + ws.connection_force.y + ws.connection_force.z;
-    for f in &ws.joint_force[..n] {
-        sum += f.x + f.y + f.z;
-    }
-    if sum.finite() {
+    if probe.finite() {
         return Ok(());
     }
     if !vec_finite(&ws.connection_force) {
         return Err(SolveError::NonFinite { joint: 0 });
     }
-    let joint = ws.joint_force[..n]
-        .iter()
-        .position(|f| !vec_finite(f))
-        .map_or(n, |i| i + 1);
-    Err(SolveError::NonFinite { joint })
+    // A probe that overflowed on finite forces is not a failure.
+    match ws.joint_force[..n].iter().position(|f| !vec_finite(f)) {
+        Some(i) => Err(SolveError::NonFinite { joint: i + 1 }),
+        None => Ok(()),
+    }
 }
 
 /// Pass 2, reference: the paper's single-sweep shooting form.
@@ -668,7 +678,11 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
         };
         ws.joint_force[j - 1] = u * t0 + v;
     }
-    finish_tensions(model, ws)
+    let mut probe = t0.x + t0.y + t0.z;
+    for f in &ws.joint_force[..last] {
+        probe += f.x + f.y + f.z;
+    }
+    finish_tensions(model, ws, probe)
 }
 
 /// Pass 3: accelerations from the tensions.
