@@ -53,9 +53,10 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) joint_rhs: [Vec3<T>; N],
     /// Right-hand side b_N of the towing-point joint (with the decoy's part).
     pub(crate) tow_rhs: Vec3<T>,
-    /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (the shooting reference
-    /// keeps its affine carriers U_j here instead).
+    /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j.
     pub(crate) elimination: [Mat3<T>; N],
+    /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (symmetric, six entries).
+    pub(crate) pivot_inverse: [Sym3<T>; N],
     /// Elimination: u_j = S_j⁻¹ e_{j+1} for joint j = i, so that
     /// X_j = S_j⁻¹ B_j = (2 S_j⁻¹ - 3 u_j e_{j+1}ᵀ)/m_{j+1}.
     pub(crate) pivot_direction: [Vec3<T>; N],
@@ -109,6 +110,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
             joint_rhs: [z; N],
             tow_rhs: z,
             elimination: [Mat3::zeros(); N],
+            pivot_inverse: [Sym3::zero(); N],
             pivot_direction: [z; N],
             reduced_rhs: [z; N],
             joint_force: [z; N],
@@ -376,7 +378,7 @@ fn joint_row<T: Real, const N: usize>(
 
 /// A symmetric 3x3 matrix, six entries (the pivot blocks S_j and their inverses).
 #[derive(Clone, Copy, Debug)]
-struct Sym3<T: Real> {
+pub(crate) struct Sym3<T: Real> {
     xx: T,
     yy: T,
     zz: T,
@@ -386,6 +388,18 @@ struct Sym3<T: Real> {
 }
 
 impl<T: Real> Sym3<T> {
+    fn zero() -> Self {
+        let z = T::zero();
+        Sym3 {
+            xx: z,
+            yy: z,
+            zz: z,
+            xy: z,
+            xz: z,
+            yz: z,
+        }
+    }
+
     /// The lower triangle of `m` (which must be symmetric).
     #[inline(always)]
     fn from_lower(m: &Mat3<T>) -> Self {
@@ -432,13 +446,6 @@ impl<T: Real> Sym3<T> {
             self.xx * v.x + self.xy * v.y + self.xz * v.z,
             self.xy * v.x + self.yy * v.y + self.yz * v.z,
             self.xz * v.x + self.yz * v.y + self.zz * v.z,
-        )
-    }
-
-    #[inline(always)]
-    fn to_mat(self) -> Mat3<T> {
-        Mat3::new(
-            self.xx, self.xy, self.xz, self.xy, self.yy, self.yz, self.xz, self.yz, self.zz,
         )
     }
 
@@ -528,7 +535,7 @@ pub fn solve_tensions<T: Real, const N: usize>(
         let im = inverse_masses[j];
         let u = inv.mul(&e);
         let z = inv.mul(&y);
-        ws.elimination[j] = inv.to_mat();
+        ws.pivot_inverse[j] = inv;
         ws.pivot_direction[j] = u;
         ws.reduced_rhs[j] = z;
         let im2 = im * im;
@@ -565,7 +572,7 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let mut probe = t.x + t.y + t.z;
     for j in (0..last).rev() {
         let e = directions[j];
-        let x_t = (ws.elimination[j] * t * two - ws.pivot_direction[j] * (three * e.dot(&t)))
+        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
             * inverse_masses[j];
         t = ws.reduced_rhs[j] - x_t;
         probe += t.x + t.y + t.z;

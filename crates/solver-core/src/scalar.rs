@@ -81,9 +81,9 @@ impl Real for f64 {
 /// NaN arguments go to the library root (libm), so every IEEE case is kept.
 ///
 /// Recurrence: the reciprocal root seed y_0 from the exponent-halving bit trick
-/// (`0x5f37_5a86 - bits/2`, relative error below 1.8e-3), two Newton steps
-/// y_{k+1} = y_k (3/2 - (x/2) y_k²) (error 1.5 e_k², so 5e-6 and then round-off),
-/// then s = x y_2 and one Newton step on the root itself, s + (x - s²) y_2 / 2.
+/// (`0x5f37_5a86 - bits/2`, relative error below 3.5e-2), two Newton steps
+/// y_{k+1} = y_k (3/2 - (x/2) y_k²) (error 1.5 e_k²: 1.8e-3, then 5e-6), then
+/// s = x y_2 and one Newton step on the root itself, s + (x - s²) y_2 / 2.
 #[inline(always)]
 pub fn sqrt_f32_soft(x: f32) -> f32 {
     let bits = x.to_bits();
