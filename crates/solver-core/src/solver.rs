@@ -172,10 +172,10 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.slope,
         )?;
         // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
-        self.stage
+        let probe = self
+            .stage
             .set_final(&self.state, &self.sum, &self.slope, sixth, n);
         self.stage.time = t_end;
-        let probe = self.stage.renormalise(n);
         if !(probe.finite() && t_end.is_finite()) && !self.stage.is_finite(n) {
             let joint = (0..n)
                 .find(|&i| {

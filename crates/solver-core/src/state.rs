@@ -87,7 +87,12 @@ impl<T: Real, const N: usize> State<T, N> {
     }
 
     /// The RK4 result `self = base + h (sum + k)` over the first `count` segments
-    /// (`sum` holds k1 + 2 k2 + 2 k3, `k` is k4, `h` = dt/6).
+    /// (`sum` holds k1 + 2 k2 + 2 k3, `k` is k4, `h` = dt/6), renormalised in the same
+    /// pass to restore the invariants: e / |e|, w - e (w.e), q / |q|.
+    ///
+    /// Returns the sum of every used direction, rate, quaternion and decoy-rate
+    /// component: finite only if all of them are (a cheap probe; when it is not
+    /// finite, [`State::is_finite`] decides).
     #[inline(never)]
     pub(crate) fn set_final(
         &mut self,
@@ -96,21 +101,25 @@ impl<T: Real, const N: usize> State<T, N> {
         k: &Derivative<T, N>,
         h: T,
         count: usize,
-    ) {
+    ) -> T {
         let (this, base, sum, k) = crate::scalar::opaque((self, base, sum, k));
-        let pairs = this.directions[..count]
+        let mut probe = T::zero();
+        let rows = this.directions[..count]
             .iter_mut()
-            .zip(&base.directions[..count])
-            .zip(sum.directions[..count].iter().zip(&k.directions[..count]));
-        for ((o, b), (s, d)) in pairs {
-            *o = b + (s + d) * h;
-        }
-        let pairs = this.rates[..count]
-            .iter_mut()
-            .zip(&base.rates[..count])
-            .zip(sum.rates[..count].iter().zip(&k.rates[..count]));
-        for ((o, b), (s, d)) in pairs {
-            *o = b + (s + d) * h;
+            .zip(this.rates[..count].iter_mut())
+            .zip(base.directions[..count].iter().zip(&base.rates[..count]))
+            .zip(
+                (sum.directions[..count].iter().zip(&sum.rates[..count]))
+                    .zip(k.directions[..count].iter().zip(&k.rates[..count])),
+            );
+        for (((e_out, w_out), (e0, w0)), ((se, sw), (ke, kw))) in rows {
+            let e = e0 + (se + ke) * h;
+            let e = e / crate::scalar::norm(&e);
+            let w = w0 + (sw + kw) * h;
+            let w = w - e * w.dot(&e);
+            probe += (e.x + e.y + e.z) + (w.x + w.y + w.z);
+            *e_out = e;
+            *w_out = w;
         }
         for (((o, b), s), d) in this
             .decoy_attitude
@@ -122,6 +131,7 @@ impl<T: Real, const N: usize> State<T, N> {
             *o = *b + (*s + *d) * h;
         }
         this.decoy_rate = base.decoy_rate + (sum.decoy_rate + k.decoy_rate) * h;
+        probe + this.renormalise_decoy()
     }
 
     /// `self = other` over the first `count` segments (entries beyond stay as they are).
@@ -133,33 +143,20 @@ impl<T: Real, const N: usize> State<T, N> {
         self.decoy_rate = other.decoy_rate;
     }
 
-    /// Restores the invariants: unit directions, rates perpendicular to them, unit quaternion.
-    ///
-    /// Returns the sum of every used direction, rate, quaternion and decoy-rate
-    /// component: finite only if all of them are (a cheap probe; when it is not
-    /// finite, [`State::is_finite`] decides).
-    #[inline(never)]
-    pub(crate) fn renormalise(&mut self, count: usize) -> T {
-        let this = crate::scalar::opaque(self);
-        let mut probe = T::zero();
-        for (e, w) in this.directions[..count]
-            .iter_mut()
-            .zip(this.rates[..count].iter_mut())
-        {
-            *e /= crate::scalar::norm(e);
-            *w -= *e * w.dot(e);
-            probe += (e.x + e.y + e.z) + (w.x + w.y + w.z);
-        }
-        let n = this
+    /// The decoy part of the renormalisation: q / |q|; returns the sum of the
+    /// quaternion and decoy-rate components.
+    fn renormalise_decoy(&mut self) -> T {
+        let n = self
             .decoy_attitude
             .iter()
             .fold(T::zero(), |a, q| a + *q * *q)
             .square_root();
-        for q in &mut this.decoy_attitude {
+        let mut probe = T::zero();
+        for q in &mut self.decoy_attitude {
             *q /= n;
             probe += *q;
         }
-        probe + (this.decoy_rate.x + this.decoy_rate.y + this.decoy_rate.z)
+        probe + (self.decoy_rate.x + self.decoy_rate.y + self.decoy_rate.z)
     }
 
     /// True when every used value is finite.
