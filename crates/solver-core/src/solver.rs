@@ -176,7 +176,9 @@ impl<T: Real, const N: usize> Solver<T, N> {
             .stage
             .set_final(&self.state, &self.sum, &self.slope, sixth, n);
         self.stage.time = t_end;
-        if !(probe.finite() && t_end.is_finite()) && !self.stage.is_finite(n) {
+        // The probe is finite only if every value is; the full check runs only when it is not.
+        let probe_finite = probe.finite() && t_end.is_finite();
+        if !probe_finite && !self.stage.is_finite(n) {
             let joint = (0..n)
                 .find(|&i| {
                     !(crate::scalar::vec_finite(&self.stage.directions[i])
