@@ -288,7 +288,7 @@ pub fn prepare<T: Real, const N: usize>(
 
     if let Some((decoy, derived)) = model.decoy() {
         // One normalisation and one rotation matrix per evaluation (also used by pass 3).
-        let r = *state.decoy_rotation().to_rotation_matrix().matrix();
+        let r = crate::scalar::rotation_matrix(state.decoy_attitude);
         let wb = state.decoy_rate;
         let tow = ws.joint_position[n - 1];
         let tow_velocity = ws.joint_velocity[n - 1];

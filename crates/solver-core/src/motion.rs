@@ -101,7 +101,7 @@ impl<T: Real> AircraftState<T> {
     /// Kinematics of a point fixed in the aircraft body at `r` (FRD, m):
     /// p = p_a + R r, v = v_a + R (w x r), a = a_a + R (dw x r + w x (w x r)).
     pub fn point(&self, r: &Vec3<T>) -> PointKinematics<T> {
-        let rot = *self.rotation().to_rotation_matrix().matrix();
+        let rot = crate::scalar::rotation_matrix(self.attitude);
         let w = self.angular_rate;
         PointKinematics {
             position: self.position + rot * r,

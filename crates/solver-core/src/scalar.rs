@@ -108,6 +108,32 @@ pub fn unit_quaternion<T: Real>(q: [T; 4]) -> UnitQuaternion<T> {
     UnitQuaternion::new_unchecked(Quaternion::new(w * inv, x * inv, y * inv, z * inv))
 }
 
+/// The rotation matrix of the quaternion `[w, x, y, z]` after normalising it, from
+/// the quaternion as it is: with s = 2/|q|²,
+/// `R = I - s [[y²+z², -(xy-wz), -(xz+wy)], [-(xy+wz), x²+z², -(yz-wx)], [-(xz-wy), -(yz+wx), x²+y²]]`
+/// (one division, no square root).
+#[inline(always)]
+pub fn rotation_matrix<T: Real>(q: [T; 4]) -> Mat3<T> {
+    let [w, x, y, z] = q;
+    let s = T::lit(2.0) / ((w * w + x * x) + (y * y + z * z));
+    let (xs, ys, zs) = (x * s, y * s, z * s);
+    let (wx, wy, wz) = (w * xs, w * ys, w * zs);
+    let (xx, xy, xz) = (x * xs, x * ys, x * zs);
+    let (yy, yz, zz) = (y * ys, y * zs, z * zs);
+    let one = T::one();
+    Mat3::new(
+        one - (yy + zz),
+        xy - wz,
+        xz + wy,
+        xy + wz,
+        one - (xx + zz),
+        yz - wx,
+        xz - wy,
+        yz + wx,
+        one - (xx + yy),
+    )
+}
+
 /// Euclidean norm |v| with [`Real::square_root`].
 #[inline(always)]
 pub fn norm<T: Real>(v: &Vec3<T>) -> T {
@@ -167,5 +193,14 @@ mod tests {
         assert_eq!(sqrt_f32_soft(f32::INFINITY), f32::INFINITY);
         assert!(sqrt_f32_soft(-1.0).is_nan() && sqrt_f32_soft(f32::NAN).is_nan());
         assert_eq!(sqrt_f32_soft(4.0), 2.0);
+    }
+
+    #[test]
+    fn rotation_matrix_matches_the_unit_quaternion() {
+        let q = [0.9f64, -0.2, 0.35, 0.1];
+        let unit = super::unit_quaternion(q);
+        let expected = *unit.to_rotation_matrix().matrix();
+        let got = super::rotation_matrix(q);
+        assert!((got - expected).norm() < 1e-14, "{got} vs {expected}");
     }
 }
