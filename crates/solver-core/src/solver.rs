@@ -103,7 +103,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         // The flight path and the air column are sampled once per distinct time:
         // k2 and k3 both evaluate at t0 + dt/2.
         let (start, start_air) = connection_and_air(&self.model, &path.state_at(t0))?;
-        // k1 at the current state.
+        // k1 at the current state, straight into the weighted sum (sum = k1).
         dynamics::evaluate(
             &self.model,
             &self.state,
@@ -111,19 +111,18 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &start_air,
             self.method,
             &mut self.ws,
-            &mut self.slope,
+            &mut self.sum,
         )?;
         observe(&Outputs {
             model: &self.model,
             state: &self.state,
             ws: &self.ws,
-            derivative: &self.slope,
+            derivative: &self.sum,
         });
         let (middle, middle_air) =
             connection_and_air_reusing(&self.model, &path.state_at(t_half), &start_air)?;
-        // k2 at y + dt/2 k1 (sum = k1).
-        self.stage
-            .set_stage_accumulating(&self.state, &self.slope, half, &mut self.sum, None, n);
+        // k2 at y + dt/2 k1.
+        self.stage.set_stage(&self.state, &self.sum, half, n);
         dynamics::evaluate(
             &self.model,
             &self.stage,
@@ -134,14 +133,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.slope,
         )?;
         // k3 at y + dt/2 k2 (sum += 2 k2).
-        self.stage.set_stage_accumulating(
-            &self.state,
-            &self.slope,
-            half,
-            &mut self.sum,
-            Some(two),
-            n,
-        );
+        self.stage
+            .set_stage_accumulating(&self.state, &self.slope, half, &mut self.sum, two, n);
         dynamics::evaluate(
             &self.model,
             &self.stage,
@@ -154,14 +147,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
         // k4 at y + dt k3 (sum += 2 k3).
         let (end, end_air) =
             connection_and_air_reusing(&self.model, &path.state_at(t_end), &middle_air)?;
-        self.stage.set_stage_accumulating(
-            &self.state,
-            &self.slope,
-            full,
-            &mut self.sum,
-            Some(two),
-            n,
-        );
+        self.stage
+            .set_stage_accumulating(&self.state, &self.slope, full, &mut self.sum, two, n);
         dynamics::evaluate(
             &self.model,
             &self.stage,

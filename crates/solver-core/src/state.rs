@@ -66,9 +66,37 @@ impl<T: Real, const N: usize> State<T, N> {
         crate::scalar::unit_quaternion(self.decoy_attitude)
     }
 
+    /// RK4 stage `self = base + h k` over the first `count` segments.
+    #[inline(never)]
+    pub(crate) fn set_stage(&mut self, base: &Self, k: &Derivative<T, N>, h: T, count: usize) {
+        let (this, base, k) = crate::scalar::opaque((self, base, k));
+        let rows = this.directions[..count]
+            .iter_mut()
+            .zip(&base.directions[..count])
+            .zip(&k.directions[..count]);
+        for ((o, b), d) in rows {
+            *o = b + d * h;
+        }
+        let rows = this.rates[..count]
+            .iter_mut()
+            .zip(&base.rates[..count])
+            .zip(&k.rates[..count]);
+        for ((o, b), d) in rows {
+            *o = b + d * h;
+        }
+        for ((o, b), d) in this
+            .decoy_attitude
+            .iter_mut()
+            .zip(&base.decoy_attitude)
+            .zip(&k.decoy_attitude)
+        {
+            *o = *b + *d * h;
+        }
+        this.decoy_rate = base.decoy_rate + k.decoy_rate * h;
+    }
+
     /// RK4 stage and weighted sum in one pass over the first `count` segments:
-    /// `self = base + h k`, and `sum = k` (`weight` = `None`, the first stage) or
-    /// `sum += weight k`.
+    /// `self = base + h k` and `sum += weight k`.
     #[inline(never)]
     pub(crate) fn set_stage_accumulating(
         &mut self,
@@ -76,14 +104,11 @@ impl<T: Real, const N: usize> State<T, N> {
         k: &Derivative<T, N>,
         h: T,
         sum: &mut Derivative<T, N>,
-        weight: Option<T>,
+        weight: T,
         count: usize,
     ) {
         let (this, base, k, sum) = crate::scalar::opaque((self, base, k, sum));
-        match weight {
-            None => stage_pass(this, base, k, h, sum, count, |_, k| k),
-            Some(w) => stage_pass(this, base, k, h, sum, count, |s, k| s + k * w),
-        }
+        stage_pass(this, base, k, h, sum, count, |s, k| s + k * weight);
     }
 
     /// The RK4 result `self = base + h (sum + k)` over the first `count` segments
