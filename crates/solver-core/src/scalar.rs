@@ -15,12 +15,12 @@ pub trait Real: RealField + Copy + Default + core::fmt::Debug + core::fmt::Displ
     fn finite(self) -> bool;
     /// Machine epsilon of the type.
     fn eps() -> Self;
-    /// Square root, within one unit in the last place (correctly rounded where the
-    /// platform has a hardware root that Rust reaches: f64 everywhere, f32 with `std`).
+    /// Square root: f64 the correctly rounded library root; f32 [`sqrt_f32_soft`]
+    /// (within one unit in the last place) on every platform.
     ///
-    /// Without `std`, f32 uses [`sqrt_f32_soft`]: on the Cortex-M4F stable `no_std`
-    /// Rust cannot emit VSQRT, and libm's bitwise routine costs about 60 instructions
-    /// per root against about 25.
+    /// On the Cortex-M4F stable `no_std` Rust cannot emit VSQRT, and libm's bitwise
+    /// `sqrtf` costs about 60 instructions per root against about 20. The host uses the
+    /// same f32 root, so that host and firmware f32 runs stay bit-identical.
     fn square_root(self) -> Self;
 }
 
@@ -41,12 +41,6 @@ impl Real for f32 {
     fn eps() -> Self {
         f32::EPSILON
     }
-    #[cfg(feature = "std")]
-    #[inline(always)]
-    fn square_root(self) -> Self {
-        f32::sqrt(self)
-    }
-    #[cfg(not(feature = "std"))]
     #[inline(always)]
     fn square_root(self) -> Self {
         sqrt_f32_soft(self)
