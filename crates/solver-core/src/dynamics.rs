@@ -429,6 +429,18 @@ impl<T: Real> Sym3<T> {
     }
 
     #[inline(always)]
+    fn scaled(&self, k: T) -> Self {
+        Sym3 {
+            xx: self.xx * k,
+            yy: self.yy * k,
+            zz: self.zz * k,
+            xy: self.xy * k,
+            xz: self.xz * k,
+            yz: self.yz * k,
+        }
+    }
+
+    #[inline(always)]
     fn add(&self, o: &Self) -> Self {
         Sym3 {
             xx: self.xx + o.xx,
@@ -454,30 +466,40 @@ impl<T: Real> Sym3<T> {
     /// One division.
     #[inline(always)]
     fn spd_inverse(&self) -> Option<Self> {
-        let zero = T::zero();
+        let (cofactors, det) = self.cofactors();
+        let inv = T::one() / det;
+        self.positive_definite(det, inv)
+            .then(|| cofactors.scaled(inv))
+    }
+
+    /// The cofactor (adjugate) matrix C, with S⁻¹ = C / det, and det.
+    #[inline(always)]
+    fn cofactors(&self) -> (Self, T) {
         let (a, b, c) = (self.xx, self.xy, self.xz);
         let (d, e, f) = (self.yy, self.yz, self.zz);
         let c00 = d * f - e * e;
         let c01 = c * e - b * f;
         let c02 = b * e - c * d;
-        let c22 = a * d - b * b;
         let det = a * c00 + b * c01 + c * c02;
-        let inv = T::one() / det;
-        // det in (0, inf) as `det > 0 && 1/det > 0`: float compares (LLVM turns
-        // `det.finite()` into a bitwise classification of about 20 instructions).
-        if !(a > zero && c22 > zero && det > zero && inv > zero) {
-            return None;
-        }
-        let c11 = a * f - c * c;
-        let c12 = b * c - a * e;
-        Some(Sym3 {
-            xx: c00 * inv,
-            yy: c11 * inv,
-            zz: c22 * inv,
-            xy: c01 * inv,
-            xz: c02 * inv,
-            yz: c12 * inv,
-        })
+        let cofactors = Sym3 {
+            xx: c00,
+            yy: a * f - c * c,
+            zz: a * d - b * b,
+            xy: c01,
+            xz: c02,
+            yz: b * c - a * e,
+        };
+        (cofactors, det)
+    }
+
+    /// Sylvester's criterion from the leading minors a, a d - b², det (false for NaN),
+    /// with det in (0, inf) tested as `det > 0 && 1/det > 0`: float compares (LLVM
+    /// turns `det.finite()` into a bitwise classification of about 20 instructions).
+    #[inline(always)]
+    fn positive_definite(&self, det: T, inv_det: T) -> bool {
+        let zero = T::zero();
+        let minor2 = self.xx * self.yy - self.xy * self.xy;
+        self.xx > zero && minor2 > zero && det > zero && inv_det > zero
     }
 }
 
@@ -509,7 +531,10 @@ fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
 /// ```
 ///
 /// (the last two fold segment j+1's own diagonal contribution (4I - 3 e eᵀ)/m into the
-/// rank-2 update).
+/// rank-2 update). With C the cofactor matrix (S_j⁻¹ = C/det), u = (C e)/det and
+/// z_j = (C y_j)/det: the products with C do not wait for the division, which keeps
+/// the serial chain from one joint to the next short (the sweep is latency-bound on
+/// hosts).
 #[inline(never)]
 pub fn solve_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -527,19 +552,28 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let mut s = Sym3::segment(&directions[0], inverse_masses[0]);
     let mut y = ws.joint_rhs[0];
     for j in 0..last {
-        let inv = s
-            .spd_inverse()
-            .ok_or(SolveError::NonPositivePivot { joint: j })?;
         // Segment j+1 (index j) couples joints j and j+1.
         let e = directions[j];
         let im = inverse_masses[j];
-        let u = inv.mul(&e);
-        let z = inv.mul(&y);
+        // S_j⁻¹ = C/det: the products with C run while the division does (a shorter
+        // serial chain per joint; the sweep is latency-bound on hosts).
+        let (cofactors, det) = s.cofactors();
+        let cofactor_e = cofactors.mul(&e);
+        let cofactor_y = cofactors.mul(&y);
+        let e_cofactor_e = e.dot(&cofactor_e);
+        let inv_det = T::one() / det;
+        if !s.positive_definite(det, inv_det) {
+            return Err(SolveError::NonPositivePivot { joint: j });
+        }
+        let inv = cofactors.scaled(inv_det);
+        let u = cofactor_e * inv_det;
+        let z = cofactor_y * inv_det;
         ws.pivot_inverse[j] = inv;
         ws.pivot_direction[j] = u;
         ws.reduced_rhs[j] = z;
         let im2 = im * im;
-        let w = u * (six * im2) - e * (four_and_half * im2 * e.dot(&u) + one_and_half * im);
+        let eu = e_cofactor_e * inv_det;
+        let w = u * (six * im2) - e * (four_and_half * im2 * eu + one_and_half * im);
         let d = four * im;
         let k = -four * im2;
         let mut s_next = Sym3 {
