@@ -32,7 +32,7 @@ const TENSION_TOLERANCE: f64 = 5e-3;
 ///
 /// The firmware issue's target is 100,000 (goal 40,000 per RK4 step, 80,000 per
 /// control step); measured: 87,720 max, 86,242 mean (one RK4 step ~43,900: the 17
-/// joint eliminations ~3,700 and the 16 segments' kinematics and drag ~3,300 per
+/// joint eliminations ~3,900 and the 16 segments' kinematics and drag ~3,300 per
 /// dynamics evaluation, four evaluations per step, plus the f64 flight-path samples).
 /// This guard sits just above the measurement so that regressions fail; lower it as
 /// the solver gets faster. The count is exact and deterministic under `-icount`, so it
