@@ -158,7 +158,7 @@ fn isa_layer<T: Real>(
         density,
         density_slope: slope_geopotential * dh1,
         density_curvature: curvature_geopotential * dh1 * dh1 + slope_geopotential * dh2,
-        speed_of_sound: (gamma * r * temperature).sqrt(),
+        speed_of_sound: (gamma * r * temperature).square_root(),
         temperature,
         pressure,
     }
@@ -209,21 +209,63 @@ impl<T: Real> AirColumn<T> {
         })
     }
 
+    /// The expansion that [`AirColumn::density`] uses everywhere in the column, when
+    /// there is only one (the column is not within 1 km of the tropopause): lets a hot
+    /// loop skip the per-point layer choice.
+    #[inline]
+    pub fn single_layer(&self) -> Option<DensityExpansion<T>> {
+        match self.across_tropopause {
+            None => Some(DensityExpansion {
+                reference_altitude: self.reference_altitude,
+                air: self.air,
+            }),
+            Some(_) => None,
+        }
+    }
+
     /// Density at altitude `h` (m, positive up), never negative.
     #[inline]
     pub fn density(&self, h: T) -> T {
-        let tropopause = T::lit(H_TROPOPAUSE_GEOMETRIC);
         let (h_ref, air) = match &self.across_tropopause {
-            Some(other) if (h > tropopause) != (self.reference_altitude > tropopause) => {
-                (tropopause, other)
+            None => (self.reference_altitude, &self.air),
+            Some(other) => {
+                let tropopause = T::lit(H_TROPOPAUSE_GEOMETRIC);
+                if (h > tropopause) != (self.reference_altitude > tropopause) {
+                    (tropopause, other)
+                } else {
+                    (self.reference_altitude, &self.air)
+                }
             }
-            _ => (self.reference_altitude, &self.air),
         };
-        let dh = h - h_ref;
-        let half = T::lit(0.5);
-        let rho = air.density + dh * (air.density_slope + half * dh * air.density_curvature);
-        if rho > T::zero() { rho } else { T::zero() }
+        quadratic_density(air, h - h_ref)
     }
+}
+
+/// One layer's second-order density expansion about a reference altitude (see
+/// [`AirColumn::single_layer`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DensityExpansion<T: Real> {
+    /// Altitude of the expansion point, m.
+    pub reference_altitude: T,
+    /// Properties at the expansion point.
+    pub air: AirProperties<T>,
+}
+
+impl<T: Real> DensityExpansion<T> {
+    /// Density at altitude `h` (m, positive up), never negative; equal to
+    /// [`AirColumn::density`] of the column it came from.
+    #[inline(always)]
+    pub fn density(&self, h: T) -> T {
+        quadratic_density(&self.air, h - self.reference_altitude)
+    }
+}
+
+/// rho + dh (rho' + dh rho''/2), clamped at zero.
+#[inline(always)]
+fn quadratic_density<T: Real>(air: &AirProperties<T>, dh: T) -> T {
+    let half = T::lit(0.5);
+    let rho = air.density + dh * (air.density_slope + half * dh * air.density_curvature);
+    if rho > T::zero() { rho } else { T::zero() }
 }
 
 #[cfg(test)]

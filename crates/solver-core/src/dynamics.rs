@@ -24,13 +24,13 @@
 //! (`D_0 = (I + 3P_1)/m_1`, `b_0 = a_0 - F_1/m_1 - c_1`) and at joint N by the decoy's
 //! Newton-Euler equations (`D_N += I/m_d + [r]xᵀ I_d⁻¹ [r]x`), or by T_N = 0 for a free end.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::Quaternion;
 
 use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
-use crate::scalar::{Mat3, Real, Vec3, vec_finite};
+use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite};
 use crate::state::{Derivative, State};
 
 /// Per-evaluation scratch and results. Read after an evaluation through
@@ -48,10 +48,18 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) joint_velocity: [Vec3<T>; N],
     /// External force per unit mass on segment i+1 (gravity + drag), F/m.
     pub(crate) specific_force: [Vec3<T>; N],
-    /// Centripetal term c = -(l/2) w x (w x e) of segment i+1.
-    pub(crate) centripetal: [Vec3<T>; N],
-    /// Elimination: X_j = S_j⁻¹ B_j for joint j = i.
+    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
+    /// connection-point acceleration), assembled with the loads in pass 1.
+    pub(crate) joint_rhs: [Vec3<T>; N],
+    /// Right-hand side b_N of the towing-point joint (with the decoy's part).
+    pub(crate) tow_rhs: Vec3<T>,
+    /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j.
     pub(crate) elimination: [Mat3<T>; N],
+    /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (symmetric, six entries).
+    pub(crate) pivot_inverse: [Sym3<T>; N],
+    /// Elimination: u_j = S_j⁻¹ e_{j+1} for joint j = i, so that
+    /// X_j = S_j⁻¹ B_j = (2 S_j⁻¹ - 3 u_j e_{j+1}ᵀ)/m_{j+1}.
+    pub(crate) pivot_direction: [Vec3<T>; N],
     /// Elimination: z_j = S_j⁻¹ y_j for joint j = i.
     pub(crate) reduced_rhs: [Vec3<T>; N],
     /// T_{i+1}: force of segment i+1 on the next body at joint i+1.
@@ -79,6 +87,8 @@ pub struct DecoyScratch<T: Real> {
     pub airspeed: T,
     /// Dynamic pressure, Pa.
     pub dynamic_pressure: T,
+    /// Decoy attitude as a rotation matrix (body FRD to NED), from the normalised quaternion.
+    pub(crate) rotation: Mat3<T>,
     /// Decoy block of joint N: I/m_d + [r]xᵀ I⁻¹ [r]x (NED).
     pub(crate) joint_block: Mat3<T>,
     /// Decoy part of b_N.
@@ -97,8 +107,11 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
             joint_position: [z; N],
             joint_velocity: [z; N],
             specific_force: [z; N],
-            centripetal: [z; N],
+            joint_rhs: [z; N],
+            tow_rhs: z,
             elimination: [Mat3::zeros(); N],
+            pivot_inverse: [Sym3::zero(); N],
+            pivot_direction: [z; N],
             reduced_rhs: [z; N],
             joint_force: [z; N],
             connection_force: z,
@@ -110,6 +123,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
                 angle_of_attack: T::zero(),
                 airspeed: T::zero(),
                 dynamic_pressure: T::zero(),
+                rotation: Mat3::identity(),
                 joint_block: Mat3::zeros(),
                 joint_rhs: z,
             },
@@ -129,7 +143,7 @@ pub enum TensionMethod {
 /// Cable cross-flow drag on a segment (DESIGN §2): with the air velocity relative to
 /// the segment centre u split into u_t = (u.e)e and u_n = u - u_t,
 /// `F = 0.5 rho d l (C_n |u_n| u_n + pi C_f |u_t| u_t)`.
-#[inline]
+#[inline(always)]
 pub fn cable_drag<T: Real>(
     model_cable: &crate::model::CableParams<T>,
     density: T,
@@ -140,13 +154,13 @@ pub fn cable_drag<T: Real>(
     let k = T::lit(0.5) * density * model_cable.diameter * length;
     let ut = direction * relative_air.dot(direction);
     let un = relative_air - ut;
-    un * (k * model_cable.cd_normal * un.norm())
-        + ut * (k * T::pi() * model_cable.cf_tangential * ut.norm())
+    un * (k * model_cable.cd_normal * norm(&un))
+        + ut * (k * T::pi() * model_cable.cf_tangential * norm(&ut))
 }
 
 /// Aerodynamic force and moment on the decoy, DESIGN §2.
 ///
-/// Inputs: decoy attitude (body FRD to NED), body rate, CG velocity over the
+/// Inputs: decoy attitude as the rotation matrix R (body FRD to NED), body rate, CG velocity over the
 /// ground, wind, local density. Output: force (NED), moment about the CG (body
 /// frame), total angle of attack, airspeed, dynamic pressure.
 ///
@@ -158,14 +172,14 @@ pub fn cable_drag<T: Real>(
 pub fn decoy_aero<T: Real>(
     decoy: &crate::model::DecoyParams<T>,
     derived: &crate::model::DecoyDerived<T>,
-    rotation: &UnitQuaternion<T>,
+    rotation: &Mat3<T>,
     body_rate: &Vec3<T>,
     cg_velocity: &Vec3<T>,
     wind: &Vec3<T>,
     density: T,
 ) -> (Vec3<T>, Vec3<T>, T, T, T) {
-    let vb = rotation.inverse_transform_vector(&(cg_velocity - wind));
-    let speed = vb.norm();
+    let vb = rotation.tr_mul(&(cg_velocity - wind));
+    let speed = norm(&vb);
     let zero = Vec3::zeros();
     if !(speed > T::lit(1e-6)) || !(density > T::zero()) {
         return (zero, zero, T::zero(), speed, T::zero());
@@ -175,7 +189,7 @@ pub fn decoy_aero<T: Real>(
     let x = Vec3::x();
     let cos_a = vhat.x.clamp(-T::one(), T::one());
     let perp = x - vhat * cos_a;
-    let sin_a = perp.norm();
+    let sin_a = norm(&perp);
     let alpha = sin_a.atan2(cos_a);
     let c = decoy.aero.at(alpha);
     let qs = q * derived.reference_area;
@@ -195,28 +209,29 @@ pub fn decoy_aero<T: Real>(
     (rotation * force_b, moment_b, alpha, speed, q)
 }
 
-/// Pass 1: kinematics, loads and the velocity terms.
-///
-/// Joint 0 is the connection point; `p_i = p_{i-1} + l_i e_i`,
-/// `v_i = v_{i-1} + l_i w_i x e_i`. Cable loads act at segment centres.
-pub fn prepare<T: Real, const N: usize>(
+/// The segment loop of [`prepare`]: `p_i = p_{i-1} + l_i e_i`, `v_i = v_{i-1} + l_i w_i x e_i`,
+/// gravity and cable drag per unit mass F_i/m_i at each segment centre, the
+/// centripetal term c_i = -(l_i/2) w_i x (w_i x e_i), and the joint right-hand sides
+/// b_{i-1} += -(F_i/m_i + c_i), b_i += F_i/m_i - c_i (b_0 starts from a_0). Returns the
+/// last segment's share F_N/m_N - c_N of b_N.
+#[inline(always)]
+fn cable_loads<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
     connection: &PointKinematics<T>,
-    air: &AirColumn<T>,
+    has_air: bool,
     ws: &mut Workspace<T, N>,
-) {
+    density_at: impl Fn(T) -> T,
+) -> Vec3<T> {
     let n = model.segment_count();
-    let params = model.params();
-    let env = &params.environment;
+    let env = &model.params().environment;
     let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
-    let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
     let half = T::lit(0.5);
-    ws.connection = *connection;
     let mut p = connection.position;
     let mut v = connection.velocity;
     let lengths = model.lengths();
-    let inverse_masses = model.inverse_masses();
+    let (normal_drag, tangential_drag) = model.drag_factors();
+    let mut carry = connection.acceleration;
     for i in 0..n {
         let e = state.directions[i];
         let w = state.rates[i];
@@ -224,38 +239,65 @@ pub fn prepare<T: Real, const N: usize>(
         let we = w.cross(&e);
         let mut specific = gravity;
         if has_air {
+            // cable_drag(..)/m_i with the per-unit-mass factors of the model.
             let centre_altitude = -(p.z + e.z * (half * l));
             let centre_velocity = v + we * (half * l);
-            let density = air.density(centre_altitude);
-            specific += cable_drag(&params.cable, density, l, &e, &(env.wind - centre_velocity))
-                * inverse_masses[i];
+            let density = density_at(centre_altitude);
+            let u = env.wind - centre_velocity;
+            let ut = e * u.dot(&e);
+            let un = u - ut;
+            specific += (un * (normal_drag[i] * norm(&un)) + ut * (tangential_drag[i] * norm(&ut)))
+                * density;
         }
         ws.specific_force[i] = specific;
-        ws.centripetal[i] = -w.cross(&we) * (half * l);
+        let centripetal = -w.cross(&we) * (half * l);
+        ws.joint_rhs[i] = carry - (specific + centripetal);
+        carry = specific - centripetal;
         p += e * l;
         v += we * l;
         ws.joint_position[i] = p;
         ws.joint_velocity[i] = v;
     }
+    carry
+}
+
+/// Pass 1: kinematics, loads and the velocity terms.
+///
+/// Joint 0 is the connection point; `p_i = p_{i-1} + l_i e_i`,
+/// `v_i = v_{i-1} + l_i w_i x e_i`. Cable loads act at segment centres.
+#[inline(never)]
+pub fn prepare<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    ws: &mut Workspace<T, N>,
+) {
+    let (model, state, ws) = opaque((model, state, ws));
+    let n = model.segment_count();
+    let params = model.params();
+    let env = &params.environment;
+    let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
+    let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
+    ws.connection = *connection;
+    // The layer choice of the air column, once per evaluation rather than per segment.
+    ws.tow_rhs = match air.single_layer() {
+        Some(layer) => cable_loads(model, state, connection, has_air, ws, |h| layer.density(h)),
+        None => cable_loads(model, state, connection, has_air, ws, |h| air.density(h)),
+    };
 
     if let Some((decoy, derived)) = model.decoy() {
-        let rotation = state.decoy_rotation();
+        // One normalisation and one rotation matrix per evaluation (also used by pass 3).
+        let r = crate::scalar::rotation_matrix(state.decoy_attitude);
         let wb = state.decoy_rate;
         let tow = ws.joint_position[n - 1];
         let tow_velocity = ws.joint_velocity[n - 1];
-        let r_world = rotation * derived.tow_from_cg;
+        let r_world = r * derived.tow_from_cg;
         let cg_position = tow - r_world;
-        let cg_velocity = tow_velocity - rotation * wb.cross(&derived.tow_from_cg);
+        let cg_velocity = tow_velocity - r * wb.cross(&derived.tow_from_cg);
         let density = air.density(-cg_position.z);
-        let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) = decoy_aero(
-            decoy,
-            derived,
-            &rotation,
-            &wb,
-            &cg_velocity,
-            &env.wind,
-            density,
-        );
+        let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) =
+            decoy_aero(decoy, derived, &r, &wb, &cg_velocity, &env.wind, density);
         let inertia = decoy.inertia_cg;
         let gyroscopic = wb.cross(&inertia.component_mul(&wb));
         // Towing-point acceleration from the decoy side (a_tow = a_cg + dw x r + w x (w x r)):
@@ -266,9 +308,8 @@ pub fn prepare<T: Real, const N: usize>(
             wb.cross(&wb.cross(&derived.tow_from_cg)) - derived.tow_from_cg.cross(&free_angular);
         let inverse_mass = T::one() / decoy.mass;
         let force = aero_force + gravity * decoy.mass;
-        let rot = rotation.to_rotation_matrix();
-        let r = rot.matrix();
         ws.decoy = DecoyScratch {
+            rotation: r,
             cg_position,
             cg_velocity,
             aero_force,
@@ -281,6 +322,7 @@ pub fn prepare<T: Real, const N: usize>(
             // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
             joint_rhs: -(force * inverse_mass) - r * rhs_body,
         };
+        ws.tow_rhs += ws.decoy.joint_rhs;
     }
 }
 
@@ -320,45 +362,145 @@ fn joint_row<T: Real, const N: usize>(
     let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
     let mut block = Mat3::zeros();
-    let mut rhs = Vec3::zeros();
-    if j == 0 {
-        rhs += ws.connection.acceleration;
-    } else {
+    if j > 0 {
         // Upstream segment j (index j-1) seen from its downstream end.
         block += segment_block(&state.directions[j - 1], inverse_masses[j - 1]);
-        rhs += ws.specific_force[j - 1] - ws.centripetal[j - 1];
     }
     if j < n {
         // Downstream segment j+1 (index j) seen from its upstream end.
         block += segment_block(&state.directions[j], inverse_masses[j]);
-        rhs -= ws.specific_force[j] + ws.centripetal[j];
+        (block, ws.joint_rhs[j])
     } else {
         block += ws.decoy.joint_block;
-        rhs += ws.decoy.joint_rhs;
+        (block, ws.tow_rhs)
     }
-    (block, rhs)
 }
 
-/// Inverse of a symmetric 3x3 matrix (lower triangle read) by cofactors, or `None`
-/// unless it is positive definite by Sylvester's criterion (leading minors
-/// a, a d - b², det all positive; false for NaN too). One division.
-#[inline(always)]
-fn spd_inverse<T: Real>(s: &Mat3<T>) -> Option<Mat3<T>> {
-    let zero = T::zero();
-    let (a, b, c) = (s[(0, 0)], s[(1, 0)], s[(2, 0)]);
-    let (d, e, f) = (s[(1, 1)], s[(2, 1)], s[(2, 2)]);
-    let c00 = d * f - e * e;
-    let c01 = c * e - b * f;
-    let c02 = b * e - c * d;
-    let c22 = a * d - b * b;
-    let det = a * c00 + b * c01 + c * c02;
-    if !(a > zero && c22 > zero && det > zero && det.finite()) {
-        return None;
+/// A symmetric 3x3 matrix, six entries (the pivot blocks S_j and their inverses).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sym3<T: Real> {
+    xx: T,
+    yy: T,
+    zz: T,
+    xy: T,
+    xz: T,
+    yz: T,
+}
+
+impl<T: Real> Sym3<T> {
+    fn zero() -> Self {
+        let z = T::zero();
+        Sym3 {
+            xx: z,
+            yy: z,
+            zz: z,
+            xy: z,
+            xz: z,
+            yz: z,
+        }
     }
-    let inv = T::one() / det;
-    let c11 = a * f - c * c;
-    let c12 = b * c - a * e;
-    Some(Mat3::new(c00, c01, c02, c01, c11, c12, c02, c12, c22) * inv)
+
+    /// The lower triangle of `m` (which must be symmetric).
+    #[inline(always)]
+    fn from_lower(m: &Mat3<T>) -> Self {
+        Sym3 {
+            xx: m[(0, 0)],
+            yy: m[(1, 1)],
+            zz: m[(2, 2)],
+            xy: m[(1, 0)],
+            xz: m[(2, 0)],
+            yz: m[(2, 1)],
+        }
+    }
+
+    /// The segment contribution (I + 3P)/m = (4I - 3 e eᵀ)/m to a joint's diagonal block.
+    #[inline(always)]
+    fn segment(e: &Vec3<T>, inverse_mass: T) -> Self {
+        let d = T::lit(4.0) * inverse_mass;
+        let f = e * (-T::lit(3.0) * inverse_mass);
+        Sym3 {
+            xx: d + f.x * e.x,
+            yy: d + f.y * e.y,
+            zz: d + f.z * e.z,
+            xy: f.x * e.y,
+            xz: f.x * e.z,
+            yz: f.y * e.z,
+        }
+    }
+
+    #[inline(always)]
+    fn scaled(&self, k: T) -> Self {
+        Sym3 {
+            xx: self.xx * k,
+            yy: self.yy * k,
+            zz: self.zz * k,
+            xy: self.xy * k,
+            xz: self.xz * k,
+            yz: self.yz * k,
+        }
+    }
+
+    #[inline(always)]
+    fn add(&self, o: &Self) -> Self {
+        Sym3 {
+            xx: self.xx + o.xx,
+            yy: self.yy + o.yy,
+            zz: self.zz + o.zz,
+            xy: self.xy + o.xy,
+            xz: self.xz + o.xz,
+            yz: self.yz + o.yz,
+        }
+    }
+
+    #[inline(always)]
+    fn mul(&self, v: &Vec3<T>) -> Vec3<T> {
+        Vec3::new(
+            self.xx * v.x + self.xy * v.y + self.xz * v.z,
+            self.xy * v.x + self.yy * v.y + self.yz * v.z,
+            self.xz * v.x + self.yz * v.y + self.zz * v.z,
+        )
+    }
+
+    /// Inverse by cofactors, or `None` unless positive definite by Sylvester's
+    /// criterion (leading minors a, a d - b², det all positive; false for NaN too).
+    /// One division.
+    #[inline(always)]
+    fn spd_inverse(&self) -> Option<Self> {
+        let (cofactors, det) = self.cofactors();
+        let inv = T::one() / det;
+        self.positive_definite(det, inv)
+            .then(|| cofactors.scaled(inv))
+    }
+
+    /// The cofactor (adjugate) matrix C, with S⁻¹ = C / det, and det.
+    #[inline(always)]
+    fn cofactors(&self) -> (Self, T) {
+        let (a, b, c) = (self.xx, self.xy, self.xz);
+        let (d, e, f) = (self.yy, self.yz, self.zz);
+        let c00 = d * f - e * e;
+        let c01 = c * e - b * f;
+        let c02 = b * e - c * d;
+        let det = a * c00 + b * c01 + c * c02;
+        let cofactors = Sym3 {
+            xx: c00,
+            yy: a * f - c * c,
+            zz: a * d - b * b,
+            xy: c01,
+            xz: c02,
+            yz: b * c - a * e,
+        };
+        (cofactors, det)
+    }
+
+    /// Sylvester's criterion from the leading minors a, a d - b², det (false for NaN),
+    /// with det in (0, inf) tested as `det > 0 && 1/det > 0`: float compares (LLVM
+    /// turns `det.finite()` into a bitwise classification of about 20 instructions).
+    #[inline(always)]
+    fn positive_definite(&self, det: T, inv_det: T) -> bool {
+        let zero = T::zero();
+        let minor2 = self.xx * self.yy - self.xy * self.xy;
+        self.xx > zero && minor2 > zero && det > zero && inv_det > zero
+    }
 }
 
 /// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0).
@@ -377,65 +519,100 @@ fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
 /// an SPD matrix and so SPD; a pivot block that is not positive definite is reported
 /// with its joint.
 ///
-/// Structure used (the cost per joint matters on the microcontroller): S_j⁻¹ by
-/// cofactors (one division); with u = S_j⁻¹ e, X_j = (2 S_j⁻¹ - 3 u eᵀ)/m and
-/// B_j X_j = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m²; each segment's diagonal
-/// contribution (4I - 3 e eᵀ)/m is formed once and used for both of its joints.
+/// Structure used (the cost per joint matters on the microcontroller): the pivots are
+/// symmetric and kept as six entries; S_j⁻¹ by cofactors (one division). With
+/// e = e_{j+1}, m = m_{j+1}, u = S_j⁻¹ e:
+///
+/// ```text
+///   X_j T       = (2 S_j⁻¹ T - 3 u (e·T))/m                     (never formed)
+///   B_j X_j     = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m²
+///   S_{j+1}     = 4/m I - 4/m² S_j⁻¹ + w eᵀ + e wᵀ + (segment j+2 or decoy block)
+///   w           = (6 u - 4.5 (e·u) e)/m² - 1.5 e/m
+/// ```
+///
+/// (the last two fold segment j+1's own diagonal contribution (4I - 3 e eᵀ)/m into the
+/// rank-2 update). With C the cofactor matrix (S_j⁻¹ = C/det), u = (C e)/det and
+/// z_j = (C y_j)/det: the products with C do not wait for the division, which keeps
+/// the serial chain from one joint to the next short (the sweep is latency-bound on
+/// hosts).
+#[inline(never)]
 pub fn solve_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
     ws: &mut Workspace<T, N>,
 ) -> Result<(), SolveError> {
+    let (model, state, ws) = opaque((model, state, ws));
     let last = last_joint(model);
     let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
-    let (two, three, four, six, nine) = (
-        T::lit(2.0),
-        T::lit(3.0),
-        T::lit(4.0),
-        T::lit(6.0),
-        T::lit(9.0),
-    );
+    let directions = &state.directions;
+    let (two, three, four, six) = (T::lit(2.0), T::lit(3.0), T::lit(4.0), T::lit(6.0));
+    let (one_and_half, four_and_half) = (T::lit(1.5), T::lit(4.5));
     // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
-    let mut block = segment_block(&state.directions[0], inverse_masses[0]);
-    let mut s = block;
-    let mut y = ws.connection.acceleration - ws.specific_force[0] - ws.centripetal[0];
+    let mut s = Sym3::segment(&directions[0], inverse_masses[0]);
+    let mut y = ws.joint_rhs[0];
     for j in 0..last {
-        let s_inv = spd_inverse(&s).ok_or(SolveError::NonPositivePivot { joint: j })?;
         // Segment j+1 (index j) couples joints j and j+1.
-        let e = state.directions[j];
+        let e = directions[j];
         let im = inverse_masses[j];
-        let u = s_inv * e;
-        let z = s_inv * y;
-        let et = e.transpose();
-        ws.elimination[j] = (s_inv * two - u * et * three) * im;
-        ws.reduced_rhs[j] = z;
-        let coupled = (s_inv * four - (u * et + e * u.transpose()) * six
-            + e * et * (nine * e.dot(&u)))
-            * (im * im);
-        // D_{j+1} and b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
-        let mut d_next = block;
-        let mut b_next =
-            ws.specific_force[j] - ws.centripetal[j] - (z * two - e * (three * e.dot(&z))) * im;
-        if j + 1 < n {
-            block = segment_block(&state.directions[j + 1], inverse_masses[j + 1]);
-            d_next += block;
-            b_next -= ws.specific_force[j + 1] + ws.centripetal[j + 1];
-        } else {
-            d_next += ws.decoy.joint_block;
-            b_next += ws.decoy.joint_rhs;
+        // S_j⁻¹ = C/det: the products with C run while the division does (a shorter
+        // serial chain per joint; the sweep is latency-bound on hosts).
+        let (cofactors, det) = s.cofactors();
+        let cofactor_e = cofactors.mul(&e);
+        let cofactor_y = cofactors.mul(&y);
+        let e_cofactor_e = e.dot(&cofactor_e);
+        let inv_det = T::one() / det;
+        if !s.positive_definite(det, inv_det) {
+            return Err(SolveError::NonPositivePivot { joint: j });
         }
-        s = d_next - coupled;
+        let inv = cofactors.scaled(inv_det);
+        let u = cofactor_e * inv_det;
+        let z = cofactor_y * inv_det;
+        ws.pivot_inverse[j] = inv;
+        ws.pivot_direction[j] = u;
+        ws.reduced_rhs[j] = z;
+        let im2 = im * im;
+        let eu = e_cofactor_e * inv_det;
+        let w = u * (six * im2) - e * (four_and_half * im2 * eu + one_and_half * im);
+        let d = four * im;
+        let k = -four * im2;
+        let mut s_next = Sym3 {
+            xx: d + k * inv.xx + two * w.x * e.x,
+            yy: d + k * inv.yy + two * w.y * e.y,
+            zz: d + k * inv.zz + two * w.z * e.z,
+            xy: k * inv.xy + w.x * e.y + e.x * w.y,
+            xz: k * inv.xz + w.x * e.z + e.x * w.z,
+            yz: k * inv.yz + w.y * e.z + e.y * w.z,
+        };
+        // b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
+        let b_next;
+        if j + 1 < n {
+            s_next = s_next.add(&Sym3::segment(&directions[j + 1], inverse_masses[j + 1]));
+            b_next = ws.joint_rhs[j + 1];
+        } else {
+            s_next = s_next.add(&Sym3::from_lower(&ws.decoy.joint_block));
+            b_next = ws.tow_rhs;
+        }
+        // y_{j+1} = b_{j+1} - B_j z_j.
+        let b_next = b_next - (z * two - e * (three * e.dot(&z))) * im;
+        s = s_next;
         y = b_next;
     }
-    let s_inv = spd_inverse(&s).ok_or(SolveError::NonPositivePivot { joint: last })?;
-    let mut t = s_inv * y;
+    let inv = s
+        .spd_inverse()
+        .ok_or(SolveError::NonPositivePivot { joint: last })?;
+    let mut t = inv.mul(&y);
     set_joint_force(ws, last, t);
+    let mut probe = t.x + t.y + t.z;
     for j in (0..last).rev() {
-        t = ws.reduced_rhs[j] - ws.elimination[j] * t;
+        let e = directions[j];
+        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
+            * inverse_masses[j];
+        t = ws.reduced_rhs[j] - x_t;
+        probe += t.x + t.y + t.z;
         set_joint_force(ws, j, t);
     }
-    finish_tensions(model, ws)
+    finish_tensions(model, ws, probe)
 }
 
 #[inline(always)]
@@ -448,29 +625,29 @@ fn set_joint_force<T: Real, const N: usize>(ws: &mut Workspace<T, N>, j: usize, 
 }
 
 /// Clears T_N for a free end and checks every force is finite.
+///
+/// `probe` is the sum of every component of the forces T_0..T_last just computed: finite
+/// only if they all are (when it is not, the forces are searched for the culprit).
 fn finish_tensions<T: Real, const N: usize>(
     model: &Model<T, N>,
     ws: &mut Workspace<T, N>,
+    probe: T,
 ) -> Result<(), SolveError> {
     let n = model.segment_count();
     if model.decoy().is_none() {
         ws.joint_force[n - 1] = Vec3::zeros();
     }
-    let mut sum = ws.connection_force.x + ws.connection_force.y + ws.connection_force.z;
-    for f in &ws.joint_force[..n] {
-        sum += f.x + f.y + f.z;
-    }
-    if sum.finite() {
+    if probe.finite() {
         return Ok(());
     }
     if !vec_finite(&ws.connection_force) {
         return Err(SolveError::NonFinite { joint: 0 });
     }
-    let joint = ws.joint_force[..n]
-        .iter()
-        .position(|f| !vec_finite(f))
-        .map_or(n, |i| i + 1);
-    Err(SolveError::NonFinite { joint })
+    // A probe that overflowed on finite forces is not a failure.
+    match ws.joint_force[..n].iter().position(|f| !vec_finite(f)) {
+        Some(i) => Err(SolveError::NonFinite { joint: i + 1 }),
+        None => Ok(()),
+    }
 }
 
 /// Pass 2, reference: the paper's single-sweep shooting form.
@@ -542,7 +719,11 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
         };
         ws.joint_force[j - 1] = u * t0 + v;
     }
-    finish_tensions(model, ws)
+    let mut probe = t0.x + t0.y + t0.z;
+    for f in &ws.joint_force[..last] {
+        probe += f.x + f.y + f.z;
+    }
+    finish_tensions(model, ws, probe)
 }
 
 /// Pass 3: accelerations from the tensions.
@@ -550,12 +731,14 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
 /// Segment i: dw_i/dt = -(6/(m_i l_i)) e_i x (T_{i-1} + T_i) (hinge torques about the
 /// centre over the thin-rod inertia m l²/12), de_i/dt = w_i x e_i.
 /// Decoy: I dw/dt = M + r x T_N - w x I w (body frame), dq/dt = q ⊗ (0, w)/2.
+#[inline(never)]
 pub fn accelerations<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
     ws: &Workspace<T, N>,
     out: &mut Derivative<T, N>,
 ) {
+    let (model, state, ws, out) = opaque((model, state, ws, out));
     let n = model.segment_count();
     let gains = model.rate_gains();
     let mut upstream = ws.connection_force;
@@ -567,9 +750,8 @@ pub fn accelerations<T: Real, const N: usize>(
         upstream = downstream;
     }
     if let Some((decoy, derived)) = model.decoy() {
-        let rotation = state.decoy_rotation();
         let wb = state.decoy_rate;
-        let tension_body = rotation.inverse_transform_vector(&ws.joint_force[n - 1]);
+        let tension_body = ws.decoy.rotation.tr_mul(&ws.joint_force[n - 1]);
         let inertia = decoy.inertia_cg;
         let torque = ws.decoy.aero_moment_body + derived.tow_from_cg.cross(&tension_body)
             - wb.cross(&inertia.component_mul(&wb));

@@ -141,6 +141,8 @@ pub struct Model<T: Real, const N: usize> {
     masses: [T; N],
     inverse_masses: [T; N],
     rate_gains: [T; N],
+    normal_drag_factors: [T; N],
+    tangential_drag_factors: [T; N],
     decoy: Option<DecoyDerived<T>>,
 }
 
@@ -246,12 +248,17 @@ impl<T: Real, const N: usize> Model<T, N> {
         }
         let mut inverse_masses = [T::zero(); N];
         let mut rate_gains = [T::zero(); N];
+        let mut normal_drag_factors = [T::zero(); N];
+        let mut tangential_drag_factors = [T::zero(); N];
         for i in 0..count {
             positive("segment length", lengths[i])?;
             masses[i] = cable.linear_density * lengths[i];
             positive("segment mass", masses[i])?;
             inverse_masses[i] = T::one() / masses[i];
             rate_gains[i] = T::lit(6.0) / (masses[i] * lengths[i]);
+            let area_per_mass = T::lit(0.5) * cable.diameter * lengths[i] * inverse_masses[i];
+            normal_drag_factors[i] = area_per_mass * cable.cd_normal;
+            tangential_drag_factors[i] = area_per_mass * T::pi() * cable.cf_tangential;
         }
 
         let decoy = match &params.end {
@@ -314,6 +321,8 @@ impl<T: Real, const N: usize> Model<T, N> {
             masses,
             inverse_masses,
             rate_gains,
+            normal_drag_factors,
+            tangential_drag_factors,
             decoy,
         })
     }
@@ -342,6 +351,15 @@ impl<T: Real, const N: usize> Model<T, N> {
     /// (a thin rod's transverse inertia about its centre is m l^2 / 12).
     pub fn rate_gains(&self) -> &[T] {
         &self.rate_gains[..self.segment_count]
+    }
+    /// Cable drag per unit mass and unit density of each segment (DESIGN §2): the
+    /// normal factors `0.5 d l_i C_n / m_i` and the tangential factors
+    /// `0.5 d l_i pi C_f / m_i`, so that F_i/m_i = rho (k_n |u_n| u_n + k_t |u_t| u_t).
+    pub fn drag_factors(&self) -> (&[T], &[T]) {
+        (
+            &self.normal_drag_factors[..self.segment_count],
+            &self.tangential_drag_factors[..self.segment_count],
+        )
     }
     /// Decoy parameters, or `None` for a free end.
     pub fn decoy(&self) -> Option<(&DecoyParams<T>, &DecoyDerived<T>)> {

@@ -1,6 +1,6 @@
 //! The aircraft's prescribed motion and the connection point it drives.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 
 use crate::error::InputError;
 use crate::scalar::{Real, Vec3, vec_finite};
@@ -59,6 +59,20 @@ impl<T: Real> AircraftState<T> {
 
     /// Checks every field is finite and the attitude is usable.
     pub fn validate(&self) -> Result<(), InputError> {
+        // Cheap probe first: a sum of the 19 values is finite only if they all are
+        // (when it is not, the field-by-field check names the culprit).
+        let sum3 = |v: &Vec3<T>| v.x + v.y + v.z;
+        let [w, x, y, z] = self.attitude;
+        let probe = sum3(&self.position)
+            + sum3(&self.velocity)
+            + sum3(&self.acceleration)
+            + sum3(&self.angular_rate)
+            + sum3(&self.angular_acceleration)
+            + ((w + x) + (y + z));
+        let n2 = (w * w + x * x) + (y * y + z * z);
+        if probe.finite() && n2 >= T::lit(1e-6) {
+            return Ok(());
+        }
         for (field, v) in [
             ("position", &self.position),
             ("velocity", &self.velocity),
@@ -73,7 +87,6 @@ impl<T: Real> AircraftState<T> {
         if self.attitude.iter().any(|q| !q.finite()) {
             return Err(InputError::NonFinite { field: "attitude" });
         }
-        let n2 = self.attitude.iter().fold(T::zero(), |a, q| a + *q * *q);
         if n2 < T::lit(1e-6) {
             return Err(InputError::DegenerateAttitude);
         }
@@ -82,14 +95,13 @@ impl<T: Real> AircraftState<T> {
 
     /// The attitude as a unit quaternion (normalised).
     pub fn rotation(&self) -> UnitQuaternion<T> {
-        let [w, x, y, z] = self.attitude;
-        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+        crate::scalar::unit_quaternion(self.attitude)
     }
 
     /// Kinematics of a point fixed in the aircraft body at `r` (FRD, m):
     /// p = p_a + R r, v = v_a + R (w x r), a = a_a + R (dw x r + w x (w x r)).
     pub fn point(&self, r: &Vec3<T>) -> PointKinematics<T> {
-        let rot = self.rotation();
+        let rot = crate::scalar::rotation_matrix(self.attitude);
         let w = self.angular_rate;
         PointKinematics {
             position: self.position + rot * r,

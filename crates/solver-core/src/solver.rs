@@ -100,64 +100,72 @@ impl<T: Real, const N: usize> Solver<T, N> {
         let full = T::lit(dt);
         let two = T::lit(2.0);
 
-        // k1 at the current state.
-        evaluate_at(
+        // The flight path and the air column are sampled once per distinct time:
+        // k2 and k3 both evaluate at t0 + dt/2.
+        let (start, start_air) = connection_and_air(&self.model, &path.state_at(t0))?;
+        // k1 at the current state, straight into the weighted sum (sum = k1).
+        dynamics::evaluate(
             &self.model,
             &self.state,
-            path,
-            t0,
+            &start,
+            &start_air,
             self.method,
             &mut self.ws,
-            &mut self.slope,
+            &mut self.sum,
         )?;
         observe(&Outputs {
             model: &self.model,
             state: &self.state,
             ws: &self.ws,
-            derivative: &self.slope,
+            derivative: &self.sum,
         });
-        self.sum.assign(&self.slope, n);
+        let (middle, middle_air) =
+            connection_and_air_reusing(&self.model, &path.state_at(t_half), &start_air)?;
         // k2 at y + dt/2 k1.
-        self.stage.set_stage(&self.state, &self.slope, half, n);
-        evaluate_at(
+        self.stage.set_stage(&self.state, &self.sum, half, n);
+        dynamics::evaluate(
             &self.model,
             &self.stage,
-            path,
-            t_half,
+            &middle,
+            &middle_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
         )?;
-        self.sum.add_scaled(&self.slope, two, n);
-        // k3 at y + dt/2 k2.
-        self.stage.set_stage(&self.state, &self.slope, half, n);
-        evaluate_at(
+        // k3 at y + dt/2 k2 (sum += 2 k2).
+        self.stage
+            .set_stage_accumulating(&self.state, &self.slope, half, &mut self.sum, two, n);
+        dynamics::evaluate(
             &self.model,
             &self.stage,
-            path,
-            t_half,
+            &middle,
+            &middle_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
         )?;
-        self.sum.add_scaled(&self.slope, two, n);
-        // k4 at y + dt k3.
-        self.stage.set_stage(&self.state, &self.slope, full, n);
-        evaluate_at(
+        // k4 at y + dt k3 (sum += 2 k3).
+        let (end, end_air) =
+            connection_and_air_reusing(&self.model, &path.state_at(t_end), &middle_air)?;
+        self.stage
+            .set_stage_accumulating(&self.state, &self.slope, full, &mut self.sum, two, n);
+        dynamics::evaluate(
             &self.model,
             &self.stage,
-            path,
-            t_end,
+            &end,
+            &end_air,
             self.method,
             &mut self.ws,
             &mut self.slope,
         )?;
-        self.sum.add_scaled(&self.slope, T::one(), n);
         // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
-        self.stage.set_stage(&self.state, &self.sum, sixth, n);
+        let probe = self
+            .stage
+            .set_final(&self.state, &self.sum, &self.slope, sixth, n);
         self.stage.time = t_end;
-        self.stage.renormalise(n);
-        if !self.stage.is_finite(n) {
+        // The probe is finite only if every value is; the full check runs only when it is not.
+        let probe_finite = probe.finite() && t_end.is_finite();
+        if !probe_finite && !self.stage.is_finite(n) {
             let joint = (0..n)
                 .find(|&i| {
                     !(crate::scalar::vec_finite(&self.stage.directions[i])
@@ -166,7 +174,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
                 .map_or(n, |i| i + 1);
             return Err(SolveError::NonFinite { joint });
         }
-        self.state = self.stage;
+        // Only the used segments: the arrays hold capacity N, the model uses n of them.
+        self.state.copy_used(&self.stage, n);
         Ok(())
     }
 
@@ -239,6 +248,25 @@ pub fn connection_and_air<T: Real, const N: usize>(
     Ok((connection, air))
 }
 
+/// [`connection_and_air`], reusing `previous` when the connection point is at its
+/// reference altitude (level flight): the column is a function of that altitude
+/// alone, so the result is the same, without another ISA evaluation.
+fn connection_and_air_reusing<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    aircraft: &AircraftState<T>,
+    previous: &AirColumn<T>,
+) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
+    aircraft.validate()?;
+    let connection = aircraft.point(&model.params().connection_point);
+    let altitude = -connection.position.z;
+    let air = if altitude == previous.reference_altitude {
+        *previous
+    } else {
+        AirColumn::new(&model.params().environment.atmosphere, altitude)?
+    };
+    Ok((connection, air))
+}
+
 /// Decoy outputs of one evaluation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DecoyOutputs<T: Real> {
@@ -298,7 +326,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         let f = self.joint_force(j);
         let n = self.model.segment_count();
         let e = self.state.directions[if j == 0 { 0 } else { (j - 1).min(n - 1) }];
-        let magnitude = f.norm();
+        let magnitude = crate::scalar::norm(&f);
         if f.dot(&e) > T::zero() {
             -magnitude
         } else {

@@ -1,6 +1,6 @@
 //! The integrated state: a plain value that can be copied, saved and restored.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 
 use crate::scalar::{Real, Vec3};
 
@@ -63,38 +63,125 @@ impl<T: Real, const N: usize> Default for Derivative<T, N> {
 impl<T: Real, const N: usize> State<T, N> {
     /// The decoy attitude as a unit quaternion.
     pub fn decoy_rotation(&self) -> UnitQuaternion<T> {
-        let [w, x, y, z] = self.decoy_attitude;
-        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+        crate::scalar::unit_quaternion(self.decoy_attitude)
     }
 
-    /// `self = base + h * d` over the first `count` segments (RK4 stage).
-    pub(crate) fn set_stage(&mut self, base: &Self, d: &Derivative<T, N>, h: T, count: usize) {
-        for i in 0..count {
-            self.directions[i] = base.directions[i] + d.directions[i] * h;
-            self.rates[i] = base.rates[i] + d.rates[i] * h;
+    /// RK4 stage `self = base + h k` over the first `count` segments.
+    #[inline(never)]
+    pub(crate) fn set_stage(&mut self, base: &Self, k: &Derivative<T, N>, h: T, count: usize) {
+        let (this, base, k) = crate::scalar::opaque((self, base, k));
+        let rows = this.directions[..count]
+            .iter_mut()
+            .zip(&base.directions[..count])
+            .zip(&k.directions[..count]);
+        for ((o, b), d) in rows {
+            *o = b + d * h;
         }
-        for k in 0..4 {
-            self.decoy_attitude[k] = base.decoy_attitude[k] + d.decoy_attitude[k] * h;
+        let rows = this.rates[..count]
+            .iter_mut()
+            .zip(&base.rates[..count])
+            .zip(&k.rates[..count]);
+        for ((o, b), d) in rows {
+            *o = b + d * h;
         }
-        self.decoy_rate = base.decoy_rate + d.decoy_rate * h;
+        for ((o, b), d) in this
+            .decoy_attitude
+            .iter_mut()
+            .zip(&base.decoy_attitude)
+            .zip(&k.decoy_attitude)
+        {
+            *o = *b + *d * h;
+        }
+        this.decoy_rate = base.decoy_rate + k.decoy_rate * h;
     }
 
-    /// Restores the invariants: unit directions, rates perpendicular to them, unit quaternion.
-    pub(crate) fn renormalise(&mut self, count: usize) {
-        for i in 0..count {
-            let e = self.directions[i] / self.directions[i].norm();
-            self.directions[i] = e;
-            let w = self.rates[i];
-            self.rates[i] = w - e * w.dot(&e);
+    /// RK4 stage and weighted sum in one pass over the first `count` segments:
+    /// `self = base + h k` and `sum += weight k`.
+    #[inline(never)]
+    pub(crate) fn set_stage_accumulating(
+        &mut self,
+        base: &Self,
+        k: &Derivative<T, N>,
+        h: T,
+        sum: &mut Derivative<T, N>,
+        weight: T,
+        count: usize,
+    ) {
+        let (this, base, k, sum) = crate::scalar::opaque((self, base, k, sum));
+        stage_pass(this, base, k, h, sum, count, |s, k| s + k * weight);
+    }
+
+    /// The RK4 result `self = base + h (sum + k)` over the first `count` segments
+    /// (`sum` holds k1 + 2 k2 + 2 k3, `k` is k4, `h` = dt/6), renormalised in the same
+    /// pass to restore the invariants: e / |e|, w - e (w.e), q / |q|.
+    ///
+    /// Returns the sum of every used direction, rate, quaternion and decoy-rate
+    /// component: finite only if all of them are (a cheap probe; when it is not
+    /// finite, [`State::is_finite`] decides).
+    #[inline(never)]
+    pub(crate) fn set_final(
+        &mut self,
+        base: &Self,
+        sum: &Derivative<T, N>,
+        k: &Derivative<T, N>,
+        h: T,
+        count: usize,
+    ) -> T {
+        let (this, base, sum, k) = crate::scalar::opaque((self, base, sum, k));
+        let mut probe = T::zero();
+        let rows = this.directions[..count]
+            .iter_mut()
+            .zip(this.rates[..count].iter_mut())
+            .zip(base.directions[..count].iter().zip(&base.rates[..count]))
+            .zip(
+                (sum.directions[..count].iter().zip(&sum.rates[..count]))
+                    .zip(k.directions[..count].iter().zip(&k.rates[..count])),
+            );
+        for (((e_out, w_out), (e0, w0)), ((se, sw), (ke, kw))) in rows {
+            let e = e0 + (se + ke) * h;
+            let e = e / crate::scalar::norm(&e);
+            let w = w0 + (sw + kw) * h;
+            let w = w - e * w.dot(&e);
+            probe += (e.x + e.y + e.z) + (w.x + w.y + w.z);
+            *e_out = e;
+            *w_out = w;
         }
+        for (((o, b), s), d) in this
+            .decoy_attitude
+            .iter_mut()
+            .zip(&base.decoy_attitude)
+            .zip(&sum.decoy_attitude)
+            .zip(&k.decoy_attitude)
+        {
+            *o = *b + (*s + *d) * h;
+        }
+        this.decoy_rate = base.decoy_rate + (sum.decoy_rate + k.decoy_rate) * h;
+        probe + this.renormalise_decoy()
+    }
+
+    /// `self = other` over the first `count` segments (entries beyond stay as they are).
+    pub(crate) fn copy_used(&mut self, other: &Self, count: usize) {
+        self.time = other.time;
+        self.directions[..count].copy_from_slice(&other.directions[..count]);
+        self.rates[..count].copy_from_slice(&other.rates[..count]);
+        self.decoy_attitude = other.decoy_attitude;
+        self.decoy_rate = other.decoy_rate;
+    }
+
+    /// The decoy part of the renormalisation: q / |q|; returns the sum of the
+    /// quaternion and decoy-rate components.
+    fn renormalise_decoy(&mut self) -> T {
         let n = self
             .decoy_attitude
             .iter()
             .fold(T::zero(), |a, q| a + *q * *q)
-            .sqrt();
+            .square_root();
+        let mut probe = T::zero();
         for q in &mut self.decoy_attitude {
             *q /= n;
+            probe += *q;
         }
+        probe + (self.decoy_rate.x + self.decoy_rate.y + self.decoy_rate.z)
     }
 
     /// True when every used value is finite.
@@ -109,24 +196,52 @@ impl<T: Real, const N: usize> State<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> Derivative<T, N> {
-    /// `self = d` (first RK4 stage of the weighted sum).
-    pub(crate) fn assign(&mut self, d: &Self, count: usize) {
-        self.directions[..count].copy_from_slice(&d.directions[..count]);
-        self.rates[..count].copy_from_slice(&d.rates[..count]);
-        self.decoy_attitude = d.decoy_attitude;
-        self.decoy_rate = d.decoy_rate;
+/// One pass of [`State::set_stage_accumulating`]: `out = base + h k`, and every
+/// component of `sum` becomes `acc(sum, k)`.
+#[inline(always)]
+fn stage_pass<T: Real, const N: usize>(
+    out: &mut State<T, N>,
+    base: &State<T, N>,
+    k: &Derivative<T, N>,
+    h: T,
+    sum: &mut Derivative<T, N>,
+    count: usize,
+    acc: impl Fn(T, T) -> T,
+) {
+    let acc3 = |s: &mut Vec3<T>, d: &Vec3<T>| {
+        *s = Vec3::new(acc(s.x, d.x), acc(s.y, d.y), acc(s.z, d.z));
+    };
+    let rows = out.directions[..count]
+        .iter_mut()
+        .zip(&base.directions[..count])
+        .zip(
+            k.directions[..count]
+                .iter()
+                .zip(sum.directions[..count].iter_mut()),
+        );
+    for ((o, b), (d, s)) in rows {
+        let d = *d;
+        *o = b + d * h;
+        acc3(s, &d);
     }
-
-    /// `self += w * d` (RK4 weighted sum).
-    pub(crate) fn add_scaled(&mut self, d: &Self, w: T, count: usize) {
-        for i in 0..count {
-            self.directions[i] += d.directions[i] * w;
-            self.rates[i] += d.rates[i] * w;
-        }
-        for k in 0..4 {
-            self.decoy_attitude[k] += d.decoy_attitude[k] * w;
-        }
-        self.decoy_rate += d.decoy_rate * w;
+    let rows = out.rates[..count]
+        .iter_mut()
+        .zip(&base.rates[..count])
+        .zip(k.rates[..count].iter().zip(sum.rates[..count].iter_mut()));
+    for ((o, b), (d, s)) in rows {
+        let d = *d;
+        *o = b + d * h;
+        acc3(s, &d);
     }
+    let rows = out
+        .decoy_attitude
+        .iter_mut()
+        .zip(&base.decoy_attitude)
+        .zip(k.decoy_attitude.iter().zip(sum.decoy_attitude.iter_mut()));
+    for ((o, b), (d, s)) in rows {
+        *o = *b + *d * h;
+        *s = acc(*s, *d);
+    }
+    out.decoy_rate = base.decoy_rate + k.decoy_rate * h;
+    acc3(&mut sum.decoy_rate, &k.decoy_rate);
 }

@@ -71,7 +71,7 @@ pub fn trim<T: Real, const N: usize>(
             let (aero_force, ..) = decoy_aero(
                 decoy,
                 derived,
-                &rotation,
+                rotation.to_rotation_matrix().matrix(),
                 &Vec3::zeros(),
                 &(-relative_air),
                 &Vec3::zeros(),
@@ -186,7 +186,7 @@ fn decoy_trim<T: Real, const N: usize>(
         let (force, moment_cg_body, ..) = decoy_aero(
             decoy,
             derived,
-            &rotation,
+            rotation.to_rotation_matrix().matrix(),
             &Vec3::zeros(),
             &(-relative_air),
             &Vec3::zeros(),
