@@ -301,14 +301,15 @@ impl<T: Real, const N: usize> Controller<T, N> {
     /// [`SILENCE_MS`] with no valid frame it sets DEGRADED, counts a silence and
     /// returns one Status frame; nothing otherwise. The next valid frame clears
     /// DEGRADED and the next Output carries RECOVERED. The silence is measured
-    /// from the poll that first saw the last valid frame (or from the first poll).
+    /// from the poll that first saw the last valid frame; supervision starts with
+    /// the first valid frame, so a host that is slow to start is not reported.
     pub fn poll_silence(&mut self, now_ms: u32) -> Option<DeviceMessage> {
-        if self.activity || self.last_activity_ms.is_none() {
+        if self.activity {
             self.activity = false;
             self.last_activity_ms = Some(now_ms);
             return None;
         }
-        let last = self.last_activity_ms.unwrap_or(now_ms);
+        let last = self.last_activity_ms?;
         if !self.degraded && now_ms.wrapping_sub(last) >= SILENCE_MS {
             self.degraded = true;
             self.counters.silences = self.counters.silences.wrapping_add(1);

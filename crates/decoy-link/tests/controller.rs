@@ -254,10 +254,15 @@ fn silence_degrades_once_and_the_next_frame_recovers() {
 }
 
 #[test]
-fn a_silence_before_any_frame_is_reported_too() {
+fn supervision_starts_with_the_first_valid_frame() {
     let mut c = controller();
     assert_eq!(c.poll_silence(0), None);
-    assert!(c.poll_silence(SILENCE_MS).is_some());
+    assert_eq!(c.poll_silence(10 * SILENCE_MS), None);
+    assert_eq!(c.counters().silences, 0);
+    // A command is a valid frame too.
+    c.handle(HostMessage::Command(Command::GetStatus), &mut NoCounter);
+    assert_eq!(c.poll_silence(20 * SILENCE_MS), None);
+    assert!(c.poll_silence(21 * SILENCE_MS).is_some());
     let o = output(send(&mut c, frame(0, 0.0)));
     assert!(StatusFlags(o.flags).contains(StatusFlags::RECOVERED));
 }
