@@ -17,7 +17,7 @@
 //! supervision takes over), interrupts are masked and the core is parked. A
 //! watchdog, where the hardware has one, would then reset it.
 
-use core::cell::Cell;
+use core::cell::{Cell, RefCell};
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
@@ -249,7 +249,7 @@ impl embedded_io::WriteReady for Uart {
 /// instructions, and the longest work between two readings (a trim, about 1.3 M
 /// instructions) is far shorter.
 pub struct Clock {
-    _systick: SYST,
+    systick: RefCell<SYST>,
     last_reading: Cell<u32>,
     ticks: Cell<u64>,
 }
@@ -264,7 +264,7 @@ impl Clock {
         systick.clear_current();
         systick.enable_counter();
         Clock {
-            _systick: systick,
+            systick: RefCell::new(systick),
             last_reading: Cell::new(SYST::get_current()),
             ticks: Cell::new(0),
         }
@@ -279,6 +279,21 @@ impl Clock {
         let ticks = self.ticks.get() + u64::from(elapsed);
         self.ticks.set(ticks);
         ticks
+    }
+
+    /// Restarts SysTick's tick phase at this instant, keeping the clock's count.
+    ///
+    /// A tick is 40 instructions, and how long the idle loop polled before a frame
+    /// arrived depends on the host, so a free-running counter would start each
+    /// measurement at a different phase within its tick and a count could differ by
+    /// one tick from run to run. Writing SYST_CVR restarts the count from the reload
+    /// value at the write (QEMU anchors the tick period there), so a measurement
+    /// that starts a fixed number of instructions after this call reads the same
+    /// count in every run. The clock loses less than one tick per call.
+    pub fn align(&self) {
+        self.ticks();
+        self.systick.borrow_mut().clear_current();
+        self.last_reading.set(SYST::get_current());
     }
 
     /// Milliseconds since the clock started (wrapping after 49 days).

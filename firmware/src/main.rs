@@ -107,6 +107,8 @@ fn serve(
                 match uart.read(&mut byte) {
                     Ok(1) => {
                         if let Some(frame) = decoder.push::<HostMessage>(byte[0]) {
+                            // The same tick phase at every measurement start.
+                            clock.align();
                             let answer = match frame {
                                 Ok(message) => controller.handle(message, &mut counter),
                                 Err(error) => controller.on_frame_error(error),

@@ -14,7 +14,7 @@ use crate::messages::{
     AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
     PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
-use crate::path::FramePath;
+use crate::path::{FramePath, TypedFramePath};
 use crate::validate::{is_finite, validate_streamed};
 
 /// The longest RK4 step, s: a frame interval dt is integrated in
@@ -103,6 +103,10 @@ impl core::fmt::Display for ControllerError {
 
 impl core::error::Error for ControllerError {}
 
+/// A run after a State frame: the run, the RK4 steps taken, and the streamed
+/// path they followed (None for a built-in profile).
+type Advanced<T> = (Run, u16, Option<TypedFramePath<T>>);
+
 /// What the controller integrates after a trim.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Run {
@@ -139,6 +143,9 @@ pub struct Controller<T: Real, const N: usize> {
     geometry: Geometry<T>,
     allowable_tension_n: T,
     profile: Profile,
+    /// The flight path of the selected built-in profile (None: streamed), made
+    /// when the profile is selected.
+    builtin: Option<BuiltinPath>,
     run: Option<Run>,
     counters: Counters,
     degraded: bool,
@@ -173,6 +180,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             geometry,
             allowable_tension_n,
             profile: Profile::Streamed,
+            builtin: None,
             run: None,
             counters: Counters::default(),
             degraded: false,
@@ -357,6 +365,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
                     return self.reject(None, RejectReason::OutOfRange);
                 }
                 self.profile = profile;
+                self.builtin = self.builtin_path();
                 self.run = None;
             }
             Command::GetStatus => {}
@@ -379,13 +388,11 @@ impl<T: Real, const N: usize> Controller<T, N> {
     ) -> DeviceMessage {
         let start = counter.now();
         let seq = Some(frame.seq);
-        let params = *self.solver.model().params();
+        let environment = &self.solver.model().params().environment;
         let checked = match self.profile {
-            Profile::Streamed => validate_streamed(
-                frame,
-                &params.environment.atmosphere,
-                &params.environment.wind,
-            ),
+            Profile::Streamed => {
+                validate_streamed(frame, &environment.atmosphere, &environment.wind)
+            }
             _ if is_finite(frame) => Ok(()),
             _ => Err(RejectReason::NonFinite),
         };
@@ -402,12 +409,14 @@ impl<T: Real, const N: usize> Controller<T, N> {
             }
         }
         let saved = *self.solver.state();
+        let integration = counter.now();
         let result = match self.run {
             None => self.start_run(frame),
             Some(run) => self.advance(&run, frame),
         };
+        let step_instructions = counter.elapsed(integration);
         match result {
-            Ok((run, steps)) => match self.output(&run, frame, steps) {
+            Ok((run, steps, path)) => match self.output(frame, steps, path.as_ref()) {
                 Ok(mut output) => {
                     self.run = Some(run);
                     self.accepted();
@@ -420,6 +429,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
                         output.flags |= StatusFlags::RECOVERED;
                     }
                     output.instructions = counter.elapsed(start);
+                    output.step_instructions = step_instructions;
                     DeviceMessage::Output(output)
                 }
                 Err(_) => {
@@ -441,6 +451,9 @@ impl<T: Real, const N: usize> Controller<T, N> {
 
     /// The built-in profile's flight path, if one is selected.
     fn builtin_path(&self) -> Option<BuiltinPath> {
+        if self.profile == Profile::Streamed {
+            return None;
+        }
         let env = self.solver.model().params().environment;
         let atmosphere = match env.atmosphere {
             Atmosphere::Isa1976 {
@@ -486,19 +499,21 @@ impl<T: Real, const N: usize> Controller<T, N> {
     }
 
     /// Trims at the frame (streamed) or at the profile's start (built-in).
-    fn start_run(&mut self, frame: &AircraftStateFrame) -> Result<(Run, u16), RejectReason> {
+    ///
+    /// Returns the new run, 0 steps and (streamed) the constant path at the frame.
+    fn start_run(&mut self, frame: &AircraftStateFrame) -> Result<Advanced<T>, RejectReason> {
         let p = frame.position_ned_m;
         let run = Run {
             last: *frame,
             start_time_s: frame.time_s,
             origin: [p[0], p[1], 0.0],
         };
-        let (aircraft, time): (AircraftState<T>, f64) = match self.builtin_path() {
-            Some(path) => (path.state_at(0.0), 0.0),
-            None => (
-                FramePath::single(frame, run.origin).state_at(frame.time_s),
-                frame.time_s,
-            ),
+        let (aircraft, time, streamed): (AircraftState<T>, f64, _) = match self.builtin {
+            Some(path) => (path.state_at(0.0), 0.0, None),
+            None => {
+                let path = FramePath::single(frame, run.origin).in_precision::<T>();
+                (path.state_at(frame.time_s), frame.time_s, Some(path))
+            }
         };
         // Trim in steady straight flight: the frame's position, velocity and
         // attitude, its acceleration and rotation set to zero.
@@ -513,15 +528,18 @@ impl<T: Real, const N: usize> Controller<T, N> {
         self.solver
             .set_state(state)
             .map_err(|_| RejectReason::NotTrimmed)?;
-        Ok((run, 0))
+        Ok((run, 0, streamed))
     }
 
     /// Integrates from the run's last frame to `frame`.
+    ///
+    /// Returns the run, the RK4 steps taken and (streamed) the path integrated
+    /// along, on which the outputs are evaluated.
     fn advance(
         &mut self,
         run: &Run,
         frame: &AircraftStateFrame,
-    ) -> Result<(Run, u16), RejectReason> {
+    ) -> Result<Advanced<T>, RejectReason> {
         let dt = frame.time_s - run.last.time_s;
         let steps = libm::ceil(dt / MAX_STEP_S - 1e-9).max(1.0);
         let next = Run {
@@ -529,21 +547,23 @@ impl<T: Real, const N: usize> Controller<T, N> {
             ..*run
         };
         let failure = |_: SolveError| RejectReason::SolverFailure;
-        match self.builtin_path() {
+        let streamed = match self.builtin {
             Some(path) => {
                 let (t0, t1) = (
                     run.last.time_s - run.start_time_s,
                     frame.time_s - run.start_time_s,
                 );
                 self.integrate(&path, t0, t1, steps).map_err(failure)?;
+                None
             }
             None => {
-                let path = FramePath::new(&run.last, frame, run.origin);
+                let path = FramePath::new(&run.last, frame, run.origin).in_precision::<T>();
                 self.integrate(&path, run.last.time_s, frame.time_s, steps)
                     .map_err(failure)?;
+                Some(path)
             }
-        }
-        Ok((next, steps as u16))
+        };
+        Ok((next, steps as u16, streamed))
     }
 
     /// `steps` RK4 steps of (t1 - t0) / steps, ending exactly at t1.
@@ -558,27 +578,25 @@ impl<T: Real, const N: usize> Controller<T, N> {
         for _ in 0..steps as u32 {
             self.solver.step(path, h)?;
         }
-        let mut state = *self.solver.state();
-        state.time = t1;
-        self.solver.set_state(state)
+        self.solver.set_time(t1);
+        Ok(())
     }
 
     /// The Output frame at the solver's current state.
+    ///
+    /// `streamed` is the path of a streamed run (None: the built-in profile's).
     fn output(
         &mut self,
-        run: &Run,
         frame: &AircraftStateFrame,
         steps: u16,
+        streamed: Option<&TypedFramePath<T>>,
     ) -> Result<OutputFrame, SolveError> {
         let t = self.solver.state().time;
-        let builtin = self.builtin_path();
-        let streamed = FramePath::new(&run.last, frame, run.origin);
-        let (aircraft, out) = match &builtin {
-            Some(path) => (path.state_at(t), self.solver.outputs(path)?),
-            None => (
-                FlightPath::<T>::state_at(&streamed, t),
-                self.solver.outputs(&streamed)?,
-            ),
+        let builtin = self.builtin;
+        let (aircraft, out) = match (&builtin, streamed) {
+            (Some(path), _) => (path.state_at(t), self.solver.outputs(path)?),
+            (None, Some(path)) => (path.state_at(t), self.solver.outputs(path)?),
+            (None, None) => return Err(SolveError::NonFinite { joint: 0 }),
         };
         let geometry = self.geometry;
         let fp = FlightPathFrame::of(&aircraft);
@@ -635,6 +653,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             decoy_clearance_aircraft_m: narrow(decoy_clearance),
             flags,
             instructions: 0,
+            step_instructions: 0,
             steps,
         })
     }

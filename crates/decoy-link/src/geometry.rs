@@ -122,17 +122,20 @@ impl<T: Real> ExhaustPlume<T> {
         let zero = T::zero();
         let end_radius = self.nozzle_radius + self.length * self.tan_half_angle;
         let q = [s, rho];
-        let distance = segment_distance(q, [zero, zero], [zero, self.nozzle_radius])
-            .min(segment_distance(
+        // The nearest edge by squared distance, one square root at the end (the
+        // root is monotonic, so this is the root of the smallest distance).
+        let distance2 = segment_distance2(q, [zero, zero], [zero, self.nozzle_radius])
+            .min(segment_distance2(
                 q,
                 [zero, self.nozzle_radius],
                 [self.length, end_radius],
             ))
-            .min(segment_distance(
+            .min(segment_distance2(
                 q,
                 [self.length, end_radius],
                 [self.length, zero],
             ));
+        let distance = distance2.sqrt();
         let inside =
             s >= zero && s <= self.length && rho <= self.nozzle_radius + s * self.tan_half_angle;
         if inside { -distance } else { distance }
@@ -200,9 +203,13 @@ pub fn cable_plume_clearance<T: Real>(
     aircraft: &AircraftState<T>,
     joints: impl IntoIterator<Item = Vec3<T>>,
 ) -> (T, usize) {
-    let rotation = aircraft.rotation();
-    let clearance =
-        |p: &Vec3<T>| plume.clearance(&rotation.inverse_transform_vector(&(p - aircraft.position)));
+    // NED to body, formed once for all the points.
+    let to_body = aircraft
+        .rotation()
+        .to_rotation_matrix()
+        .into_inner()
+        .transpose();
+    let clearance = |p: &Vec3<T>| plume.clearance(&(to_body * (p - aircraft.position)));
     let mut best = (T::lit(f64::INFINITY), 0);
     let mut consider = |c: T, index: usize| {
         if c < best.0 {
@@ -229,8 +236,8 @@ fn clamp01<T: Real>(t: T) -> T {
     t.max(T::zero()).min(T::one())
 }
 
-/// Distance from `q` to the segment a-b in the plane.
-fn segment_distance<T: Real>(q: [T; 2], a: [T; 2], b: [T; 2]) -> T {
+/// Squared distance from `q` to the segment a-b in the plane.
+fn segment_distance2<T: Real>(q: [T; 2], a: [T; 2], b: [T; 2]) -> T {
     let ab = [b[0] - a[0], b[1] - a[1]];
     let aq = [q[0] - a[0], q[1] - a[1]];
     let length2 = ab[0] * ab[0] + ab[1] * ab[1];
@@ -241,7 +248,7 @@ fn segment_distance<T: Real>(q: [T; 2], a: [T; 2], b: [T; 2]) -> T {
     };
     let dx = aq[0] - t * ab[0];
     let dy = aq[1] - t * ab[1];
-    (dx * dx + dy * dy).sqrt()
+    dx * dx + dy * dy
 }
 
 #[cfg(test)]

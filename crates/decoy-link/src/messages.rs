@@ -128,9 +128,12 @@ pub struct OutputFrame {
     pub decoy_clearance_aircraft_m: f32,
     /// [`StatusFlags`] bits.
     pub flags: u16,
-    /// Instructions (SysTick under QEMU `-icount`) spent on this frame: all RK4
-    /// steps and the outputs.
+    /// Instructions (SysTick under QEMU `-icount`) spent on this frame:
+    /// validation, all RK4 steps and the outputs.
     pub instructions: u32,
+    /// Of [`OutputFrame::instructions`], those of the solver's integration: the
+    /// frame's RK4 steps along the flight path (for the trim frame, the trim).
+    pub step_instructions: u32,
     /// RK4 steps taken for this frame (0 for the frame that trimmed).
     pub steps: u16,
 }

@@ -115,21 +115,79 @@ impl FramePath {
     }
 }
 
+impl FramePath {
+    /// The same path with every frame value rounded to `T` once, for repeated
+    /// sampling: on the Cortex-M4F each f64-to-f32 conversion is a software call,
+    /// and an RK4 step samples the path three times. Its samples are, by
+    /// construction, those of [`FlightPath::state_at`] on `self` (which delegates to
+    /// it).
+    pub fn in_precision<T: Real>(&self) -> TypedFramePath<T> {
+        let (a, b) = (&self.from, &self.to);
+        TypedFramePath {
+            t0: a.time,
+            h: b.time - a.time,
+            p0: to_t(a.position),
+            p1: to_t(b.position),
+            delta: to_t(self.displacement),
+            v0: to_t(a.velocity),
+            v1: to_t(b.velocity),
+            a0: to_t(a.acceleration),
+            a1: to_t(b.acceleration),
+            q0: a.attitude.map(T::lit),
+            q1: b.attitude.map(T::lit),
+            r0: to_t(a.rate),
+            r1: to_t(b.rate),
+            aa0: to_t(a.angular_acceleration),
+            aa1: to_t(b.angular_acceleration),
+        }
+    }
+}
+
 impl<T: Real> FlightPath<T> for FramePath {
     fn state_at(&self, t: f64) -> AircraftState<T> {
-        let (a, b) = (&self.from, &self.to);
-        let h = b.time - a.time;
+        self.in_precision::<T>().state_at(t)
+    }
+}
+
+/// A [`FramePath`] with its frame values in the solver's precision `T`
+/// ([`FramePath::in_precision`]); the same samples, fewer conversions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TypedFramePath<T: Real> {
+    /// Time of the previous frame, s.
+    t0: f64,
+    /// Time from the previous frame to the current one, s (not positive: a
+    /// constant path at the current frame).
+    h: f64,
+    p0: Vec3<T>,
+    p1: Vec3<T>,
+    /// p1 - p0 rounded once from f64.
+    delta: Vec3<T>,
+    v0: Vec3<T>,
+    v1: Vec3<T>,
+    a0: Vec3<T>,
+    a1: Vec3<T>,
+    q0: [T; 4],
+    q1: [T; 4],
+    r0: Vec3<T>,
+    r1: Vec3<T>,
+    aa0: Vec3<T>,
+    aa1: Vec3<T>,
+}
+
+impl<T: Real> FlightPath<T> for TypedFramePath<T> {
+    fn state_at(&self, t: f64) -> AircraftState<T> {
+        let h = self.h;
         if !(h > 0.0) {
             return AircraftState {
-                position: to_t(b.position),
-                velocity: to_t(b.velocity),
-                acceleration: to_t(b.acceleration),
-                attitude: b.attitude.map(T::lit),
-                angular_rate: to_t(b.rate),
-                angular_acceleration: to_t(b.angular_acceleration),
+                position: self.p1,
+                velocity: self.v1,
+                acceleration: self.a1,
+                attitude: self.q1,
+                angular_rate: self.r1,
+                angular_acceleration: self.aa1,
             };
         }
-        let s = T::lit(((t - a.time) / h).clamp(0.0, 1.0));
+        let s = T::lit(((t - self.t0) / h).clamp(0.0, 1.0));
         let step = T::lit(h);
         let lit = T::lit;
         // Hermite basis (h01 = 1 - h00, so p = p0 + h01 (p1 - p0) + ...) and its
@@ -141,19 +199,18 @@ impl<T: Real> FlightPath<T> for FramePath {
         let d10 = lit(3.0) * s2 - lit(4.0) * s + T::one();
         let d01 = lit(6.0) * (s - s2);
         let d11 = lit(3.0) * s2 - lit(2.0) * s;
-        let delta: Vec3<T> = to_t(self.displacement);
-        let (v0, v1): (Vec3<T>, Vec3<T>) = (to_t(a.velocity), to_t(b.velocity));
-        let position = to_t::<T>(a.position) + delta * h01 + (v0 * h10 + v1 * h11) * step;
+        let (delta, v0, v1) = (self.delta, self.v0, self.v1);
+        let position = self.p0 + delta * h01 + (v0 * h10 + v1 * h11) * step;
         let velocity = delta * (d01 / step) + v0 * d10 + v1 * d11;
-        let lerp = |x: &[f64; 3], y: &[f64; 3]| -> Vec3<T> {
-            let x: Vec3<T> = to_t(*x);
-            x + (to_t::<T>(*y) - x) * s
-        };
+        let lerp = |x: &Vec3<T>, y: &Vec3<T>| -> Vec3<T> { x + (y - x) * s };
         let q = [0, 1, 2, 3].map(|i| {
-            let qa = T::lit(a.attitude[i]);
-            qa + (T::lit(b.attitude[i]) - qa) * s
+            let qa = self.q0[i];
+            qa + (self.q1[i] - qa) * s
         });
-        let norm = q.iter().fold(T::zero(), |sum, c| sum + *c * *c).sqrt();
+        let norm = q
+            .iter()
+            .fold(T::zero(), |sum, c| sum + *c * *c)
+            .square_root();
         let attitude = if norm > T::zero() {
             q.map(|c| c / norm)
         } else {
@@ -162,10 +219,10 @@ impl<T: Real> FlightPath<T> for FramePath {
         AircraftState {
             position,
             velocity,
-            acceleration: lerp(&a.acceleration, &b.acceleration),
+            acceleration: lerp(&self.a0, &self.a1),
             attitude,
-            angular_rate: lerp(&a.rate, &b.rate),
-            angular_acceleration: lerp(&a.angular_acceleration, &b.angular_acceleration),
+            angular_rate: lerp(&self.r0, &self.r1),
+            angular_acceleration: lerp(&self.aa0, &self.aa1),
         }
     }
 }

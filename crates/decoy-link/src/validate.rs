@@ -41,13 +41,12 @@ pub fn validate_streamed<T: Real>(
     if !is_finite(frame) {
         return Err(RejectReason::NonFinite);
     }
-    let norm2: f64 = frame
-        .attitude_wxyz
-        .iter()
-        .map(|&c| f64::from(c) * f64::from(c))
-        .sum();
-    let norm = libm::sqrt(norm2);
-    if !((1.0 - QUATERNION_NORM_TOLERANCE)..=(1.0 + QUATERNION_NORM_TOLERANCE)).contains(&norm) {
+    // In f32, the frame's own precision: f64 is software-emulated on the
+    // Cortex-M4F, and the tolerances are far above f32 rounding.
+    let norm2: f32 = frame.attitude_wxyz.iter().map(|&c| c * c).sum();
+    let norm = libm::sqrtf(norm2);
+    let tolerance = QUATERNION_NORM_TOLERANCE as f32;
+    if !((1.0 - tolerance)..=(1.0 + tolerance)).contains(&norm) {
         return Err(RejectReason::BadQuaternion);
     }
     let altitude = -frame.position_ned_m[2];
@@ -58,14 +57,17 @@ pub fn validate_streamed<T: Real>(
         .at(T::lit(altitude))
         .map_err(|_| RejectReason::OutOfRange)?;
     let v = frame.velocity_ned_mps;
-    let relative = [0, 1, 2].map(|i| f64::from(v[i]) - wind[i].to_f64());
-    let airspeed = libm::sqrt(relative.iter().map(|c| c * c).sum::<f64>());
-    let speed_of_sound = air.speed_of_sound.to_f64();
-    if !(speed_of_sound > 0.0) {
+    let relative = [0, 1, 2].map(|i| T::lit(f64::from(v[i])) - wind[i]);
+    let airspeed = relative
+        .iter()
+        .fold(T::zero(), |sum, c| sum + *c * *c)
+        .square_root();
+    let speed_of_sound = air.speed_of_sound;
+    if !(speed_of_sound > T::zero()) {
         return Err(RejectReason::OutOfRange);
     }
     let mach = airspeed / speed_of_sound;
-    if !(mach > 0.0 && mach <= MAX_MACH) {
+    if !(mach > T::zero() && mach <= T::lit(MAX_MACH)) {
         return Err(RejectReason::OutOfRange);
     }
     Ok(())

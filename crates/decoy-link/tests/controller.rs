@@ -410,7 +410,10 @@ fn the_counter_measures_state_frames() {
     let mut c = running(1);
     let mut counter = Ticking(std::cell::Cell::new(u32::MAX - 500));
     let o = output(c.handle(HostMessage::State(frame(2, 0.02)), &mut counter));
-    assert_eq!(o.instructions, 1000);
+    // Four readings, 1000 apart, across the wrap: the frame's start, the
+    // integration's start and end, the frame's end.
+    assert_eq!(o.instructions, 3000);
+    assert_eq!(o.step_instructions, 1000);
 }
 
 #[test]

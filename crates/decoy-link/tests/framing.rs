@@ -118,6 +118,7 @@ fn device_message(r: &mut Rng) -> DeviceMessage {
             decoy_clearance_aircraft_m: r.f32(),
             flags: r.u16(),
             instructions: r.u32(),
+            step_instructions: r.u32(),
             steps: r.u16(),
         }),
         1 => DeviceMessage::Rejected(Rejected {

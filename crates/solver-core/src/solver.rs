@@ -68,6 +68,15 @@ impl<T: Real, const N: usize> Solver<T, N> {
         Ok(())
     }
 
+    /// Sets the state's time (s) without touching the rest of the state; for a
+    /// caller that integrates to an exact end time, where n steps of (t1 - t0)/n
+    /// can land an ulp away from t1. A non-finite `time` is ignored.
+    pub fn set_time(&mut self, time: f64) {
+        if time.is_finite() {
+            self.state.time = time;
+        }
+    }
+
     /// Advances the state by one RK4 step of `dt` seconds along `path`, then
     /// renormalises (unit directions, rates perpendicular to them, unit quaternion).
     ///
