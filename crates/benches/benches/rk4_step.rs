@@ -27,7 +27,7 @@
 //! the state inside the timed region), and every [`RESTART_STEPS`] steps the initial
 //! state is restored outside the timed region ([`Bencher::iter_custom`]); more often
 //! where fewer consecutive steps stay finite (found in setup, printed as a note: the
-//! f32 towed system with thousands of uniform segments). Every
+//! f32 pendulum and towed system with thousands of segments). Every
 //! sample therefore covers the same stretch of trajectory (the first 0.1 s of the
 //! pendulum's fall, the first second of trimmed flight), the per-step work does not
 //! depend on the state anyway (no data-dependent branches but the error checks), and
@@ -88,8 +88,8 @@ impl<T: Real, const N: usize> Stepper<T, N> for ReferenceStepper<T, N> {
 
 /// How many consecutive steps (at most [`RESTART_STEPS`]) succeed from the current
 /// state, which is restored afterwards; at least 1 (the first step must succeed).
-/// The f32 towed system with thousands of uniform segments does not stay finite for
-/// long from its f32 trim; its benchmarks restart that much more often.
+/// In f32 the pendulum with 4096 rods and the towed system with thousands of uniform
+/// segments do not stay finite for long; their benchmarks restart that much more often.
 fn finite_steps<T: Real, const N: usize, S: Stepper<T, N> + ?Sized>(
     stepper: &mut S,
     path: &Uniform<T>,

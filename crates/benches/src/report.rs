@@ -645,13 +645,19 @@ fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
 
     for system in System::ALL {
         let (wall, instr) = step_costs(inputs, system, Variant::F64);
+        let instr_flat = series_flatness(&instr).map(|(ok, _)| ok);
         match series_flatness(&wall) {
             Some((ok, worst)) => writeln!(
                 s,
                 "| O(N), {}: wall-clock cost per segment of an RK4 step (f64) within ±20 % of \
-                 N = 64, for N = 64..4096 | worst {:+.1} % | {} |",
+                 N = 64, for N = 64..4096 | worst {:+.1} %{} | {} |",
                 system.label(),
                 worst * 100.0,
+                if !ok && instr_flat == Some(true) {
+                    " (the instruction counts are flat: probably a loaded machine, rerun)"
+                } else {
+                    ""
+                },
                 pass(ok)
             )?,
             None => writeln!(
@@ -1484,6 +1490,27 @@ mod tests {
         );
         assert!(md.contains("45,000 max"), "{md}");
         assert!(md.contains("O(N), towed system: wall-clock"), "{md}");
+        // A wall-clock failure with flat instruction counts points at the machine.
+        let mut loaded = Inputs::default();
+        for (n, ns, c) in [
+            (64, 10_000.0, 1_000_000),
+            (300, 47_000.0, 4_700_000),
+            (4096, 1_000_000.0, 64_000_000),
+        ] {
+            let (wall, instr) = (
+                wall_step_key(System::Pendulum, Variant::F64, n),
+                instr_step_key(System::Pendulum, Variant::F64, n),
+            );
+            loaded.wall.insert(wall, ns);
+            loaded.instructions.insert(instr, c);
+        }
+        let md_loaded = render(&loaded);
+        assert!(
+            md_loaded.contains(
+                "+56.2 % (the instruction counts are flat: probably a loaded machine, rerun) | **FAIL**"
+            ),
+            "{md_loaded}"
+        );
         assert!(
             md.contains("with the dense derivatives at N = 300 (wall clock) | 800x | **pass**"),
             "{md}"
