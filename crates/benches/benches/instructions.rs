@@ -11,22 +11,35 @@
 //!
 //! - `steps::pendulum_f64 n{8,64,300,1024,4096}`: one `Solver::step(&fixed_anchor,
 //!   1e-4)` on the compound pendulum with N rods (capacity N), from its initial state.
+//! - `steps::pendulum_f32 n{8,64,300,1024,4096}`: the same in f32.
+//! - `steps::pendulum_shooting n{8,64,300,1024,4096}`, `steps::pendulum_dense
+//!   n{8,64,300}`: the same RK4 step (f64) with the shooting form's and the dense
+//!   Kane derivatives (`benches::stepper`; the shooting step runs all four stages
+//!   even where the diverging form fails, the dense one allocates inside the count).
 //! - `steps::towed_f32 graded16`, `steps::towed_f64 graded16`: one
 //!   `Solver::step(&cruise, 1e-3)` on the reference towed system with 16 graded
 //!   segments, trimmed at 9 km, Mach 0.8.
+//! - `steps::towed_{f64,f32,shooting} uniform{8,64,300,1024,4096}`,
+//!   `steps::towed_dense uniform{8,64,300}`: the towed scaling series (N uniform
+//!   segments, trimmed, dt = 1e-5 s), as for the pendulum.
 //! - `tension::{two_sweep,shooting,dense} n{16,64,300}`: one derivative evaluation
 //!   of the pendulum (f64) in its initial state, as in the criterion group
 //!   `tension_solve` (the O(N) forms through `Solver::derivative`, the dense one
 //!   through `evaluate_dense`, which allocates its matrix).
+//! - `breakdown::{f64,f32}_{graded16,uniform300} {pass}`: one pass of one derivative
+//!   evaluation of the trimmed towed system (`benches::passes`): `evaluate`,
+//!   `prepare`, `cable_drag`, `decoy_aero`, `solve_tensions`, `accelerations`.
 
 // gungraun's macros generate public modules without documentation.
 #![allow(missing_docs)]
 
 use std::hint::black_box;
 
+use benches::passes::{Pass, Passes};
+use benches::stepper::{Derivatives, ReferenceStepper};
 use benches::{
-    GRADED_COUNT, PENDULUM_DT, TOWED_DT, cruise_path, fixed_anchor, graded_layout, pendulum_solver,
-    towed_solver,
+    GRADED_COUNT, PENDULUM_DT, TOWED_DT, TOWED_SCALING_DT, cruise_path, fixed_anchor,
+    graded_layout, pendulum_solver, towed_solver, towed_uniform_solver,
 };
 use gungraun::{library_benchmark, library_benchmark_group, main};
 use solver_core::dense::{DenseSolution, evaluate_dense};
@@ -62,12 +75,63 @@ impl<T: Real, const N: usize> Operation for StepCase<T, N> {
     }
 }
 
+/// A reference stepper (shooting or dense derivatives), its flight path and time step.
+struct ReferenceCase<T: Real, const N: usize> {
+    stepper: Box<ReferenceStepper<T, N>>,
+    path: Uniform<T>,
+    dt: f64,
+}
+
+impl<T: Real, const N: usize> Operation for ReferenceCase<T, N> {
+    /// One RK4 step; the shooting form's failure (beyond a few tens of segments) is
+    /// ignored, its step does the full work anyway.
+    fn run(&mut self) {
+        let _ = black_box(self.stepper.step(black_box(&self.path), black_box(self.dt)));
+    }
+}
+
 /// The pendulum with N rods, hinged to a fixed anchor.
 fn pendulum_case<const N: usize>() -> Box<dyn Operation> {
     Box::new(StepCase {
         solver: pendulum_solver::<f64, N>(N),
         path: fixed_anchor(),
         dt: PENDULUM_DT,
+    })
+}
+
+/// The pendulum with N rods in f32.
+fn pendulum_f32_case<const N: usize>() -> Box<dyn Operation> {
+    Box::new(StepCase {
+        solver: pendulum_solver::<f32, N>(N),
+        path: fixed_anchor(),
+        dt: PENDULUM_DT,
+    })
+}
+
+/// The pendulum with N rods (f64) stepped with the reference `derivatives`.
+fn pendulum_reference_case<const N: usize>(derivatives: Derivatives) -> Box<dyn Operation> {
+    Box::new(ReferenceCase {
+        stepper: ReferenceStepper::from_solver(&pendulum_solver::<f64, N>(N), derivatives),
+        path: fixed_anchor(),
+        dt: PENDULUM_DT,
+    })
+}
+
+/// The trimmed towed system with N uniform segments in cruise.
+fn towed_uniform_case<T: Real, const N: usize>() -> Box<dyn Operation> {
+    Box::new(StepCase {
+        solver: towed_uniform_solver::<T, N>(N),
+        path: cruise_path::<T>(),
+        dt: TOWED_SCALING_DT,
+    })
+}
+
+/// The trimmed towed system with N uniform segments (f64), reference `derivatives`.
+fn towed_reference_case<const N: usize>(derivatives: Derivatives) -> Box<dyn Operation> {
+    Box::new(ReferenceCase {
+        stepper: ReferenceStepper::from_solver(&towed_uniform_solver::<f64, N>(N), derivatives),
+        path: cruise_path::<f64>(),
+        dt: TOWED_SCALING_DT,
     })
 }
 
@@ -97,20 +161,85 @@ fn pendulum_f64(case: Box<dyn Operation>) -> Box<dyn Operation> {
 }
 
 #[library_benchmark]
+#[bench::n8(setup = pendulum_f32_case::<8>)]
+#[bench::n64(setup = pendulum_f32_case::<64>)]
+#[bench::n300(setup = pendulum_f32_case::<300>)]
+#[bench::n1024(setup = pendulum_f32_case::<1024>)]
+#[bench::n4096(setup = pendulum_f32_case::<4096>)]
+fn pendulum_f32(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::n8(args = (Derivatives::Shooting), setup = pendulum_reference_case::<8>)]
+#[bench::n64(args = (Derivatives::Shooting), setup = pendulum_reference_case::<64>)]
+#[bench::n300(args = (Derivatives::Shooting), setup = pendulum_reference_case::<300>)]
+#[bench::n1024(args = (Derivatives::Shooting), setup = pendulum_reference_case::<1024>)]
+#[bench::n4096(args = (Derivatives::Shooting), setup = pendulum_reference_case::<4096>)]
+fn pendulum_shooting(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::n8(args = (Derivatives::Dense), setup = pendulum_reference_case::<8>)]
+#[bench::n64(args = (Derivatives::Dense), setup = pendulum_reference_case::<64>)]
+#[bench::n300(args = (Derivatives::Dense), setup = pendulum_reference_case::<300>)]
+fn pendulum_dense(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
 #[bench::graded16(setup = towed_case::<f32>)]
+#[bench::uniform8(setup = towed_uniform_case::<f32, 8>)]
+#[bench::uniform64(setup = towed_uniform_case::<f32, 64>)]
+#[bench::uniform300(setup = towed_uniform_case::<f32, 300>)]
+#[bench::uniform1024(setup = towed_uniform_case::<f32, 1024>)]
+#[bench::uniform4096(setup = towed_uniform_case::<f32, 4096>)]
 fn towed_f32(case: Box<dyn Operation>) -> Box<dyn Operation> {
     run_once(case)
 }
 
 #[library_benchmark]
 #[bench::graded16(setup = towed_case::<f64>)]
+#[bench::uniform8(setup = towed_uniform_case::<f64, 8>)]
+#[bench::uniform64(setup = towed_uniform_case::<f64, 64>)]
+#[bench::uniform300(setup = towed_uniform_case::<f64, 300>)]
+#[bench::uniform1024(setup = towed_uniform_case::<f64, 1024>)]
+#[bench::uniform4096(setup = towed_uniform_case::<f64, 4096>)]
 fn towed_f64(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::uniform8(args = (Derivatives::Shooting), setup = towed_reference_case::<8>)]
+#[bench::uniform64(args = (Derivatives::Shooting), setup = towed_reference_case::<64>)]
+#[bench::uniform300(args = (Derivatives::Shooting), setup = towed_reference_case::<300>)]
+#[bench::uniform1024(args = (Derivatives::Shooting), setup = towed_reference_case::<1024>)]
+#[bench::uniform4096(args = (Derivatives::Shooting), setup = towed_reference_case::<4096>)]
+fn towed_shooting(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::uniform8(args = (Derivatives::Dense), setup = towed_reference_case::<8>)]
+#[bench::uniform64(args = (Derivatives::Dense), setup = towed_reference_case::<64>)]
+#[bench::uniform300(args = (Derivatives::Dense), setup = towed_reference_case::<300>)]
+fn towed_dense(case: Box<dyn Operation>) -> Box<dyn Operation> {
     run_once(case)
 }
 
 library_benchmark_group!(
     name = steps,
-    benchmarks = [pendulum_f64, towed_f32, towed_f64]
+    benchmarks = [
+        pendulum_f64,
+        pendulum_f32,
+        pendulum_shooting,
+        pendulum_dense,
+        towed_f32,
+        towed_f64,
+        towed_shooting,
+        towed_dense
+    ]
 );
 
 /// The pendulum (f64, N rods) in its initial state and the result of the last
@@ -190,4 +319,84 @@ fn dense(case: Box<dyn Operation>) -> Box<dyn Operation> {
 
 library_benchmark_group!(name = tension, benchmarks = [two_sweep, shooting, dense]);
 
-main!(library_benchmark_groups = steps, tension);
+/// One pass of one evaluation of a trimmed towed system, prepared in setup.
+struct PassCase<T: Real, const N: usize> {
+    passes: Box<Passes<T, N>>,
+    pass: Pass,
+}
+
+impl<T: Real, const N: usize> Operation for PassCase<T, N> {
+    /// The pass, once.
+    fn run(&mut self) {
+        self.passes.run(black_box(self.pass));
+    }
+}
+
+/// `pass` on the 16-segment graded towed system (precision T).
+fn graded_pass_case<T: Real>(pass: Pass) -> Box<dyn Operation> {
+    let solver = towed_solver::<T, GRADED_COUNT>(graded_layout());
+    Box::new(PassCase {
+        passes: Passes::new(&*solver, &cruise_path::<T>()),
+        pass,
+    })
+}
+
+/// `pass` on the 300-segment uniform towed system (precision T).
+fn uniform300_pass_case<T: Real>(pass: Pass) -> Box<dyn Operation> {
+    let solver = towed_uniform_solver::<T, 300>(300);
+    Box::new(PassCase {
+        passes: Passes::new(&*solver, &cruise_path::<T>()),
+        pass,
+    })
+}
+
+#[library_benchmark]
+#[bench::evaluate(args = (Pass::Evaluate), setup = graded_pass_case::<f64>)]
+#[bench::prepare(args = (Pass::Prepare), setup = graded_pass_case::<f64>)]
+#[bench::cable_drag(args = (Pass::CableDrag), setup = graded_pass_case::<f64>)]
+#[bench::decoy_aero(args = (Pass::DecoyAero), setup = graded_pass_case::<f64>)]
+#[bench::solve_tensions(args = (Pass::SolveTensions), setup = graded_pass_case::<f64>)]
+#[bench::accelerations(args = (Pass::Accelerations), setup = graded_pass_case::<f64>)]
+fn f64_graded16(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::evaluate(args = (Pass::Evaluate), setup = graded_pass_case::<f32>)]
+#[bench::prepare(args = (Pass::Prepare), setup = graded_pass_case::<f32>)]
+#[bench::cable_drag(args = (Pass::CableDrag), setup = graded_pass_case::<f32>)]
+#[bench::decoy_aero(args = (Pass::DecoyAero), setup = graded_pass_case::<f32>)]
+#[bench::solve_tensions(args = (Pass::SolveTensions), setup = graded_pass_case::<f32>)]
+#[bench::accelerations(args = (Pass::Accelerations), setup = graded_pass_case::<f32>)]
+fn f32_graded16(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::evaluate(args = (Pass::Evaluate), setup = uniform300_pass_case::<f64>)]
+#[bench::prepare(args = (Pass::Prepare), setup = uniform300_pass_case::<f64>)]
+#[bench::cable_drag(args = (Pass::CableDrag), setup = uniform300_pass_case::<f64>)]
+#[bench::decoy_aero(args = (Pass::DecoyAero), setup = uniform300_pass_case::<f64>)]
+#[bench::solve_tensions(args = (Pass::SolveTensions), setup = uniform300_pass_case::<f64>)]
+#[bench::accelerations(args = (Pass::Accelerations), setup = uniform300_pass_case::<f64>)]
+fn f64_uniform300(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+#[library_benchmark]
+#[bench::evaluate(args = (Pass::Evaluate), setup = uniform300_pass_case::<f32>)]
+#[bench::prepare(args = (Pass::Prepare), setup = uniform300_pass_case::<f32>)]
+#[bench::cable_drag(args = (Pass::CableDrag), setup = uniform300_pass_case::<f32>)]
+#[bench::decoy_aero(args = (Pass::DecoyAero), setup = uniform300_pass_case::<f32>)]
+#[bench::solve_tensions(args = (Pass::SolveTensions), setup = uniform300_pass_case::<f32>)]
+#[bench::accelerations(args = (Pass::Accelerations), setup = uniform300_pass_case::<f32>)]
+fn f32_uniform300(case: Box<dyn Operation>) -> Box<dyn Operation> {
+    run_once(case)
+}
+
+library_benchmark_group!(
+    name = breakdown,
+    benchmarks = [f64_graded16, f32_graded16, f64_uniform300, f32_uniform300]
+);
+
+main!(library_benchmark_groups = steps, tension, breakdown);

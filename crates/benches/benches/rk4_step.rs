@@ -1,19 +1,33 @@
-//! Criterion wall-clock benchmarks of one RK4 step and of one tension solve.
+//! Criterion wall-clock benchmarks of one RK4 step, of one tension solve and of the
+//! passes of one derivative evaluation.
 //!
-//! Groups (names are stable, they are quoted in the docs):
+//! Groups (names are stable, they are quoted in the docs and parsed by the report):
 //!
 //! - `pendulum_rk4_step/{f64,f32}/{N}`: one `Solver::step(&fixed_anchor, 1e-4)` on the
-//!   compound pendulum with N rods (capacity N), N = 16, 64, 300, 1024, 2048, 4096 (f64) and
-//!   16, 64, 300 (f32).
-//! - `towed_rk4_step/{f32,f64}/graded16`, `towed_rk4_step/f64/uniform300`: one
-//!   `Solver::step(&cruise, 1e-3)` on the reference towed system trimmed at 9 km,
-//!   Mach 0.8, in steady level flight.
+//!   compound pendulum with N rods (capacity N), N = 16, 64, 300, 1024, 2048, 4096.
+//! - `pendulum_rk4_step/shooting/{N}` (same N): the same RK4 step with the shooting
+//!   form's derivatives (`benches::stepper`, which runs all four stages even when the
+//!   diverging shooting form fails: beyond a few tens of rods it does, the work is
+//!   the same).
+//! - `pendulum_rk4_step/dense/{16,64,300}`: the same RK4 step with the dense Kane
+//!   derivatives (`solver_core::dense::evaluate_dense`, O(N³)).
+//! - `towed_rk4_step/{f32,f64}/graded16`: one `Solver::step(&cruise, 1e-3)` on the
+//!   reference towed system with 16 graded segments, trimmed at 9 km, Mach 0.8.
+//! - `towed_rk4_step/{f64,f32,shooting}/uniform{N}` (N as for the pendulum) and
+//!   `towed_rk4_step/dense/uniform{16,64,300}`: the towed scaling series, N segments
+//!   of equal length, trimmed, dt = 1e-5 s.
 //! - `tension_solve/{two_sweep,shooting,dense}/{N}`: one derivative evaluation of the
 //!   pendulum in its initial state, N = 16, 64, 300.
+//! - `eval_breakdown/{f64,f32}_{graded16,uniform300}/{pass}`: one pass of one
+//!   derivative evaluation of the trimmed towed system (`benches::passes`), pass =
+//!   `evaluate` (the whole), `prepare`, `cable_drag`, `decoy_aero`, `solve_tensions`,
+//!   `accelerations`.
 //!
 //! State handling in the step benchmarks: the solver steps continuously (no copy of
 //! the state inside the timed region), and every [`RESTART_STEPS`] steps the initial
-//! state is restored outside the timed region ([`Bencher::iter_custom`]). Every
+//! state is restored outside the timed region ([`Bencher::iter_custom`]); more often
+//! where fewer consecutive steps stay finite (found in setup, printed as a note: the
+//! f32 pendulum and towed system with thousands of segments). Every
 //! sample therefore covers the same stretch of trajectory (the first 0.1 s of the
 //! pendulum's fall, the first second of trimmed flight), the per-step work does not
 //! depend on the state anyway (no data-dependent branches but the error checks), and
@@ -22,9 +36,11 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
+use benches::passes::{Pass, Passes};
+use benches::stepper::{Derivatives, ReferenceStepper};
 use benches::{
-    GRADED_COUNT, PENDULUM_DT, TOWED_DT, cruise_path, fixed_anchor, graded_layout, pendulum_solver,
-    towed_solver,
+    GRADED_COUNT, PENDULUM_DT, RESTART_STEPS, TOWED_DT, TOWED_SCALING_DT, cruise_path,
+    fixed_anchor, graded_layout, pendulum_solver, towed_solver, towed_uniform_solver,
 };
 use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, SamplingMode, criterion_group, criterion_main,
@@ -32,55 +48,140 @@ use criterion::{
 };
 use solver_core::dense::evaluate_dense;
 use solver_core::solver::connection_and_air;
-use solver_core::{AircraftState, FlightPath, Real, SegmentLayout, Solver, TensionMethod, Vec3};
+use solver_core::{
+    AircraftState, Real, SegmentLayout, SolveError, Solver, State, TensionMethod, Uniform, Vec3,
+};
 
-/// Steps between restorations of the initial state (outside the timed region).
-const RESTART_STEPS: u64 = 1000;
+/// Something that takes RK4 steps from a state that can be saved and restored.
+trait Stepper<T: Real, const N: usize> {
+    /// The current state.
+    fn saved(&self) -> State<T, N>;
+    /// Puts a saved state back.
+    fn restore(&mut self, state: State<T, N>);
+    /// One RK4 step.
+    fn step_once(&mut self, path: &Uniform<T>, dt: f64) -> Result<(), SolveError>;
+}
 
-/// Times `iters` consecutive steps of `solver` along `path`, restoring the initial
-/// state (untimed) every [`RESTART_STEPS`] steps. Panics if a step fails.
-fn time_steps<T: Real, const N: usize, P: FlightPath<T>>(
-    solver: &mut Solver<T, N>,
-    path: &P,
+impl<T: Real, const N: usize> Stepper<T, N> for Solver<T, N> {
+    fn saved(&self) -> State<T, N> {
+        *self.state()
+    }
+    fn restore(&mut self, state: State<T, N>) {
+        self.set_state(state).expect("finite initial state");
+    }
+    fn step_once(&mut self, path: &Uniform<T>, dt: f64) -> Result<(), SolveError> {
+        self.step(path, dt)
+    }
+}
+
+impl<T: Real, const N: usize> Stepper<T, N> for ReferenceStepper<T, N> {
+    fn saved(&self) -> State<T, N> {
+        *self.state()
+    }
+    fn restore(&mut self, state: State<T, N>) {
+        self.set_state(state);
+    }
+    fn step_once(&mut self, path: &Uniform<T>, dt: f64) -> Result<(), SolveError> {
+        self.step(path, dt)
+    }
+}
+
+/// How many consecutive steps (at most [`RESTART_STEPS`]) succeed from the current
+/// state, which is restored afterwards; at least 1 (the first step must succeed).
+/// In f32 the pendulum with 4096 rods and the towed system with thousands of uniform
+/// segments do not stay finite for long; their benchmarks restart that much more often.
+fn finite_steps<T: Real, const N: usize, S: Stepper<T, N> + ?Sized>(
+    stepper: &mut S,
+    path: &Uniform<T>,
     dt: f64,
+    name: &str,
+) -> u64 {
+    let initial = stepper.saved();
+    let mut steps = 0;
+    while steps < RESTART_STEPS && stepper.step_once(path, dt).is_ok() {
+        steps += 1;
+    }
+    stepper.restore(initial);
+    assert!(steps > 0, "{name}: the first RK4 step fails");
+    if steps < RESTART_STEPS {
+        eprintln!("note: {name}: only {steps} steps stay finite; restarting every {steps} steps");
+    }
+    steps
+}
+
+/// Times `iters` consecutive steps of `stepper` along `path`, restoring the initial
+/// state (untimed) every `restart` steps. A failing step panics, unless `may_fail`
+/// (the shooting form, whose failed steps do the full work anyway).
+fn time_steps<T: Real, const N: usize, S: Stepper<T, N> + ?Sized>(
+    stepper: &mut S,
+    path: &Uniform<T>,
+    dt: f64,
+    (restart, may_fail): (u64, bool),
     iters: u64,
 ) -> Duration {
-    let initial = *solver.state();
+    let initial = stepper.saved();
     let mut total = Duration::ZERO;
     let mut left = iters;
     while left > 0 {
-        let chunk = left.min(RESTART_STEPS);
-        solver.set_state(initial).expect("finite initial state");
+        let chunk = left.min(restart);
+        stepper.restore(initial);
         let start = Instant::now();
         for _ in 0..chunk {
-            solver
-                .step(black_box(path), black_box(dt))
-                .expect("RK4 step");
+            let result = stepper.step_once(black_box(path), black_box(dt));
+            if !may_fail {
+                result.expect("RK4 step");
+            }
         }
         total += start.elapsed();
-        black_box(solver.state());
+        black_box(stepper.saved().time);
         left -= chunk;
     }
-    solver.set_state(initial).expect("finite initial state");
+    stepper.restore(initial);
     total
 }
 
-/// Registers `pendulum_rk4_step/{precision}/{count}` with capacity = count.
-macro_rules! pendulum_step {
-    ($group:expr, $t:ty, $precision:literal, $($n:literal),+) => {$({
-        let mut solver = pendulum_solver::<$t, $n>($n);
-        let anchor = fixed_anchor::<$t>();
-        $group.bench_function(BenchmarkId::new($precision, $n), |b| {
-            b.iter_custom(|iters| time_steps(&mut *solver, &anchor, PENDULUM_DT, iters))
-        });
-    })+};
+/// Registers `{group}/{f64,f32,shooting}/{prefix}{N}` for the O(N) steps of `make(N)`
+/// and `{group}/dense/{prefix}{N}` for the dense ones, capacity N.
+macro_rules! step_series {
+    ($group:expr, $make:ident, $prefix:literal, $path:ident, $dt:expr; o_n: $($n:literal),+; dense: $($d:literal),+) => {
+        $({
+            let mut solver = $make::<f64, $n>($n);
+            let path = $path::<f64>();
+            let restart = finite_steps(&mut *solver, &path, $dt, concat!("f64/", $prefix, $n));
+            $group.bench_function(BenchmarkId::new("f64", concat!($prefix, $n)), |b| {
+                b.iter_custom(|iters| time_steps(&mut *solver, &path, $dt, (restart, false), iters))
+            });
+            let mut shooting = ReferenceStepper::from_solver(&solver, Derivatives::Shooting);
+            $group.bench_function(BenchmarkId::new("shooting", concat!($prefix, $n)), |b| {
+                b.iter_custom(|iters| time_steps(&mut *shooting, &path, $dt, (RESTART_STEPS, true), iters))
+            });
+            drop((solver, shooting));
+            let mut solver = $make::<f32, $n>($n);
+            let path = $path::<f32>();
+            let restart = finite_steps(&mut *solver, &path, $dt, concat!("f32/", $prefix, $n));
+            $group.bench_function(BenchmarkId::new("f32", concat!($prefix, $n)), |b| {
+                b.iter_custom(|iters| time_steps(&mut *solver, &path, $dt, (restart, false), iters))
+            });
+        })+
+        // The dense step takes milliseconds at N = 300: flat sampling and few samples.
+        $group.sampling_mode(SamplingMode::Flat);
+        $group.sample_size(10);
+        $({
+            let solver = $make::<f64, $d>($d);
+            let path = $path::<f64>();
+            let mut dense = ReferenceStepper::from_solver(&solver, Derivatives::Dense);
+            $group.bench_function(BenchmarkId::new("dense", concat!($prefix, $d)), |b| {
+                b.iter_custom(|iters| time_steps(&mut *dense, &path, $dt, (RESTART_STEPS, false), iters))
+            });
+        })+
+    };
 }
 
-/// `pendulum_rk4_step/{f64,f32}/{N}`.
+/// `pendulum_rk4_step/{f64,f32,shooting}/{N}` and `pendulum_rk4_step/dense/{N}`.
 fn pendulum_rk4_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("pendulum_rk4_step");
-    pendulum_step!(group, f64, "f64", 16, 64, 300, 1024, 2048, 4096);
-    pendulum_step!(group, f32, "f32", 16, 64, 300);
+    step_series!(group, pendulum_solver, "", fixed_anchor, PENDULUM_DT;
+        o_n: 16, 64, 300, 1024, 2048, 4096; dense: 16, 64, 300);
     group.finish();
 }
 
@@ -94,21 +195,20 @@ fn towed_step<T: Real, const N: usize>(
     let mut solver = towed_solver::<T, N>(layout);
     let path = cruise_path::<T>();
     group.bench_function(BenchmarkId::new(precision, name), |b| {
-        b.iter_custom(|iters| time_steps(&mut *solver, &path, TOWED_DT, iters))
+        b.iter_custom(|iters| {
+            time_steps(&mut *solver, &path, TOWED_DT, (RESTART_STEPS, false), iters)
+        })
     });
 }
 
-/// `towed_rk4_step/{f32,f64}/graded16` and `towed_rk4_step/f64/uniform300`.
+/// `towed_rk4_step/{f32,f64}/graded16` and the uniform scaling series
+/// `towed_rk4_step/{f64,f32,shooting,dense}/uniform{N}`.
 fn towed_rk4_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("towed_rk4_step");
     towed_step::<f32, GRADED_COUNT>(&mut group, "f32", "graded16", graded_layout());
     towed_step::<f64, GRADED_COUNT>(&mut group, "f64", "graded16", graded_layout());
-    towed_step::<f64, 300>(
-        &mut group,
-        "f64",
-        "uniform300",
-        SegmentLayout::Uniform { count: 300 },
-    );
+    step_series!(group, towed_uniform_solver, "uniform", cruise_path, TOWED_SCALING_DT;
+        o_n: 16, 64, 300, 1024, 2048, 4096; dense: 16, 64, 300);
     group.finish();
 }
 
@@ -144,10 +244,50 @@ fn tension_solve(c: &mut Criterion) {
     group.finish();
 }
 
+/// Registers `eval_breakdown/{name}/{pass}` for every pass on the trimmed `solver`.
+fn breakdown<T: Real, const N: usize>(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    solver: &Solver<T, N>,
+) {
+    let mut passes = Passes::new(solver, &cruise_path::<T>());
+    for pass in Pass::ALL {
+        group.bench_function(BenchmarkId::new(name, pass.name()), |b| {
+            b.iter(|| passes.run(black_box(pass)))
+        });
+    }
+}
+
+/// `eval_breakdown/{f64,f32}_{graded16,uniform300}/{pass}`.
+fn eval_breakdown(c: &mut Criterion) {
+    let mut group = c.benchmark_group("eval_breakdown");
+    breakdown(
+        &mut group,
+        "f64_graded16",
+        &*towed_solver::<f64, GRADED_COUNT>(graded_layout()),
+    );
+    breakdown(
+        &mut group,
+        "f32_graded16",
+        &*towed_solver::<f32, GRADED_COUNT>(graded_layout()),
+    );
+    breakdown(
+        &mut group,
+        "f64_uniform300",
+        &*towed_uniform_solver::<f64, 300>(300),
+    );
+    breakdown(
+        &mut group,
+        "f32_uniform300",
+        &*towed_uniform_solver::<f32, 300>(300),
+    );
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     // Text reports only (TOOLCHAIN.md: no plotters in this crate).
     config = Criterion::default().without_plots();
-    targets = pendulum_rk4_step, towed_rk4_step, tension_solve
+    targets = pendulum_rk4_step, towed_rk4_step, tension_solve, eval_breakdown
 }
 criterion_main!(benches);

@@ -8,7 +8,11 @@
 //! - the reference towed system ([`reference_params`], the built-in
 //!   configuration from `decoy-config`), trimmed in
 //!   steady level flight at [`CRUISE_ALTITUDE`] and [`CRUISE_MACH`]
-//!   ([`towed_solver`], [`cruise_path`]), stepped with [`TOWED_DT`].
+//!   ([`towed_solver`], [`cruise_path`]), stepped with [`TOWED_DT`]; and its
+//!   scaling series with N uniform segments ([`towed_uniform_solver`]), stepped with
+//!   [`TOWED_SCALING_DT`];
+//! - RK4 steps with the reference derivatives, shooting and dense ([`stepper`]), and
+//!   one derivative evaluation taken apart into its passes ([`passes`]).
 //!
 //! Run the benchmarks with
 //! `cargo bench -p benches --bench rk4_step -- --warm-up-time 1 --measurement-time 3`
@@ -18,10 +22,16 @@
 //! `bench-report` binary, run by `cargo xtask bench-report`).
 //!
 //! Benchmark names (stable, quoted in the docs):
-//! `pendulum_rk4_step/{f32,f64}/{N}`, `towed_rk4_step/{f32,f64}/graded16`,
-//! `towed_rk4_step/f64/uniform300`, `tension_solve/{two_sweep,shooting,dense}/{N}`.
+//! `pendulum_rk4_step/{f64,f32,shooting,dense}/{N}`,
+//! `towed_rk4_step/{f32,f64}/graded16`,
+//! `towed_rk4_step/{f64,f32,shooting,dense}/uniform{N}`,
+//! `tension_solve/{two_sweep,shooting,dense}/{N}`,
+//! `eval_breakdown/{f64,f32}_{graded16,uniform300}/{pass}` (criterion; the gungraun
+//! names are listed in `benches/instructions.rs`).
 
+pub mod passes;
 pub mod report;
+pub mod stepper;
 
 use solver_core::{
     AircraftState, Atmosphere, Model, ModelParams, Real, SegmentLayout, Solver, Uniform, Vec3,
@@ -32,6 +42,12 @@ use solver_core::{
 pub const PENDULUM_DT: f64 = 1e-4;
 /// Time step of the towed-system benchmarks, s.
 pub const TOWED_DT: f64 = 1e-3;
+/// Time step of the towed scaling series (uniform segments, up to 4096), s: small
+/// enough that [`RESTART_STEPS`] steps from the trim stay finite at every size and
+/// precision (the cost of a step does not depend on it).
+pub const TOWED_SCALING_DT: f64 = 1e-5;
+/// Steps between restorations of the initial state in the stepping benchmarks.
+pub const RESTART_STEPS: u64 = 1000;
 /// Flight altitude of the towed-system benchmarks, m.
 pub const CRUISE_ALTITUDE: f64 = 9000.0;
 /// Flight Mach number of the towed-system benchmarks.
@@ -84,18 +100,46 @@ pub fn fixed_anchor<T: Real>() -> Uniform<T> {
     }
 }
 
+/// Stack size of the threads [`on_large_stack`] starts, bytes.
+const LARGE_STACK: usize = 256 << 20;
+
+/// Runs `build` on a thread with a large stack and returns its result: building a
+/// solver with a capacity of thousands of segments (trim, model, state, workspace
+/// passed by value before they are boxed) takes more than the 8 MiB of the main
+/// thread.
+pub fn on_large_stack<R: Send>(build: impl FnOnce() -> R + Send) -> R {
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .stack_size(LARGE_STACK)
+            .spawn_scoped(scope, build)
+            .expect("spawn a thread to build the case")
+            .join()
+            .expect("building the case panicked")
+    })
+}
+
 /// The compound pendulum with `count` rods (capacity `N`) in its initial state
 /// (all rods at -60 degrees, at rest), boxed because large capacities are large.
 pub fn pendulum_solver<T: Real, const N: usize>(count: usize) -> Box<Solver<T, N>> {
-    let model = reference_pendulum::<T, N>(count).expect("pendulum model");
-    let state = pendulum_initial_state::<T, N>(count);
-    Box::new(Solver::new(model, state).expect("finite initial state"))
+    on_large_stack(|| {
+        let model = reference_pendulum::<T, N>(count).expect("pendulum model");
+        let state = pendulum_initial_state::<T, N>(count);
+        Box::new(Solver::new(model, state).expect("finite initial state"))
+    })
 }
 
 /// The reference towed system with `layout` (capacity `N`), trimmed in the
 /// [`cruise_path`] flight, boxed.
 pub fn towed_solver<T: Real, const N: usize>(layout: SegmentLayout<T>) -> Box<Solver<T, N>> {
-    let model = Model::<T, N>::new(reference_params(layout)).expect("reference towed model");
-    let state = trim(&model, &cruise_path::<T>().initial).expect("trim at 9 km, Mach 0.8");
-    Box::new(Solver::new(model, state).expect("finite trim state"))
+    on_large_stack(|| {
+        let model = Model::<T, N>::new(reference_params(layout)).expect("reference towed model");
+        let state = trim(&model, &cruise_path::<T>().initial).expect("trim at 9 km, Mach 0.8");
+        Box::new(Solver::new(model, state).expect("finite trim state"))
+    })
+}
+
+/// The reference towed system with `count` segments of equal length (capacity `N`),
+/// trimmed in the [`cruise_path`] flight, boxed: the towed scaling series.
+pub fn towed_uniform_solver<T: Real, const N: usize>(count: usize) -> Box<Solver<T, N>> {
+    towed_solver::<T, N>(SegmentLayout::Uniform { count })
 }

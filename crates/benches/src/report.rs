@@ -8,12 +8,13 @@
 //! - gungraun's instruction counts from `target/gungraun/**/summary.json`
 //!   ([`read_gungraun`]);
 //! - the firmware's instruction counts under QEMU `-icount` for several segment
-//!   counts ([`FirmwareRow`], measured by the binary through `hil-tests`);
+//!   counts ([`FirmwareRow`], measured by the binary through `hil-tests`), for the
+//!   Cortex-M4 (f32) and, once measured, the Cortex-M7 (f64);
 //! - the machine ([`Machine`]) and an optional external reference (Pinocchio);
 //!
 //! and renders them with [`render`] (Markdown) and [`scaling_plot`] (the log-log
-//! figure). The analysis ([`per_segment`], [`flatness`], the targets) is here so that
-//! it can be tested without running anything.
+//! figure). The analysis ([`per_segment`], [`flatness`], [`breakdown`], the targets)
+//! is here so that it can be tested without running anything.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -31,12 +32,15 @@ pub const CRITERION_COMMAND: &str =
 pub const GUNGRAUN_COMMAND: &str =
     "cargo bench -p benches --bench instructions -- --save-summary=json";
 
-/// Pendulum sizes of the criterion RK4-step benchmarks (f64).
+/// Sizes of the criterion RK4-step series with O(N) derivatives (two-sweep f64 and
+/// f32, shooting), pendulum and towed.
 pub const WALL_STEP_SIZES: [u32; 6] = [16, 64, 300, 1024, 2048, 4096];
-/// Pendulum sizes of the criterion RK4-step benchmarks (f32).
-pub const WALL_STEP_SIZES_F32: [u32; 3] = [16, 64, 300];
-/// Pendulum sizes of the gungraun RK4-step benchmarks (f64).
+/// Sizes of the criterion RK4-step series with the dense derivatives.
+pub const WALL_DENSE_STEP_SIZES: [u32; 3] = [16, 64, 300];
+/// Sizes of the gungraun RK4-step series with O(N) derivatives.
 pub const INSTRUCTION_STEP_SIZES: [u32; 5] = [8, 64, 300, 1024, 4096];
+/// Sizes of the gungraun RK4-step series with the dense derivatives.
+pub const INSTRUCTION_DENSE_STEP_SIZES: [u32; 3] = [8, 64, 300];
 /// Sizes of the tension-solve benchmarks (both harnesses).
 pub const TENSION_SIZES: [u32; 3] = [16, 64, 300];
 /// Tension-solve methods, as named in both harnesses.
@@ -193,8 +197,11 @@ pub struct Inputs {
     pub wall: WallClock,
     /// Gungraun instruction counts.
     pub instructions: Instructions,
-    /// Firmware runs, by segment count.
+    /// Firmware runs on the Cortex-M4F (QEMU mps2-an386), f32, by segment count.
     pub firmware: Vec<FirmwareRow>,
+    /// Firmware runs on the Cortex-M7 (QEMU mps2-an500), f64, by segment count
+    /// (empty: rendered as not measured).
+    pub firmware_m7: Vec<FirmwareRow>,
     /// The Pinocchio reference: its result line, or why there is none.
     pub pinocchio: Result<String, String>,
 }
@@ -207,24 +214,109 @@ impl Default for Inputs {
             wall: WallClock::new(),
             instructions: Instructions::new(),
             firmware: Vec::new(),
+            firmware_m7: Vec::new(),
             pinocchio: Err("not run".into()),
         }
     }
 }
 
-/// Criterion key of one pendulum RK4 step.
-fn wall_step(precision: &str, n: u32) -> String {
-    format!("pendulum_rk4_step/{precision}/{n}")
+/// The system an RK4-step series runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum System {
+    /// The compound pendulum on a fixed anchor (`pendulum_rk4_step`, `steps/pendulum_*`).
+    Pendulum,
+    /// The trimmed reference towed system, uniform segments (`towed_rk4_step/*/uniform{N}`).
+    Towed,
+}
+
+/// How the derivatives of an RK4-step series are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// The two-sweep recurrence in f64 (`Solver::step`).
+    F64,
+    /// The two-sweep recurrence in f32 (`Solver::step`).
+    F32,
+    /// The shooting form (f64), which diverges with N.
+    Shooting,
+    /// The dense Kane reference (f64), O(N³).
+    Dense,
+}
+
+impl Variant {
+    /// Every variant, in table order.
+    pub const ALL: [Variant; 4] = [
+        Variant::F64,
+        Variant::F32,
+        Variant::Shooting,
+        Variant::Dense,
+    ];
+
+    /// The variant's part of the benchmark names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::F64 => "f64",
+            Variant::F32 => "f32",
+            Variant::Shooting => "shooting",
+            Variant::Dense => "dense",
+        }
+    }
+
+    /// A short label for tables and the figure.
+    pub fn label(self) -> &'static str {
+        match self {
+            Variant::F64 => "two-sweep f64",
+            Variant::F32 => "two-sweep f32",
+            Variant::Shooting => "shooting f64",
+            Variant::Dense => "dense f64",
+        }
+    }
+
+    fn wall_sizes(self) -> &'static [u32] {
+        match self {
+            Variant::Dense => &WALL_DENSE_STEP_SIZES,
+            _ => &WALL_STEP_SIZES,
+        }
+    }
+
+    fn instruction_sizes(self) -> &'static [u32] {
+        match self {
+            Variant::Dense => &INSTRUCTION_DENSE_STEP_SIZES,
+            _ => &INSTRUCTION_STEP_SIZES,
+        }
+    }
+}
+
+impl System {
+    /// Both systems, in table order.
+    pub const ALL: [System; 2] = [System::Pendulum, System::Towed];
+
+    fn label(self) -> &'static str {
+        match self {
+            System::Pendulum => "pendulum",
+            System::Towed => "towed system",
+        }
+    }
+}
+
+/// Criterion key of one RK4 step of a series.
+pub fn wall_step_key(system: System, variant: Variant, n: u32) -> String {
+    match system {
+        System::Pendulum => format!("pendulum_rk4_step/{}/{n}", variant.name()),
+        System::Towed => format!("towed_rk4_step/{}/uniform{n}", variant.name()),
+    }
+}
+
+/// Gungraun key of one RK4 step of a series.
+pub fn instr_step_key(system: System, variant: Variant, n: u32) -> String {
+    match system {
+        System::Pendulum => format!("steps/pendulum_{}/n{n}", variant.name()),
+        System::Towed => format!("steps/towed_{}/uniform{n}", variant.name()),
+    }
 }
 
 /// Criterion key of one tension solve.
 fn wall_tension(method: &str, n: u32) -> String {
     format!("tension_solve/{method}/{n}")
-}
-
-/// Gungraun key of one pendulum RK4 step (f64).
-fn instr_step(n: u32) -> String {
-    format!("steps/pendulum_f64/n{n}")
 }
 
 /// Gungraun key of one tension solve.
@@ -304,22 +396,81 @@ const MISSING: &str = "n/a (missing from this run)";
 /// Costs by segment count: `(N, cost)`.
 pub type Costs = Vec<(u32, f64)>;
 
-/// The wall-clock and instruction costs of the pendulum RK4 step (f64), by N.
-fn step_costs(inputs: &Inputs) -> (Costs, Costs) {
-    let wall = WALL_STEP_SIZES
+/// The wall-clock (ns) and instruction costs of one RK4-step series, by N.
+pub fn step_costs(inputs: &Inputs, system: System, variant: Variant) -> (Costs, Costs) {
+    let wall = variant
+        .wall_sizes()
         .iter()
-        .filter_map(|&n| inputs.wall.get(&wall_step("f64", n)).map(|&t| (n, t)))
+        .filter_map(|&n| {
+            inputs
+                .wall
+                .get(&wall_step_key(system, variant, n))
+                .map(|&t| (n, t))
+        })
         .collect();
-    let instr = INSTRUCTION_STEP_SIZES
+    let instr = variant
+        .instruction_sizes()
         .iter()
         .filter_map(|&n| {
             inputs
                 .instructions
-                .get(&instr_step(n))
+                .get(&instr_step_key(system, variant, n))
                 .map(|&c| (n, c as f64))
         })
         .collect();
     (wall, instr)
+}
+
+/// The towed configurations of the evaluation breakdown (benchmark-name parts).
+pub const BREAKDOWN_CASES: [&str; 4] = [
+    "f64_graded16",
+    "f32_graded16",
+    "f64_uniform300",
+    "f32_uniform300",
+];
+
+/// One evaluation split into its parts, in one unit (ns or instructions).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Breakdown {
+    /// The whole evaluation (`evaluate`).
+    pub evaluate: f64,
+    /// Kinematics, velocity terms and load assembly: `prepare` − the aerodynamics.
+    pub kinematics_assembly: f64,
+    /// Cable drag of every segment.
+    pub cable_drag: f64,
+    /// Decoy aerodynamics.
+    pub decoy_aero: f64,
+    /// The tension solve: joint rows assembled in the forward sweep, back sweep.
+    pub sweeps: f64,
+    /// Pass 3.
+    pub accelerations: f64,
+}
+
+impl Breakdown {
+    /// The sum of the parts (differs from [`Breakdown::evaluate`] by call overhead,
+    /// inlining across the passes, and noise).
+    pub fn sum(&self) -> f64 {
+        self.kinematics_assembly
+            + self.cable_drag
+            + self.decoy_aero
+            + self.sweeps
+            + self.accelerations
+    }
+}
+
+/// The breakdown from the cost of each pass (`cost(pass name)`), `None` if any is missing.
+pub fn breakdown(cost: &dyn Fn(&str) -> Option<f64>) -> Option<Breakdown> {
+    let prepare = cost("prepare")?;
+    let cable_drag = cost("cable_drag")?;
+    let decoy_aero = cost("decoy_aero")?;
+    Some(Breakdown {
+        evaluate: cost("evaluate")?,
+        kinematics_assembly: prepare - cable_drag - decoy_aero,
+        cable_drag,
+        decoy_aero,
+        sweeps: cost("solve_tensions")?,
+        accelerations: cost("accelerations")?,
+    })
 }
 
 /// The report, Markdown.
@@ -358,15 +509,16 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         s,
         "Wall-clock times: numbers from one run on the machine above (criterion medians); \
          they vary from run to run. Instruction counts are exact and repeat for the same \
-         build: x86-64 instructions under valgrind's callgrind (gungraun 0.20), Cortex-M4 \
+         build: x86-64 instructions under valgrind's callgrind (gungraun 0.20), Cortex-M \
          instructions under QEMU `-icount`."
     )?;
     writeln!(s)?;
 
     render_targets(s, inputs)?;
-    render_wall(s, inputs)?;
-    render_instructions(s, inputs)?;
+    render_steps(s, inputs)?;
     render_ratios(s, inputs)?;
+    render_breakdown(s, inputs)?;
+    render_other(s, inputs)?;
     render_firmware(s, inputs)?;
 
     writeln!(s, "## Scaling")?;
@@ -378,10 +530,12 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     writeln!(s)?;
     writeln!(
         s,
-        "log10 of the wall-clock time per call (µs) against log10 N, criterion medians: \
-         one RK4 step of the pendulum (f64 and f32, O(N) two-sweep solve) and one tension \
-         solve by each method. A slope of 1 is O(N); the dense solve's slope approaches 3. \
-         Also `docs/figures/bench-scaling.svg`."
+        "log10 of the wall-clock time per call (µs) against log10 N, criterion medians. \
+         Top: the pendulum, one RK4 step with each kind of derivative (two-sweep f64 and \
+         f32, shooting, dense) and one tension solve by each method. Bottom: the towed \
+         system with N uniform segments, one RK4 step with each kind of derivative. A \
+         slope of 1 is O(N); the dense solve's slope approaches 3. Also \
+         `docs/figures/bench-scaling.svg`."
     )?;
     writeln!(s)?;
 
@@ -396,7 +550,7 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
              the 300-rod spherical chain does not fit: the script times 25 to 100 rods and \
              extrapolates (ABA is O(N)), and times 300 revolute joints directly as a planar \
              lower bound. Measured in this run: {line} For comparison, this solver's \
-             300-rod RK4 step (f64) is in the wall-clock table above."
+             300-rod RK4 step (f64) is in the RK4-step table above."
         )?,
         Err(why) => writeln!(
             s,
@@ -412,13 +566,35 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     writeln!(
         s,
         "- Pendulum: the compound pendulum with N rods (capacity N) hinged to a fixed \
-         anchor, all rods at -60 degrees, dt = 1e-4 s; towed: the reference system, 16 \
-         segments graded 1.3, trimmed at 9 km, Mach 0.8, dt = 1e-3 s (`crates/benches/src/lib.rs`)."
+         anchor, all rods at -60 degrees, dt = 1e-4 s. Towed: the reference system \
+         trimmed at 9 km, Mach 0.8, either 16 segments graded 1.3 with dt = 1e-3 s, or \
+         (the scaling series) N segments of equal length with dt = 1e-5 s, small enough \
+         that 1000 steps from the trim stay finite at every N in both precisions; the \
+         cost of a step does not depend on dt (`crates/benches/src/lib.rs`)."
+    )?;
+    writeln!(
+        s,
+        "- Two-sweep RK4 steps are `Solver::step`. Shooting and dense RK4 steps use the \
+         same RK4 scheme written in the benches crate (`crates/benches/src/stepper.rs`, \
+         bit-identical to `Solver::step` with the two-sweep derivatives, checked by a \
+         test), with `dynamics::solve_tensions_shooting` or `dense::evaluate_dense` for \
+         the derivatives. The shooting form diverges numerically with N (round-off grows \
+         about 3.7x per segment): beyond a few tens of segments its results are garbage \
+         or not finite and the step fails, but its cost is still measurable: the \
+         stepper runs all four stages whatever the numbers, so a failed step does the \
+         same work as a successful one (`Solver::step` would stop at the first failed \
+         stage). The dense derivatives allocate their matrices on every call and are \
+         measured up to N = 300 only."
     )?;
     writeln!(
         s,
         "- Criterion (`crates/benches/benches/rk4_step.rs`): the solver steps \
-         continuously and its initial state is restored, untimed, every 1000 steps."
+         continuously and its initial state is restored, untimed, every 1000 steps, or \
+         more often where fewer consecutive steps stay finite from the initial state \
+         (counted in setup and printed by the benchmark as a note; the f32 cases with \
+         thousands of segments: the f32 towed system with 4096 uniform segments does not \
+         stay finite beyond its first step from the f32 trim, even with dt = 1e-6 s). The \
+         work of a step does not depend on that."
     )?;
     writeln!(
         s,
@@ -431,6 +607,14 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         "- Tension solve: one derivative evaluation of the pendulum in its initial state \
          (the O(N) forms through `Solver::derivative`, the dense reference through \
          `evaluate_dense`)."
+    )?;
+    writeln!(
+        s,
+        "- Breakdown (`crates/benches/src/passes.rs`): each public pass of \
+         `solver_core::dynamics` timed alone on a workspace filled by one evaluation of \
+         the trimmed state; the aerodynamics by calling `cable_drag` (with the local \
+         density) for every segment and `decoy_aero` once, on the inputs `prepare` \
+         computes."
     )?;
     writeln!(
         s,
@@ -448,33 +632,49 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     Ok(())
 }
 
+/// The flatness verdict of one series' costs: `Some((ok, worst))` or `None`.
+fn series_flatness(costs: &Costs) -> Option<(bool, f64)> {
+    per_segment(costs).and_then(|n| flatness(&n))
+}
+
 fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     writeln!(s, "## Targets")?;
     writeln!(s)?;
     writeln!(s, "| target | measured | result |")?;
     writeln!(s, "|---|---|---|")?;
 
-    let (wall, instr) = step_costs(inputs);
-    match per_segment(&wall).and_then(|n| flatness(&n)) {
-        Some((ok, worst)) => writeln!(
-            s,
-            "| O(N): wall-clock cost per segment of an RK4 step (f64) within ±20 % of N = 64, \
-             for N = 64..4096 | worst {:+.1} % | {} |",
-            worst * 100.0,
-            pass(ok)
-        )?,
-        None => writeln!(
-            s,
-            "| O(N) flatness, wall clock, N = 64..4096 | {MISSING} | - |"
-        )?,
-    }
-    if let Some((ok, worst)) = per_segment(&instr).and_then(|n| flatness(&n)) {
-        writeln!(
-            s,
-            "| O(N), instruction count (same criterion, for reference) | worst {:+.1} % | {} |",
-            worst * 100.0,
-            pass(ok)
-        )?;
+    for system in System::ALL {
+        let (wall, instr) = step_costs(inputs, system, Variant::F64);
+        let instr_flat = series_flatness(&instr).map(|(ok, _)| ok);
+        match series_flatness(&wall) {
+            Some((ok, worst)) => writeln!(
+                s,
+                "| O(N), {}: wall-clock cost per segment of an RK4 step (f64) within ±20 % of \
+                 N = 64, for N = 64..4096 | worst {:+.1} %{} | {} |",
+                system.label(),
+                worst * 100.0,
+                if !ok && instr_flat == Some(true) {
+                    " (the instruction counts are flat: probably a loaded machine, rerun)"
+                } else {
+                    ""
+                },
+                pass(ok)
+            )?,
+            None => writeln!(
+                s,
+                "| O(N) flatness, {}, wall clock, N = 64..4096 | {MISSING} | - |",
+                system.label()
+            )?,
+        }
+        if let Some((ok, worst)) = series_flatness(&instr) {
+            writeln!(
+                s,
+                "| O(N), {}, instruction count (same criterion, for reference) | worst {:+.1} % | {} |",
+                system.label(),
+                worst * 100.0,
+                pass(ok)
+            )?;
+        }
     }
 
     let speedup = |get: &dyn Fn(&str) -> Option<f64>| Some(get("dense")? / get("two_sweep")?);
@@ -496,8 +696,41 @@ fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         )?,
         None => writeln!(s, "| tension solve vs dense at N = 300 | {MISSING} | - |")?,
     }
+    for system in System::ALL {
+        let wall = |v: Variant| inputs.wall.get(&wall_step_key(system, v, 300)).copied();
+        let instr = |v: Variant| {
+            inputs
+                .instructions
+                .get(&instr_step_key(system, v, 300))
+                .map(|&c| c as f64)
+        };
+        match (wall(Variant::Dense), wall(Variant::F64)) {
+            (Some(dense), Some(fast)) if fast > 0.0 => {
+                let x = dense / fast;
+                let i = match (instr(Variant::Dense), instr(Variant::F64)) {
+                    (Some(d), Some(f)) if f > 0.0 => format!(" ({:.0}x in instructions)", d / f),
+                    _ => String::new(),
+                };
+                writeln!(
+                    s,
+                    "| RK4 step, {}, ≥ 100x faster than with the dense derivatives at N = 300 \
+                     (wall clock) | {x:.0}x{i} | {} |",
+                    system.label(),
+                    pass(x >= DENSE_SPEEDUP_TARGET)
+                )?
+            }
+            _ => writeln!(
+                s,
+                "| RK4 step, {}, vs dense at N = 300 | {MISSING} | - |",
+                system.label()
+            )?,
+        }
+    }
 
-    match inputs.wall.get(&wall_step("f64", 300)) {
+    match inputs
+        .wall
+        .get(&wall_step_key(System::Pendulum, Variant::F64, 300))
+    {
         Some(&ns) => {
             let us = ns / 1e3;
             let goal = if us <= STEP_300_GOAL_US {
@@ -542,75 +775,88 @@ fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     Ok(())
 }
 
-fn render_wall(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
-    writeln!(s, "## Wall clock (criterion medians)")?;
-    writeln!(s)?;
-    writeln!(s, "| benchmark | median | per segment |")?;
-    writeln!(s, "|---|---:|---:|")?;
-    let mut row = |key: String, n: Option<u32>| -> std::fmt::Result {
-        match inputs.wall.get(&key) {
-            Some(&ns) => writeln!(
-                s,
-                "| `{key}` | {} | {} |",
-                duration(ns),
-                n.map(|n| duration(ns / f64::from(n)))
-                    .unwrap_or_else(|| "-".into())
-            ),
-            None => writeln!(s, "| `{key}` | {MISSING} | - |"),
-        }
-    };
-    for n in WALL_STEP_SIZES {
-        row(wall_step("f64", n), Some(n))?;
-    }
-    for n in WALL_STEP_SIZES_F32 {
-        row(wall_step("f32", n), Some(n))?;
-    }
-    row("towed_rk4_step/f32/graded16".into(), Some(16))?;
-    row("towed_rk4_step/f64/graded16".into(), Some(16))?;
-    row("towed_rk4_step/f64/uniform300".into(), Some(300))?;
-    for method in TENSION_METHODS {
-        for n in TENSION_SIZES {
-            row(wall_tension(method, n), Some(n))?;
-        }
-    }
-    writeln!(s)?;
-    Ok(())
+/// Every size of `sizes` lists, sorted, without repeats.
+fn union_sizes<'a>(sizes: impl IntoIterator<Item = &'a [u32]>) -> Vec<u32> {
+    let mut all: Vec<u32> = sizes.into_iter().flatten().copied().collect();
+    all.sort_unstable();
+    all.dedup();
+    all
 }
 
-fn render_instructions(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
+/// The RK4-step tables: one row per N, one column per system and variant.
+fn render_steps(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
+    writeln!(s, "## RK4 step against segment count")?;
+    writeln!(s)?;
     writeln!(
         s,
-        "## Instruction counts (gungraun, x86-64 under callgrind)"
+        "One RK4 step (four derivative evaluations) of the pendulum and of the towed \
+         system with N uniform segments, with each kind of derivative: the two-sweep \
+         recurrence (`Solver::step`) in f64 and f32, the shooting form (diverges with N, \
+         see below; the cost is still measured) and the dense reference (O(N³), up to \
+         N = 300). `-`: not measured at that size."
     )?;
     writeln!(s)?;
-    writeln!(s, "| benchmark | instructions | per segment |")?;
-    writeln!(s, "|---|---:|---:|")?;
-    let mut row = |key: String, n: u32| -> std::fmt::Result {
-        match inputs.instructions.get(&key) {
-            Some(&c) => writeln!(
-                s,
-                "| `{key}` | {} | {} |",
-                thousands(c),
-                thousands(c / u64::from(n))
-            ),
-            None => writeln!(s, "| `{key}` | {MISSING} | - |"),
+    let header = || {
+        let mut h = String::from("| N |");
+        for system in System::ALL {
+            for variant in Variant::ALL {
+                let _ = write!(h, " {}, {} |", system.label(), variant.label());
+            }
         }
+        h
     };
-    for n in INSTRUCTION_STEP_SIZES {
-        row(instr_step(n), n)?;
-    }
-    row("steps/towed_f32/graded16".into(), 16)?;
-    row("steps/towed_f64/graded16".into(), 16)?;
-    for method in TENSION_METHODS {
-        for n in TENSION_SIZES {
-            row(instr_tension(method, n), n)?;
+    let rule = format!(
+        "|---:|{}",
+        "---:|".repeat(System::ALL.len() * Variant::ALL.len())
+    );
+
+    writeln!(s, "### Wall clock (criterion medians)")?;
+    writeln!(s)?;
+    writeln!(s, "{}", header())?;
+    writeln!(s, "{rule}")?;
+    for n in union_sizes([&WALL_STEP_SIZES[..], &WALL_DENSE_STEP_SIZES[..]]) {
+        let mut row = format!("| {n} |");
+        for system in System::ALL {
+            for variant in Variant::ALL {
+                let cell = inputs
+                    .wall
+                    .get(&wall_step_key(system, variant, n))
+                    .map_or_else(|| "-".into(), |&ns| duration(ns));
+                let _ = write!(row, " {cell} |");
+            }
         }
+        writeln!(s, "{row}")?;
+    }
+    writeln!(s)?;
+
+    writeln!(
+        s,
+        "### Instruction counts (gungraun, x86-64 under callgrind)"
+    )?;
+    writeln!(s)?;
+    writeln!(s, "{}", header())?;
+    writeln!(s, "{rule}")?;
+    for n in union_sizes([
+        &INSTRUCTION_STEP_SIZES[..],
+        &INSTRUCTION_DENSE_STEP_SIZES[..],
+    ]) {
+        let mut row = format!("| {n} |");
+        for system in System::ALL {
+            for variant in Variant::ALL {
+                let cell = inputs
+                    .instructions
+                    .get(&instr_step_key(system, variant, n))
+                    .map_or_else(|| "-".into(), |&c| thousands(c));
+                let _ = write!(row, " {cell} |");
+            }
+        }
+        writeln!(s, "{row}")?;
     }
     writeln!(s)?;
     Ok(())
 }
 
-/// `a / b` as `12.3x`, or `n/a`.
+/// `a / b` as `12.3x`, or `-`.
 fn ratio(a: Option<f64>, b: Option<f64>) -> String {
     match (a, b) {
         (Some(a), Some(b)) if b > 0.0 => {
@@ -621,7 +867,7 @@ fn ratio(a: Option<f64>, b: Option<f64>) -> String {
                 format!("{r:.2}x")
             }
         }
-        _ => "n/a".into(),
+        _ => "-".into(),
     }
 }
 
@@ -630,6 +876,40 @@ fn render_ratios(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     let instr = |k: String| inputs.instructions.get(&k).map(|&c| c as f64);
     writeln!(s, "## Ratios")?;
     writeln!(s)?;
+
+    writeln!(s, "### RK4 step: dense and shooting against the recurrence")?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "Cost of one RK4 step with the dense or the shooting derivatives divided by its \
+         cost with the two-sweep recurrence (f64); larger = the recurrence is that many \
+         times faster. The shooting form costs about as much as the recurrence but its \
+         results are unusable beyond a few tens of segments (it diverges, ~3.7^N)."
+    )?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "| system | N | dense / two-sweep (wall) | dense / two-sweep (instr.) | shooting / two-sweep (wall) | shooting / two-sweep (instr.) |"
+    )?;
+    writeln!(s, "|---|---:|---:|---:|---:|---:|")?;
+    for system in System::ALL {
+        let sizes = union_sizes([&WALL_STEP_SIZES[..], &INSTRUCTION_STEP_SIZES[..]]);
+        for n in sizes {
+            let w = |v| wall(wall_step_key(system, v, n));
+            let i = |v| instr(instr_step_key(system, v, n));
+            writeln!(
+                s,
+                "| {} | {n} | {} | {} | {} | {} |",
+                system.label(),
+                ratio(w(Variant::Dense), w(Variant::F64)),
+                ratio(i(Variant::Dense), i(Variant::F64)),
+                ratio(w(Variant::Shooting), w(Variant::F64)),
+                ratio(i(Variant::Shooting), i(Variant::F64)),
+            )?;
+        }
+    }
+    writeln!(s)?;
+
     writeln!(
         s,
         "### Tension solve: dense and shooting against the recurrence"
@@ -637,8 +917,8 @@ fn render_ratios(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     writeln!(s)?;
     writeln!(
         s,
-        "Cost of one derivative evaluation relative to the O(N) two-sweep recurrence \
-         (larger = the recurrence is that many times faster)."
+        "Cost of one derivative evaluation of the pendulum relative to the O(N) two-sweep \
+         recurrence (larger = the recurrence is that many times faster)."
     )?;
     writeln!(s)?;
     writeln!(
@@ -669,7 +949,14 @@ fn render_ratios(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         )?;
     }
     writeln!(s)?;
+
     writeln!(s, "### f32 against f64")?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "Cost of one RK4 step in f64 divided by its cost in f32 (the two-sweep recurrence; \
+         > 1: f32 is faster)."
+    )?;
     writeln!(s)?;
     writeln!(s, "| case | f64 / f32 (wall) | f64 / f32 (instr.) |")?;
     writeln!(s, "|---|---:|---:|")?;
@@ -685,60 +972,253 @@ fn render_ratios(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
             instr("steps/towed_f32/graded16".into())
         )
     )?;
-    for n in WALL_STEP_SIZES_F32 {
-        writeln!(
-            s,
-            "| pendulum, N = {n} | {} | - |",
-            ratio(wall(wall_step("f64", n)), wall(wall_step("f32", n)))
-        )?;
+    for system in System::ALL {
+        for n in union_sizes([&WALL_STEP_SIZES[..], &INSTRUCTION_STEP_SIZES[..]]) {
+            writeln!(
+                s,
+                "| {}, N = {n} | {} | {} |",
+                system.label(),
+                ratio(
+                    wall(wall_step_key(system, Variant::F64, n)),
+                    wall(wall_step_key(system, Variant::F32, n))
+                ),
+                ratio(
+                    instr(instr_step_key(system, Variant::F64, n)),
+                    instr(instr_step_key(system, Variant::F32, n))
+                ),
+            )?;
+        }
     }
     writeln!(s)?;
-    writeln!(s, "### Cost per segment across N (RK4 step, pendulum, f64)")?;
+
+    writeln!(s, "### Cost per segment across N (RK4 step)")?;
     writeln!(s)?;
     writeln!(
         s,
         "Cost per segment divided by its value at N = {REFERENCE_N}; O(N) means flat. \
-         Target: within ±20 % from N = 64 to 4096."
+         Target: within ±20 % from N = 64 to 4096 (the targets table checks the f64 \
+         recurrence; the other series are shown for comparison). The last row is the \
+         cost per segment at N = {REFERENCE_N} itself."
     )?;
     writeln!(s)?;
-    let (wall_costs, instr_costs) = step_costs(inputs);
-    let wall_norm = per_segment(&wall_costs).unwrap_or_default();
-    let instr_norm = per_segment(&instr_costs).unwrap_or_default();
-    let mut sizes: Vec<u32> = wall_norm
-        .iter()
-        .chain(&instr_norm)
-        .map(|(n, _)| *n)
-        .collect();
-    sizes.sort_unstable();
-    sizes.dedup();
-    writeln!(s, "| N | wall clock | instructions |")?;
-    writeln!(s, "|---:|---:|---:|")?;
+    let o_n = [Variant::F64, Variant::F32, Variant::Shooting];
+    let mut header = String::from("| N |");
+    let mut normalised = Vec::new();
+    for system in System::ALL {
+        for variant in o_n {
+            let (w, i) = step_costs(inputs, system, variant);
+            let _ = write!(
+                header,
+                " {}, {} (wall) | {}, {} (instr.) |",
+                system.label(),
+                variant.label(),
+                system.label(),
+                variant.label()
+            );
+            normalised.push((
+                system,
+                variant,
+                "wall",
+                w.clone(),
+                per_segment(&w).unwrap_or_default(),
+            ));
+            normalised.push((
+                system,
+                variant,
+                "instructions",
+                i.clone(),
+                per_segment(&i).unwrap_or_default(),
+            ));
+        }
+    }
+    writeln!(s, "{header}")?;
+    writeln!(s, "|---:|{}", "---:|".repeat(normalised.len()))?;
     let find = |v: &[(u32, f64)], n: u32| {
         v.iter()
             .find(|(m, _)| *m == n)
             .map(|(_, r)| format!("{r:.2}"))
             .unwrap_or_else(|| "-".into())
     };
-    for n in sizes {
-        writeln!(
-            s,
-            "| {n} | {} | {} |",
-            find(&wall_norm, n),
-            find(&instr_norm, n)
-        )?;
+    for n in union_sizes([&WALL_STEP_SIZES[..], &INSTRUCTION_STEP_SIZES[..]]) {
+        let mut row = format!("| {n} |");
+        for (.., norm) in &normalised {
+            let _ = write!(row, " {} |", find(norm, n));
+        }
+        writeln!(s, "{row}")?;
     }
+    let mut row = format!("| per segment at {REFERENCE_N} |");
+    for (_, _, unit, costs, _) in &normalised {
+        let cell = costs
+            .iter()
+            .find(|(n, _)| *n == REFERENCE_N)
+            .map(|(n, c)| {
+                let per = c / f64::from(*n);
+                if *unit == "wall" {
+                    duration(per)
+                } else {
+                    thousands(per.round() as u64)
+                }
+            })
+            .unwrap_or_else(|| "-".into());
+        let _ = write!(row, " {cell} |");
+    }
+    writeln!(s, "{row}")?;
     writeln!(s)?;
     let verdict = |v: &[(u32, f64)]| match flatness(v) {
         Some((true, worst)) => format!("flat within ±20 % (worst {:+.1} %)", worst * 100.0),
         Some((false, worst)) => format!("NOT flat within ±20 % (worst {:+.1} %)", worst * 100.0),
         None => "no verdict (N = 64 or 4096 missing)".into(),
     };
+    writeln!(s, "From N = 64 to 4096:")?;
+    writeln!(s)?;
+    for (system, variant, unit, _, norm) in &normalised {
+        writeln!(
+            s,
+            "- {}, {}, {unit}: {}.",
+            system.label(),
+            variant.label(),
+            verdict(norm)
+        )?;
+    }
+    writeln!(s)?;
+    Ok(())
+}
+
+/// One row of the breakdown table: a part of a [`Breakdown`].
+type Part = &'static dyn Fn(&Breakdown) -> f64;
+
+/// A cell `value (share %)` of the breakdown table.
+fn share_cell(value: f64, whole: f64, format: &dyn Fn(f64) -> String) -> String {
+    format!("{} ({:.0} %)", format(value), 100.0 * value / whole)
+}
+
+fn render_breakdown(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     writeln!(
         s,
-        "From N = 64 to 4096: wall clock {}; instructions {}.",
-        verdict(&wall_norm),
-        verdict(&instr_norm)
+        "## One derivative evaluation: kinematics, aerodynamics, assembly, sweeps"
     )?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "The trimmed towed system (16 graded segments; 300 uniform segments), one \
+         `dynamics::evaluate` split into its passes, each measured alone \
+         (`eval_breakdown/{{case}}/{{pass}}`, `breakdown/{{case}}/{{pass}}`). Shares are in \
+         % of one whole evaluation. The aerodynamics (cable drag of every segment with \
+         its local density, and the decoy's airloads) run inside `prepare` and are \
+         measured by calling the same functions on the same inputs; kinematics + assembly \
+         = `prepare` − aerodynamics (forward kinematics, gravity, the velocity terms, the \
+         decoy's joint block). The joint rows D_j, b_j of the tension system are \
+         assembled inside the forward sweep (fused, not separable), so \"sweeps\" \
+         includes that assembly. The parts do not add up exactly to the whole (call \
+         overhead, inlining across passes, and for the wall clock noise): the last row \
+         shows by how much. One RK4 step is four evaluations plus four flight-path \
+         samples and the stage arithmetic."
+    )?;
+    writeln!(s)?;
+    for (title, unit_is_wall) in [
+        ("Wall clock (criterion medians)", true),
+        ("Instruction counts (gungraun)", false),
+    ] {
+        writeln!(s, "### {title}")?;
+        writeln!(s)?;
+        let cases: Vec<(&str, Option<Breakdown>)> = BREAKDOWN_CASES
+            .iter()
+            .map(|case| {
+                let cost = |pass: &str| -> Option<f64> {
+                    if unit_is_wall {
+                        inputs
+                            .wall
+                            .get(&format!("eval_breakdown/{case}/{pass}"))
+                            .copied()
+                    } else {
+                        inputs
+                            .instructions
+                            .get(&format!("breakdown/{case}/{pass}"))
+                            .map(|&c| c as f64)
+                    }
+                };
+                (*case, breakdown(&cost))
+            })
+            .collect();
+        let mut header = String::from("| part |");
+        for (case, _) in &cases {
+            let _ = write!(header, " `{case}` |");
+        }
+        writeln!(s, "{header}")?;
+        writeln!(s, "|---|{}", "---:|".repeat(cases.len()))?;
+        let format = |v: f64| {
+            if unit_is_wall {
+                duration(v)
+            } else {
+                thousands(v.max(0.0).round() as u64)
+            }
+        };
+        let rows: [(&str, Part); 8] = [
+            ("kinematics + assembly (prepare − aerodynamics)", &|b| {
+                b.kinematics_assembly
+            }),
+            ("aerodynamics: cable drag, every segment", &|b| b.cable_drag),
+            ("aerodynamics: decoy", &|b| b.decoy_aero),
+            ("aerodynamics, total", &|b| b.cable_drag + b.decoy_aero),
+            (
+                "sweeps (solve_tensions: row assembly + forward sweep, back sweep)",
+                &|b| b.sweeps,
+            ),
+            ("accelerations (pass 3)", &|b| b.accelerations),
+            ("whole evaluation (evaluate)", &|b| b.evaluate),
+            ("sum of the parts", &|b| b.sum()),
+        ];
+        for (label, part) in rows {
+            let mut row = format!("| {label} |");
+            for (_, b) in &cases {
+                let cell = match b {
+                    Some(b) => share_cell(part(b), b.evaluate, &format),
+                    None => "-".into(),
+                };
+                let _ = write!(row, " {cell} |");
+            }
+            writeln!(s, "{row}")?;
+        }
+        writeln!(s)?;
+    }
+    Ok(())
+}
+
+/// The other benchmarks: the graded towed steps and the tension solves.
+fn render_other(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
+    writeln!(s, "## Other benchmarks")?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "| benchmark | median (wall) | per segment | benchmark | instructions | per segment |"
+    )?;
+    writeln!(s, "|---|---:|---:|---|---:|---:|")?;
+    let mut row = |wall_key: String, instr_key: String, n: u32| -> std::fmt::Result {
+        let (w, wn) = match inputs.wall.get(&wall_key) {
+            Some(&ns) => (duration(ns), duration(ns / f64::from(n))),
+            None => (MISSING.into(), "-".into()),
+        };
+        let (i, i_n) = match inputs.instructions.get(&instr_key) {
+            Some(&c) => (thousands(c), thousands(c / u64::from(n))),
+            None => (MISSING.into(), "-".into()),
+        };
+        writeln!(
+            s,
+            "| `{wall_key}` | {w} | {wn} | `{instr_key}` | {i} | {i_n} |"
+        )
+    };
+    for precision in ["f32", "f64"] {
+        row(
+            format!("towed_rk4_step/{precision}/graded16"),
+            format!("steps/towed_{precision}/graded16"),
+            16,
+        )?;
+    }
+    for method in TENSION_METHODS {
+        for n in TENSION_SIZES {
+            row(wall_tension(method, n), instr_tension(method, n), n)?;
+        }
+    }
     writeln!(s)?;
     Ok(())
 }
@@ -753,28 +1233,17 @@ fn one_line(text: &str) -> String {
         .to_owned()
 }
 
-fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
-    writeln!(
-        s,
-        "## Firmware: Cortex-M4F (QEMU mps2-an386, `-icount`), f32, graded segments"
-    )?;
-    writeln!(s)?;
-    writeln!(
-        s,
-        "The firmware reports instructions per 10 ms control step, which is 2 RK4 steps \
-         of 5 ms (plus the flight-path samples they take); per RK4 step is that divided \
-         by 2. Max and mean over the 300 control steps of the acceleration case."
-    )?;
-    writeln!(s)?;
+/// One firmware table (rows by segment count); `empty` is shown when there are none.
+fn render_firmware_table(s: &mut String, rows: &[FirmwareRow], empty: &str) -> std::fmt::Result {
     writeln!(
         s,
         "| segments | per control step, max | per control step, mean | per RK4 step, max | per RK4 step and segment |"
     )?;
     writeln!(s, "|---:|---:|---:|---:|---:|")?;
-    if inputs.firmware.is_empty() {
-        writeln!(s, "| - | not run | | | |")?;
+    if rows.is_empty() {
+        writeln!(s, "| - | {empty} | | | |")?;
     }
-    for row in &inputs.firmware {
+    for row in rows {
         match &row.outcome {
             Ok((max, mean)) => writeln!(
                 s,
@@ -797,55 +1266,88 @@ fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     Ok(())
 }
 
-/// The log-log scaling figure: log10 of the wall-clock µs per call against log10 N.
-/// Series without data are left out.
-pub fn scaling_plot(inputs: &Inputs) -> Plot {
-    let mut series = Vec::new();
-    let mut add = |label: &str, points: Vec<(u32, f64)>| {
-        if points.len() >= 2 {
-            series.push(Series {
-                label: label.into(),
-                x: points.iter().map(|(n, _)| f64::from(*n).log10()).collect(),
-                y: points.iter().map(|(_, ns)| (ns / 1e3).log10()).collect(),
-            });
+fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
+    writeln!(
+        s,
+        "## Firmware: Cortex-M4F (QEMU mps2-an386, `-icount`), f32, graded segments"
+    )?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "The firmware reports instructions per 10 ms control step, which is 2 RK4 steps \
+         of 5 ms (plus the flight-path samples they take); per RK4 step is that divided \
+         by 2. Max and mean over the 300 control steps of the acceleration case."
+    )?;
+    writeln!(s)?;
+    render_firmware_table(s, &inputs.firmware, "not run")?;
+    writeln!(s, "## Firmware: Cortex-M7 (mps2-an500), f64")?;
+    writeln!(s)?;
+    writeln!(
+        s,
+        "The same measurement on QEMU's Cortex-M7 (`-M mps2-an500`, f64 in hardware, \
+         FPv5-D16), same columns."
+    )?;
+    writeln!(s)?;
+    render_firmware_table(s, &inputs.firmware_m7, "not measured")?;
+    Ok(())
+}
+
+/// Points `(log10 N, log10 µs)` of the wall-clock costs `(N, ns)`.
+fn log_log(label: String, points: &[(u32, f64)]) -> Series {
+    Series {
+        label,
+        x: points.iter().map(|(n, _)| f64::from(*n).log10()).collect(),
+        y: points.iter().map(|(_, ns)| (ns / 1e3).log10()).collect(),
+    }
+}
+
+/// The log-log scaling figure, two panels (pendulum, towed system): log10 of the
+/// wall-clock µs per call against log10 N. Series with fewer than two points are
+/// left out; so is a panel without any series.
+pub fn scaling_plot(inputs: &Inputs) -> Vec<Plot> {
+    let mut plots = Vec::new();
+    for system in System::ALL {
+        let mut series = Vec::new();
+        for variant in Variant::ALL {
+            let (wall, _) = step_costs(inputs, system, variant);
+            if wall.len() >= 2 {
+                series.push(log_log(format!("RK4 step, {}", variant.label()), &wall));
+            }
         }
-    };
-    let wall = |key: String, n: u32| inputs.wall.get(&key).map(|&t| (n, t));
-    add(
-        "RK4 step, f64 (two-sweep)",
-        WALL_STEP_SIZES
-            .iter()
-            .filter_map(|&n| wall(wall_step("f64", n), n))
-            .collect(),
-    );
-    add(
-        "RK4 step, f32 (two-sweep)",
-        WALL_STEP_SIZES_F32
-            .iter()
-            .filter_map(|&n| wall(wall_step("f32", n), n))
-            .collect(),
-    );
-    for (method, label) in [
-        ("two_sweep", "tension solve, two-sweep O(N)"),
-        ("shooting", "tension solve, shooting O(N)"),
-        ("dense", "tension solve, dense O(N^3)"),
-    ] {
-        add(
-            label,
-            TENSION_SIZES
-                .iter()
-                .filter_map(|&n| wall(wall_tension(method, n), n))
-                .collect(),
-        );
+        if system == System::Pendulum {
+            for (method, label) in [
+                ("two_sweep", "tension solve, two-sweep O(N)"),
+                ("shooting", "tension solve, shooting O(N)"),
+                ("dense", "tension solve, dense O(N^3)"),
+            ] {
+                let points: Vec<(u32, f64)> = TENSION_SIZES
+                    .iter()
+                    .filter_map(|&n| inputs.wall.get(&wall_tension(method, n)).map(|&t| (n, t)))
+                    .collect();
+                if points.len() >= 2 {
+                    series.push(log_log(label.into(), &points));
+                }
+            }
+        }
+        if series.is_empty() {
+            continue;
+        }
+        let title = match system {
+            System::Pendulum => "Pendulum: cost per call (log-log, wall clock)",
+            System::Towed => {
+                "Towed system, uniform segments: cost per RK4 step (log-log, wall clock)"
+            }
+        };
+        plots.push(Plot {
+            title: title.into(),
+            x_label: "log10(N)".into(),
+            y_label: "log10(time per call / µs)".into(),
+            series,
+            aspect: Aspect::Free,
+            invert_y: false,
+        });
     }
-    Plot {
-        title: "Cost per call against segment count (log-log, wall clock)".into(),
-        x_label: "log10(N)".into(),
-        y_label: "log10(time per call / µs)".into(),
-        series,
-        aspect: Aspect::Free,
-        invert_y: false,
-    }
+    plots
 }
 
 #[cfg(test)]
@@ -897,14 +1399,81 @@ mod tests {
     }
 
     #[test]
+    fn keys_match_the_benchmark_names() {
+        assert_eq!(
+            wall_step_key(System::Pendulum, Variant::F32, 4096),
+            "pendulum_rk4_step/f32/4096"
+        );
+        assert_eq!(
+            wall_step_key(System::Towed, Variant::Dense, 300),
+            "towed_rk4_step/dense/uniform300"
+        );
+        assert_eq!(
+            instr_step_key(System::Pendulum, Variant::Shooting, 64),
+            "steps/pendulum_shooting/n64"
+        );
+        assert_eq!(
+            instr_step_key(System::Towed, Variant::F64, 8),
+            "steps/towed_f64/uniform8"
+        );
+    }
+
+    #[test]
+    fn breakdown_derives_kinematics_and_assembly() {
+        let costs = [
+            ("evaluate", 1000.0),
+            ("prepare", 600.0),
+            ("cable_drag", 300.0),
+            ("decoy_aero", 100.0),
+            ("solve_tensions", 350.0),
+            ("accelerations", 60.0),
+        ];
+        let cost = |pass: &str| costs.iter().find(|(p, _)| *p == pass).map(|(_, c)| *c);
+        let b = breakdown(&cost).unwrap();
+        assert_eq!(b.kinematics_assembly, 200.0);
+        assert_eq!(b.sum(), 1010.0);
+        assert!(breakdown(&|_| None).is_none());
+        let mut inputs = Inputs::default();
+        for (pass, c) in costs {
+            inputs
+                .instructions
+                .insert(format!("breakdown/f64_graded16/{pass}"), c as u64);
+        }
+        let md = render(&inputs);
+        assert!(
+            md.contains("| kinematics + assembly (prepare − aerodynamics) | - | - | - | - |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| kinematics + assembly (prepare − aerodynamics) | 200 (20 %) | - |"),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "| sweeps (solve_tensions: row assembly + forward sweep, back sweep) | 350 (35 %) |"
+            ),
+            "{md}"
+        );
+    }
+
+    #[test]
     fn report_names_its_command_and_targets() {
         let mut inputs = Inputs {
             pinocchio: Err("pinocchio is not installed".into()),
             ..Inputs::default()
         };
         for (n, ns) in [(64, 10_000.0), (300, 47_000.0), (4096, 700_000.0)] {
-            inputs.wall.insert(wall_step("f64", n), ns);
+            inputs
+                .wall
+                .insert(wall_step_key(System::Pendulum, Variant::F64, n), ns);
+            inputs
+                .wall
+                .insert(wall_step_key(System::Towed, Variant::F64, n), 1.5 * ns);
         }
+        inputs.wall.insert(
+            wall_step_key(System::Towed, Variant::Dense, 300),
+            47_000.0 * 1.5 * 800.0,
+        );
         inputs.wall.insert(wall_tension("dense", 300), 5e6);
         inputs.wall.insert(wall_tension("two_sweep", 300), 1e4);
         inputs.firmware.push(FirmwareRow {
@@ -920,8 +1489,59 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("45,000 max"), "{md}");
-        let plot = scaling_plot(&inputs);
-        assert_eq!(plot.series.len(), 1);
-        assert_eq!(plot.series[0].x.len(), 3);
+        assert!(md.contains("O(N), towed system: wall-clock"), "{md}");
+        // A wall-clock failure with flat instruction counts points at the machine.
+        let mut loaded = Inputs::default();
+        for (n, ns, c) in [
+            (64, 10_000.0, 1_000_000),
+            (300, 47_000.0, 4_700_000),
+            (4096, 1_000_000.0, 64_000_000),
+        ] {
+            let (wall, instr) = (
+                wall_step_key(System::Pendulum, Variant::F64, n),
+                instr_step_key(System::Pendulum, Variant::F64, n),
+            );
+            loaded.wall.insert(wall, ns);
+            loaded.instructions.insert(instr, c);
+        }
+        let md_loaded = render(&loaded);
+        assert!(
+            md_loaded.contains(
+                "+56.2 % (the instruction counts are flat: probably a loaded machine, rerun) | **FAIL**"
+            ),
+            "{md_loaded}"
+        );
+        assert!(
+            md.contains("with the dense derivatives at N = 300 (wall clock) | 800x | **pass**"),
+            "{md}"
+        );
+        // The Cortex-M7 table is an input; empty, it says so.
+        assert!(
+            md.contains("## Firmware: Cortex-M7 (mps2-an500), f64"),
+            "{md}"
+        );
+        assert!(md.contains("| - | not measured | | | |"), "{md}");
+        let plots = scaling_plot(&inputs);
+        assert_eq!(plots.len(), 2);
+        assert_eq!(plots[0].series.len(), 1);
+        assert_eq!(plots[0].series[0].x.len(), 3);
+        assert_eq!(plots[1].series.len(), 1);
+    }
+
+    #[test]
+    fn measured_cortex_m7_rows_are_rendered() {
+        let inputs = Inputs {
+            firmware_m7: vec![FirmwareRow {
+                segments: 16,
+                outcome: Ok((20_000, 18_000)),
+            }],
+            ..Inputs::default()
+        };
+        let md = render(&inputs);
+        let m7 = &md[md.find("## Firmware: Cortex-M7").unwrap()..];
+        assert!(
+            m7.contains("| 16 | 20,000 | 18,000 | 10,000 | 625 |"),
+            "{md}"
+        );
     }
 }

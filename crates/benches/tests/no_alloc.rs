@@ -1,5 +1,6 @@
 //! Zero heap allocations per step: `Solver::step` and `Solver::outputs` must not
-//! touch the allocator, so the same code runs on a target without one and its
+//! touch the allocator (the pendulum, and the towed model with its aerodynamics and
+//! decoy, graded and uniform, f32 and f64), so the same code runs on a target without one and its
 //! timing has no allocator noise.
 //!
 //! A counting global allocator wraps [`System`] and counts, per thread, every
@@ -13,8 +14,8 @@ use std::cell::Cell;
 use std::hint::black_box;
 
 use benches::{
-    GRADED_COUNT, PENDULUM_DT, TOWED_DT, cruise_path, fixed_anchor, graded_layout, pendulum_solver,
-    towed_solver,
+    GRADED_COUNT, PENDULUM_DT, TOWED_DT, TOWED_SCALING_DT, cruise_path, fixed_anchor,
+    graded_layout, pendulum_solver, towed_solver, towed_uniform_solver,
 };
 use solver_core::{FlightPath, Real, Solver};
 
@@ -166,5 +167,33 @@ fn towed_graded16_f64_steps_do_not_allocate() {
     assert_eq!(
         count, 0,
         "{CALLS} towed output evaluations (f64) allocated {count} times"
+    );
+}
+
+#[test]
+fn towed_uniform300_steps_do_not_allocate() {
+    let mut solver = towed_uniform_solver::<f64, 300>(300);
+    let path = cruise_path::<f64>();
+    let count = allocations_per_steps(&mut *solver, &path, TOWED_SCALING_DT);
+    assert_eq!(
+        count, 0,
+        "{CALLS} towed steps (uniform 300, f64) allocated {count} times"
+    );
+    let count = allocations_per_outputs(&mut *solver, &path);
+    assert_eq!(
+        count, 0,
+        "{CALLS} towed output evaluations (uniform 300, f64) allocated {count} times"
+    );
+    let mut solver = towed_uniform_solver::<f32, 300>(300);
+    let path = cruise_path::<f32>();
+    let count = allocations_per_steps(&mut *solver, &path, TOWED_SCALING_DT);
+    assert_eq!(
+        count, 0,
+        "{CALLS} towed steps (uniform 300, f32) allocated {count} times"
+    );
+    let count = allocations_per_outputs(&mut *solver, &path);
+    assert_eq!(
+        count, 0,
+        "{CALLS} towed output evaluations (uniform 300, f32) allocated {count} times"
     );
 }
