@@ -13,9 +13,11 @@
 //! - [`scenario`]: the scenario the firmware runs (the same source file).
 #![deny(missing_docs)]
 
+pub mod defmt;
 pub mod firmware;
 pub mod qemu;
 pub mod report;
+pub mod serial;
 
 // The firmware's own scenario module, compiled here unchanged, so that the host
 // replays exactly the flight path and step sequence the target runs.
