@@ -1,172 +1,77 @@
 //! Frames and clearances: the flight-path frame the outputs are expressed in, the
 //! exhaust plume and the aircraft's collision envelope.
+//!
+//! The maths lives in `decoy_link::geometry` (no_std, generic over the scalar), so
+//! that `decoy simulate` and the onboard controller compute the flight-path frame
+//! and the clearances with the same code; this module fixes it to f64 and builds
+//! it from the system configuration.
 
-use decoy_config::AircraftConfig;
+use decoy_config::{ConfigError, SystemConfig};
+use decoy_link::ControllerConfig;
 use nalgebra::Vector3;
-use solver_core::AircraftState;
+use solver_core::{Real, SegmentLayout};
 
-/// Speed below which the flight-path frame falls back to the aircraft's axes, m/s.
-const MIN_SPEED_MPS: f64 = 1e-6;
+pub use decoy_link::geometry::cable_plume_clearance;
 
 /// The flight-path frame at one instant: x along the aircraft's velocity, y
 /// horizontal and to the right of it, z = x cross y (downward, perpendicular to
-/// the flight path in its vertical plane). Reduces to NED rotated to the heading
-/// in level flight.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FlightPathFrame {
-    /// Unit x axis (along the velocity), NED.
-    pub x: Vector3<f64>,
-    /// Unit y axis (horizontal, right), NED.
-    pub y: Vector3<f64>,
-    /// Unit z axis (down, perpendicular to x and y), NED.
-    pub z: Vector3<f64>,
-}
+/// the flight path in its vertical plane); see [`decoy_link::FlightPathFrame`].
+pub type FlightPathFrame = decoy_link::FlightPathFrame<f64>;
 
-impl FlightPathFrame {
-    /// The frame of `aircraft`'s velocity; for a (near) zero or vertical velocity
-    /// the aircraft's body axes stand in for the missing directions.
-    pub fn of(aircraft: &AircraftState<f64>) -> Self {
-        let rotation = aircraft.rotation();
-        let speed = aircraft.velocity.norm();
-        let x = if speed > MIN_SPEED_MPS {
-            aircraft.velocity / speed
-        } else {
-            rotation * Vector3::x()
-        };
-        let right = Vector3::z().cross(&x);
-        let y = if right.norm() > 1e-9 {
-            right.normalize()
-        } else {
-            let body_y = rotation * Vector3::y();
-            (body_y - x * x.dot(&body_y)).normalize()
-        };
-        FlightPathFrame {
-            x,
-            y,
-            z: x.cross(&y),
-        }
-    }
+/// The hot exhaust plume, a truncated cone in the aircraft body frame; see
+/// [`decoy_link::ExhaustPlume`].
+pub type ExhaustPlume = decoy_link::ExhaustPlume<f64>;
 
-    /// The components of the NED vector `r` along x, y, z.
-    pub fn components(&self, r: &Vector3<f64>) -> Vector3<f64> {
-        Vector3::new(self.x.dot(r), self.y.dot(r), self.z.dot(r))
+/// The aircraft's collision capsule in the body frame; see [`decoy_link::Envelope`].
+pub type Envelope = decoy_link::Envelope<f64>;
+
+/// The plume of an aircraft configuration, in precision `T`.
+pub fn plume_from_config<T: Real>(
+    aircraft: &decoy_config::AircraftConfig,
+) -> decoy_link::ExhaustPlume<T> {
+    let axis = Vector3::from(aircraft.exhaust_axis).normalize();
+    let t = T::lit;
+    decoy_link::ExhaustPlume {
+        nozzle: decoy_config::vec3(aircraft.exhaust_nozzle),
+        axis: solver_core::Vec3::new(t(axis.x), t(axis.y), t(axis.z)),
+        nozzle_radius: t(aircraft.exhaust_nozzle_radius),
+        tan_half_angle: t(aircraft.exhaust_half_angle_deg.to_radians().tan()),
+        length: t(aircraft.exhaust_length),
     }
 }
 
-/// The hot exhaust plume: a truncated cone in the aircraft body frame starting at
-/// the nozzle exit (radius `nozzle_radius`) and widening along `axis` with
-/// `half_angle` for `length` metres.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExhaustPlume {
-    /// Nozzle exit centre, body frame, m.
-    pub nozzle: Vector3<f64>,
-    /// Unit plume axis, body frame.
-    pub axis: Vector3<f64>,
-    /// Nozzle exit radius, m.
-    pub nozzle_radius: f64,
-    /// Tangent of the half angle.
-    pub tan_half_angle: f64,
-    /// Length of the plume, m.
-    pub length: f64,
-}
-
-impl ExhaustPlume {
-    /// The plume of an aircraft configuration.
-    pub fn from_config(aircraft: &AircraftConfig) -> Self {
-        let axis = Vector3::from(aircraft.exhaust_axis).normalize();
-        ExhaustPlume {
-            nozzle: Vector3::from(aircraft.exhaust_nozzle),
-            axis,
-            nozzle_radius: aircraft.exhaust_nozzle_radius,
-            tan_half_angle: aircraft.exhaust_half_angle_deg.to_radians().tan(),
-            length: aircraft.exhaust_length,
-        }
-    }
-
-    /// Signed distance from the body-frame point `p` to the plume's surface
-    /// (nozzle disc, conical side, end disc), m: positive outside, negative inside.
-    ///
-    /// Computed in the meridian half-plane: s along the axis from the nozzle, rho
-    /// from the axis; the plume's section there is the trapezoid (0,0), (0,r0),
-    /// (L, r0 + L tan a), (L,0), and the distance to the solid of revolution is
-    /// the distance to the trapezoid's three edges off the axis.
-    pub fn clearance(&self, p: &Vector3<f64>) -> f64 {
-        let d = p - self.nozzle;
-        let s = d.dot(&self.axis);
-        let rho = (d - self.axis * s).norm();
-        let end_radius = self.nozzle_radius + self.length * self.tan_half_angle;
-        let q = [s, rho];
-        let distance = segment_distance(q, [0.0, 0.0], [0.0, self.nozzle_radius])
-            .min(segment_distance(
-                q,
-                [0.0, self.nozzle_radius],
-                [self.length, end_radius],
-            ))
-            .min(segment_distance(
-                q,
-                [self.length, end_radius],
-                [self.length, 0.0],
-            ));
-        let inside =
-            (0.0..=self.length).contains(&s) && rho <= self.nozzle_radius + s * self.tan_half_angle;
-        if inside { -distance } else { distance }
+/// The collision capsule of an aircraft configuration, in precision `T`.
+pub fn envelope_from_config<T: Real>(
+    aircraft: &decoy_config::AircraftConfig,
+) -> decoy_link::Envelope<T> {
+    decoy_link::Envelope {
+        fore: decoy_config::vec3(aircraft.envelope_fore),
+        aft: decoy_config::vec3(aircraft.envelope_aft),
+        radius: T::lit(aircraft.envelope_radius),
     }
 }
 
-/// The aircraft's collision envelope: a capsule (a segment swept by a sphere) in
-/// the body frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Envelope {
-    /// Fore end of the axis, body frame, m.
-    pub fore: Vector3<f64>,
-    /// Aft end of the axis, body frame, m.
-    pub aft: Vector3<f64>,
-    /// Radius, m.
-    pub radius: f64,
-}
-
-impl Envelope {
-    /// The envelope of an aircraft configuration.
-    pub fn from_config(aircraft: &AircraftConfig) -> Self {
-        Envelope {
-            fore: Vector3::from(aircraft.envelope_fore),
-            aft: Vector3::from(aircraft.envelope_aft),
-            radius: aircraft.envelope_radius,
-        }
-    }
-
-    /// Distance from the body-frame point `p` to the capsule's surface, m
-    /// (negative inside).
-    pub fn clearance(&self, p: &Vector3<f64>) -> f64 {
-        let axis = self.aft - self.fore;
-        let length2 = axis.norm_squared();
-        let t = if length2 > 0.0 {
-            ((p - self.fore).dot(&axis) / length2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (p - (self.fore + axis * t)).norm() - self.radius
-    }
-}
-
-/// Distance from `q` to the segment a-b in the plane.
-fn segment_distance(q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let ab = [b[0] - a[0], b[1] - a[1]];
-    let aq = [q[0] - a[0], q[1] - a[1]];
-    let length2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if length2 > 0.0 {
-        ((aq[0] * ab[0] + aq[1] * ab[1]) / length2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let dx = aq[0] - t * ab[0];
-    let dy = aq[1] - t * ab[1];
-    (dx * dx + dy * dy).sqrt()
+/// The onboard controller's configuration for `config` with `layout`: the model,
+/// the plume and capsule, the allowable tension (what the firmware's build script
+/// generates from the same files).
+pub fn controller_config<T: Real>(
+    config: &SystemConfig,
+    layout: SegmentLayout<T>,
+) -> Result<ControllerConfig<T>, ConfigError> {
+    Ok(ControllerConfig {
+        params: config.model_params(layout)?,
+        geometry: decoy_link::Geometry {
+            plume: plume_from_config(&config.aircraft),
+            envelope: envelope_from_config(&config.aircraft),
+        },
+        allowable_tension_n: T::lit(config.cable.allowable_tension),
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use solver_core::AircraftState;
 
     fn plume() -> ExhaustPlume {
         ExhaustPlume {

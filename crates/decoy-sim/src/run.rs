@@ -11,7 +11,10 @@ use serde::{Deserialize, Serialize};
 use solver_core::{AircraftState, Model, Outputs, SegmentLayout, SolveError, Solver, State, trim};
 
 use crate::error::SimError;
-use crate::geometry::{Envelope, ExhaustPlume, FlightPathFrame};
+use crate::geometry::{
+    Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance, envelope_from_config,
+    plume_from_config,
+};
 use crate::profile::FlightProfile;
 use crate::scenario::{MAX_SEGMENTS, RunPlan, Scenario};
 
@@ -267,26 +270,17 @@ impl Probe {
         let rotation = aircraft.rotation();
         let to_body =
             |p: &Vector3<f64>| rotation.inverse_transform_vector(&(p - aircraft.position));
-        let mut exhaust_clearance = f64::INFINITY;
-        let mut exhaust_along = 0.0;
-        let mut check = |p: &Vector3<f64>, along: f64| {
-            let c = self.plume.clearance(&to_body(p));
-            if c < exhaust_clearance {
-                exhaust_clearance = c;
-                exhaust_along = along;
-            }
+        // Joints and segment midpoints, in the order decoy-link numbers them.
+        let (exhaust_clearance, at) = cable_plume_clearance(
+            &self.plume,
+            aircraft,
+            (0..=n).map(|j| out.joint_position(j)),
+        );
+        let exhaust_along = if at % 2 == 0 {
+            self.joint_along[at / 2]
+        } else {
+            0.5 * (self.joint_along[at / 2] + self.joint_along[at / 2 + 1])
         };
-        let mut previous = out.joint_position(0);
-        check(&previous, 0.0);
-        for j in 1..=n {
-            let p = out.joint_position(j);
-            check(
-                &((previous + p) * 0.5),
-                0.5 * (self.joint_along[j - 1] + self.joint_along[j]),
-            );
-            check(&p, self.joint_along[j]);
-            previous = p;
-        }
         let (cg, euler, aoa, decoy_clearance) = match out.decoy() {
             Some(d) => {
                 let c = frame.components(&(d.cg_position - aircraft.position));
@@ -635,8 +629,8 @@ pub(crate) fn probe<const N: usize>(
         joint_along.push(joint_along[joint_along.len() - 1] + l);
     }
     Probe {
-        plume: ExhaustPlume::from_config(&config.aircraft),
-        envelope: Envelope::from_config(&config.aircraft),
+        plume: plume_from_config(&config.aircraft),
+        envelope: envelope_from_config(&config.aircraft),
         lateral_sign,
         joint_along,
     }
@@ -1024,5 +1018,61 @@ mod tests {
         assert_eq!(settling_time(&samples), Some(2.0));
         samples.push(sample(3.6, 120.0));
         assert_eq!(settling_time(&samples), None);
+    }
+
+    /// The onboard controller (decoy-link, f64) and `decoy simulate`'s probe report
+    /// the same tensions, decoy position and clearances for the same trimmed state.
+    #[test]
+    fn the_controller_and_the_probe_agree() {
+        use decoy_link::{AircraftStateFrame, Controller, DeviceMessage, HostMessage, NoCounter};
+        let config = SystemConfig::builtin().unwrap();
+        let layout = config.embedded_layout();
+        let model = config.model::<f64, 16>(layout).unwrap();
+        for mach in [0.5, 0.6, 0.8] {
+            let speed = config.mach_to_speed(9000.0, mach).unwrap();
+            let aircraft = AircraftState::<f64>::level(9000.0, speed);
+            let mut solver = Solver::new(model, trim(&model, &aircraft).unwrap()).unwrap();
+            let path = solver_core::Uniform { initial: aircraft };
+            let probe = probe(&config, &model, 1.0);
+            let sample = probe.sample(&solver.outputs(&path).unwrap(), &aircraft, None);
+
+            let mut controller: Controller<f64, 16> =
+                Controller::new(crate::geometry::controller_config(&config, layout).unwrap())
+                    .unwrap();
+            let frame = AircraftStateFrame {
+                seq: 1,
+                time_s: 0.0,
+                position_ned_m: [0.0, 0.0, -9000.0],
+                velocity_ned_mps: [speed as f32, 0.0, 0.0],
+                acceleration_ned_mps2: [0.0; 3],
+                attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
+                body_rate_radps: [0.0; 3],
+                body_angular_acceleration_radps2: [0.0; 3],
+            };
+            let DeviceMessage::Output(o) =
+                controller.handle(HostMessage::State(frame), &mut NoCounter)
+            else {
+                panic!("no output at Mach {mach}");
+            };
+            // The frame carries the speed in f32: agreement to that rounding.
+            let close = |a: f32, b: f64, tol: f64| {
+                assert!(
+                    (f64::from(a) - b).abs() <= tol * (1.0 + b.abs()),
+                    "Mach {mach}: {a} vs {b}"
+                )
+            };
+            close(o.connection_tension_n, sample.tension_connection, 1e-5);
+            close(o.tow_tension_n, sample.tension_tow, 1e-5);
+            close(o.cable_clearance_exhaust_m, sample.exhaust_clearance, 1e-5);
+            close(o.decoy_clearance_aircraft_m, sample.decoy_clearance, 1e-5);
+            // The probe reports "behind" and "below"; the frame x forward, z down.
+            close(o.decoy_position_fp_m[0], -sample.cg[0], 1e-5);
+            close(o.decoy_position_fp_m[2], sample.cg[2], 1e-5);
+            close(
+                o.decoy_euler_rel_rad[1],
+                sample.euler_deg[1].to_radians(),
+                1e-5,
+            );
+        }
     }
 }

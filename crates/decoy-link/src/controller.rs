@@ -1,0 +1,649 @@
+//! The decoy controller: a pure state machine (no hardware, no time source of its
+//! own) that turns host messages into answers. The firmware wraps it with a UART
+//! and SysTick; the host runs the same type as its reference.
+
+use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
+use solver_core::{
+    AircraftState, Atmosphere, ConfigError, FlightPath, Model, ModelParams, Real, SolveError,
+    Solver, State, Vec3, trim,
+};
+
+use crate::framing::{Decoder, FrameError};
+use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
+use crate::messages::{
+    AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
+    PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
+};
+use crate::path::FramePath;
+use crate::validate::{is_finite, validate_streamed};
+
+/// The longest RK4 step, s: a frame interval dt is integrated in
+/// n = ceil(dt / MAX_STEP_S - 1e-9) steps of dt / n.
+pub const MAX_STEP_S: f64 = 0.005;
+/// The longest accepted interval between two State frames, s.
+pub const MAX_TIME_JUMP_S: f64 = 0.1;
+/// Rounding allowance of the time-jump check, s: an interval of exactly
+/// [`MAX_TIME_JUMP_S`] computed as a difference of two times is accepted.
+pub const TIME_TOLERANCE_S: f64 = 1e-9;
+/// Link silence (no valid frame) after which the controller reports DEGRADED, ms.
+pub const SILENCE_MS: u32 = 200;
+/// The control period the host is expected to use, us (reported in Hello).
+pub const CONTROL_PERIOD_US: u32 = 10_000;
+/// Decoy-to-aircraft clearance below which DECOY_NEAR_AIRCRAFT is set, m.
+pub const DECOY_NEAR_AIRCRAFT_M: f64 = 1.0;
+/// The highest built-in profile rate accepted, mrad/s.
+pub const MAX_PROFILE_RATE_MILLI_RADPS: u16 = 1000;
+
+/// Altitude of the built-in profiles, m.
+const PROFILE_ALTITUDE_M: f64 = 9000.0;
+
+/// A source of instruction (or tick) counts for [`OutputFrame::instructions`].
+pub trait InstructionCounter {
+    /// The current count (a free-running, wrapping up-counter).
+    fn now(&self) -> u32;
+    /// The count since `start` (a reading of [`InstructionCounter::now`]).
+    fn elapsed(&self, start: u32) -> u32 {
+        self.now().wrapping_sub(start)
+    }
+}
+
+/// A counter that always reads 0 (hosts that do not measure).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoCounter;
+
+impl InstructionCounter for NoCounter {
+    fn now(&self) -> u32 {
+        0
+    }
+}
+
+/// Everything the controller is built from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ControllerConfig<T: Real> {
+    /// The solver's model (environment, connection point, cable, layout, decoy).
+    pub params: ModelParams<T>,
+    /// Exhaust plume and collision capsule, aircraft body frame.
+    pub geometry: Geometry<T>,
+    /// Allowable connection tension, N (OVER_TENSION above it).
+    pub allowable_tension_n: T,
+}
+
+/// Why a controller could not be built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ControllerError {
+    /// The model parameters are invalid.
+    Config(ConfigError),
+    /// The solver rejected its initial state.
+    Solve(SolveError),
+    /// The allowable tension is not a positive finite number.
+    AllowableTension,
+}
+
+impl core::fmt::Display for ControllerError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ControllerError::Config(e) => write!(f, "model: {e}"),
+            ControllerError::Solve(e) => write!(f, "solver: {e}"),
+            ControllerError::AllowableTension => {
+                f.write_str("allowable tension must be positive and finite")
+            }
+        }
+    }
+}
+
+impl core::error::Error for ControllerError {}
+
+/// What the controller integrates after a trim.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Run {
+    /// The last accepted State frame.
+    last: AircraftStateFrame,
+    /// `time_s` of the frame the run was trimmed at (time 0 of a built-in profile).
+    start_time_s: f64,
+    /// Origin of the solver's positions, NED, m (horizontal position at the trim).
+    origin: [f64; 3],
+}
+
+/// Everything that decides the controller's next answers except the counters:
+/// two controllers with equal snapshots answer the same frames identically.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ControllerSnapshot<T: Real, const N: usize> {
+    /// The solver state.
+    pub state: State<T, N>,
+    /// The selected profile.
+    pub profile: Profile,
+    /// The last accepted State frame, if trimmed.
+    pub last_frame: Option<AircraftStateFrame>,
+    /// Link silent.
+    pub degraded: bool,
+    /// The next Output carries RECOVERED.
+    pub recovered_pending: bool,
+    /// Hazard flags of the last Output.
+    pub hazard_flags: u16,
+}
+
+/// The decoy controller with a solver of capacity `N` in precision `T`.
+#[derive(Clone, Debug)]
+pub struct Controller<T: Real, const N: usize> {
+    solver: Solver<T, N>,
+    geometry: Geometry<T>,
+    allowable_tension_n: T,
+    profile: Profile,
+    run: Option<Run>,
+    counters: Counters,
+    degraded: bool,
+    recovered_pending: bool,
+    hazard_flags: u16,
+    /// A valid frame arrived since the last [`Controller::poll_silence`].
+    activity: bool,
+    last_activity_ms: Option<u32>,
+}
+
+impl<T: Real, const N: usize> Controller<T, N> {
+    /// A controller for `config`, waiting for its first State frame to trim at.
+    pub fn new(config: ControllerConfig<T>) -> Result<Self, ControllerError> {
+        let model = Model::<T, N>::new(config.params).map_err(ControllerError::Config)?;
+        Self::from_model(model, config.geometry, config.allowable_tension_n)
+    }
+
+    /// [`Controller::new`] with an already built model (lets the firmware build
+    /// the controller in place in a `static`).
+    pub fn from_model(
+        model: Model<T, N>,
+        geometry: Geometry<T>,
+        allowable_tension_n: T,
+    ) -> Result<Self, ControllerError> {
+        if !(allowable_tension_n.finite() && allowable_tension_n > T::zero()) {
+            return Err(ControllerError::AllowableTension);
+        }
+        // The default state is never integrated: every run starts from a trim.
+        let solver = Solver::new(model, State::default()).map_err(ControllerError::Solve)?;
+        Ok(Controller {
+            solver,
+            geometry,
+            allowable_tension_n,
+            profile: Profile::Streamed,
+            run: None,
+            counters: Counters::default(),
+            degraded: false,
+            recovered_pending: false,
+            hazard_flags: 0,
+            activity: false,
+            last_activity_ms: None,
+        })
+    }
+
+    /// The Hello message of this controller on `board`.
+    pub fn hello(&self, board: Board) -> DeviceMessage {
+        DeviceMessage::Hello(Hello {
+            protocol_version: PROTOCOL_VERSION,
+            board,
+            precision_bits: (core::mem::size_of::<T>() * 8) as u8,
+            segments: self.segments(),
+            capacity: N as u16,
+            control_period_us: CONTROL_PERIOD_US,
+            max_step_us: libm::round(MAX_STEP_S * 1e6) as u32,
+        })
+    }
+
+    /// The solver state.
+    pub fn state(&self) -> &State<T, N> {
+        self.solver.state()
+    }
+
+    /// The solver (model, state).
+    pub fn solver(&self) -> &Solver<T, N> {
+        &self.solver
+    }
+
+    /// The counters since construction.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// The selected profile.
+    pub fn profile(&self) -> Profile {
+        self.profile
+    }
+
+    /// True once a State frame has been trimmed at (until the next reset).
+    pub fn is_trimmed(&self) -> bool {
+        self.run.is_some()
+    }
+
+    /// Everything but the counters (see [`ControllerSnapshot`]).
+    pub fn snapshot(&self) -> ControllerSnapshot<T, N> {
+        ControllerSnapshot {
+            state: *self.solver.state(),
+            profile: self.profile,
+            last_frame: self.run.map(|r| r.last),
+            degraded: self.degraded,
+            recovered_pending: self.recovered_pending,
+            hazard_flags: self.hazard_flags,
+        }
+    }
+
+    /// The current [`StatusFlags`] bits (as in a Status frame).
+    pub fn flags(&self) -> u16 {
+        let mut flags = self.hazard_flags;
+        if self.run.is_some() {
+            flags |= StatusFlags::TRIMMED;
+        }
+        if self.degraded {
+            flags |= StatusFlags::DEGRADED;
+        }
+        if self.profile != Profile::Streamed {
+            flags |= StatusFlags::PROFILE_BUILTIN;
+        }
+        flags
+    }
+
+    /// The Status frame now.
+    pub fn status(&self) -> DeviceMessage {
+        DeviceMessage::Status(StatusFrame {
+            protocol_version: PROTOCOL_VERSION,
+            flags: self.flags(),
+            segments: self.segments(),
+            time_s: self.run.map_or(0.0, |r| r.last.time_s),
+            counters: self.counters,
+        })
+    }
+
+    fn segments(&self) -> u16 {
+        self.solver.model().segment_count() as u16
+    }
+
+    /// Answers one decoded host message. `counter` measures the instructions a
+    /// State frame costs.
+    pub fn handle(
+        &mut self,
+        message: HostMessage,
+        counter: &mut impl InstructionCounter,
+    ) -> DeviceMessage {
+        match message {
+            HostMessage::State(frame) => self.on_state(&frame, counter),
+            HostMessage::Command(command) => self.on_command(command),
+        }
+    }
+
+    /// The answer to a frame that could not be decoded: a Rejected with no seq.
+    pub fn on_frame_error(&mut self, error: FrameError) -> DeviceMessage {
+        let reason = match error {
+            FrameError::Oversize => RejectReason::Oversize,
+            FrameError::Cobs => RejectReason::Cobs,
+            FrameError::Crc => RejectReason::Crc,
+            FrameError::Truncated => RejectReason::Truncated,
+            FrameError::Decode => RejectReason::Decode,
+        };
+        self.reject(None, reason)
+    }
+
+    /// Feeds received bytes through `decoder` and calls `answer` with the answer
+    /// to every frame they complete (a decoded message or a frame error).
+    pub fn handle_bytes<const CAP: usize>(
+        &mut self,
+        decoder: &mut Decoder<CAP>,
+        bytes: &[u8],
+        counter: &mut impl InstructionCounter,
+        mut answer: impl FnMut(&DeviceMessage),
+    ) {
+        for &byte in bytes {
+            let reply = match decoder.push::<HostMessage>(byte) {
+                None => continue,
+                Some(Ok(message)) => self.handle(message, counter),
+                Some(Err(error)) => self.on_frame_error(error),
+            };
+            answer(&reply);
+        }
+    }
+
+    /// Link supervision, called often with a millisecond clock: after
+    /// [`SILENCE_MS`] with no valid frame it sets DEGRADED, counts a silence and
+    /// returns one Status frame; nothing otherwise. The next valid frame clears
+    /// DEGRADED and the next Output carries RECOVERED. The silence is measured
+    /// from the poll that first saw the last valid frame; supervision starts with
+    /// the first valid frame, so a host that is slow to start is not reported.
+    pub fn poll_silence(&mut self, now_ms: u32) -> Option<DeviceMessage> {
+        if self.activity {
+            self.activity = false;
+            self.last_activity_ms = Some(now_ms);
+            return None;
+        }
+        let last = self.last_activity_ms?;
+        if !self.degraded && now_ms.wrapping_sub(last) >= SILENCE_MS {
+            self.degraded = true;
+            self.counters.silences = self.counters.silences.wrapping_add(1);
+            return Some(self.status());
+        }
+        None
+    }
+
+    fn reject(&mut self, seq: Option<u32>, reason: RejectReason) -> DeviceMessage {
+        let count = self.counters.count(reason);
+        DeviceMessage::Rejected(Rejected { seq, reason, count })
+    }
+
+    /// A valid frame arrived: counts it and ends a silence.
+    fn accepted(&mut self) {
+        self.counters.frames_ok = self.counters.frames_ok.wrapping_add(1);
+        self.activity = true;
+        if self.degraded {
+            self.degraded = false;
+            self.recovered_pending = true;
+        }
+    }
+
+    fn on_command(&mut self, command: Command) -> DeviceMessage {
+        match command {
+            Command::ResetToTrim => self.run = None,
+            Command::SelectProfile(profile) => {
+                let rate = match profile {
+                    Profile::PullUp { rate_milli_radps } | Profile::Turn { rate_milli_radps } => {
+                        rate_milli_radps
+                    }
+                    _ => 0,
+                };
+                if rate > MAX_PROFILE_RATE_MILLI_RADPS {
+                    return self.reject(None, RejectReason::OutOfRange);
+                }
+                self.profile = profile;
+                self.run = None;
+            }
+            Command::GetStatus => {}
+            Command::Ping { nonce } => {
+                self.accepted();
+                return DeviceMessage::Pong {
+                    nonce,
+                    protocol_version: PROTOCOL_VERSION,
+                };
+            }
+        }
+        self.accepted();
+        self.status()
+    }
+
+    fn on_state(
+        &mut self,
+        frame: &AircraftStateFrame,
+        counter: &mut impl InstructionCounter,
+    ) -> DeviceMessage {
+        let start = counter.now();
+        let seq = Some(frame.seq);
+        let params = *self.solver.model().params();
+        let checked = match self.profile {
+            Profile::Streamed => validate_streamed(
+                frame,
+                &params.environment.atmosphere,
+                &params.environment.wind,
+            ),
+            _ if is_finite(frame) => Ok(()),
+            _ => Err(RejectReason::NonFinite),
+        };
+        if let Err(reason) = checked {
+            return self.reject(seq, reason);
+        }
+        if let Some(run) = &self.run {
+            let dt = frame.time_s - run.last.time_s;
+            if !(dt > 0.0) {
+                return self.reject(seq, RejectReason::TimeNotIncreasing);
+            }
+            if dt > MAX_TIME_JUMP_S + TIME_TOLERANCE_S {
+                return self.reject(seq, RejectReason::TimeJump);
+            }
+        }
+        let saved = *self.solver.state();
+        let result = match self.run {
+            None => self.start_run(frame),
+            Some(run) => self.advance(&run, frame),
+        };
+        match result {
+            Ok((run, steps)) => match self.output(&run, frame, steps) {
+                Ok(mut output) => {
+                    self.run = Some(run);
+                    self.accepted();
+                    self.hazard_flags = output.flags
+                        & (StatusFlags::OVER_TENSION
+                            | StatusFlags::CABLE_IN_PLUME
+                            | StatusFlags::DECOY_NEAR_AIRCRAFT);
+                    if self.recovered_pending {
+                        self.recovered_pending = false;
+                        output.flags |= StatusFlags::RECOVERED;
+                    }
+                    output.instructions = counter.elapsed(start);
+                    DeviceMessage::Output(output)
+                }
+                Err(_) => {
+                    self.restore(saved);
+                    self.reject(seq, RejectReason::SolverFailure)
+                }
+            },
+            Err(reason) => {
+                self.restore(saved);
+                self.reject(seq, reason)
+            }
+        }
+    }
+
+    fn restore(&mut self, saved: State<T, N>) {
+        // `saved` was the solver's own state, so it is finite and accepted.
+        let _ = self.solver.set_state(saved);
+    }
+
+    /// The built-in profile's flight path, if one is selected.
+    fn builtin_path(&self) -> Option<BuiltinPath> {
+        let env = self.solver.model().params().environment;
+        let atmosphere = match env.atmosphere {
+            Atmosphere::Isa1976 {
+                gas_constant,
+                gamma,
+                gravity,
+            } => Atmosphere::<f64>::Isa1976 {
+                gas_constant: gas_constant.to_f64(),
+                gamma: gamma.to_f64(),
+                gravity: gravity.to_f64(),
+            },
+            Atmosphere::Vacuum => Atmosphere::Vacuum,
+        };
+        let a = atmosphere
+            .at(PROFILE_ALTITUDE_M)
+            .map_or(0.0, |air| air.speed_of_sound);
+        let h = PROFILE_ALTITUDE_M;
+        Some(match self.profile {
+            Profile::Streamed => return None,
+            Profile::Steady => BuiltinPath::Level(LevelAcceleration::steady(h, 0.8 * a)),
+            Profile::Acceleration => BuiltinPath::Level(LevelAcceleration {
+                altitude: h,
+                initial_speed: 0.6 * a,
+                final_speed: 0.8 * a,
+                start: 2.0,
+                acceleration: 10.0,
+            }),
+            Profile::PullUp { rate_milli_radps } => BuiltinPath::PullUp(PullUp {
+                altitude: h,
+                speed: 0.6 * a,
+                start: 2.0,
+                rate: f64::from(rate_milli_radps) * 1e-3,
+                duration: 5.0,
+            }),
+            Profile::Turn { rate_milli_radps } => BuiltinPath::Turn(LevelTurn {
+                altitude: h,
+                speed: 0.8 * a,
+                start: 0.0,
+                rate: f64::from(rate_milli_radps) * 1e-3,
+                gravity: env.gravity.to_f64(),
+            }),
+        })
+    }
+
+    /// Trims at the frame (streamed) or at the profile's start (built-in).
+    fn start_run(&mut self, frame: &AircraftStateFrame) -> Result<(Run, u16), RejectReason> {
+        let p = frame.position_ned_m;
+        let run = Run {
+            last: *frame,
+            start_time_s: frame.time_s,
+            origin: [p[0], p[1], 0.0],
+        };
+        let (aircraft, time): (AircraftState<T>, f64) = match self.builtin_path() {
+            Some(path) => (path.state_at(0.0), 0.0),
+            None => (
+                FramePath::single(frame, run.origin).state_at(frame.time_s),
+                frame.time_s,
+            ),
+        };
+        // Trim in steady straight flight: the frame's position, velocity and
+        // attitude, its acceleration and rotation set to zero.
+        let steady = AircraftState {
+            acceleration: Vec3::zeros(),
+            angular_rate: Vec3::zeros(),
+            angular_acceleration: Vec3::zeros(),
+            ..aircraft
+        };
+        let mut state = trim(self.solver.model(), &steady).map_err(|_| RejectReason::NotTrimmed)?;
+        state.time = time;
+        self.solver
+            .set_state(state)
+            .map_err(|_| RejectReason::NotTrimmed)?;
+        Ok((run, 0))
+    }
+
+    /// Integrates from the run's last frame to `frame`.
+    fn advance(
+        &mut self,
+        run: &Run,
+        frame: &AircraftStateFrame,
+    ) -> Result<(Run, u16), RejectReason> {
+        let dt = frame.time_s - run.last.time_s;
+        let steps = libm::ceil(dt / MAX_STEP_S - 1e-9).max(1.0);
+        let next = Run {
+            last: *frame,
+            ..*run
+        };
+        let failure = |_: SolveError| RejectReason::SolverFailure;
+        match self.builtin_path() {
+            Some(path) => {
+                let (t0, t1) = (
+                    run.last.time_s - run.start_time_s,
+                    frame.time_s - run.start_time_s,
+                );
+                self.integrate(&path, t0, t1, steps).map_err(failure)?;
+            }
+            None => {
+                let path = FramePath::new(&run.last, frame, run.origin);
+                self.integrate(&path, run.last.time_s, frame.time_s, steps)
+                    .map_err(failure)?;
+            }
+        }
+        Ok((next, steps as u16))
+    }
+
+    /// `steps` RK4 steps of (t1 - t0) / steps, ending exactly at t1.
+    fn integrate<P: FlightPath<T>>(
+        &mut self,
+        path: &P,
+        t0: f64,
+        t1: f64,
+        steps: f64,
+    ) -> Result<(), SolveError> {
+        let h = (t1 - t0) / steps;
+        for _ in 0..steps as u32 {
+            self.solver.step(path, h)?;
+        }
+        let mut state = *self.solver.state();
+        state.time = t1;
+        self.solver.set_state(state)
+    }
+
+    /// The Output frame at the solver's current state.
+    fn output(
+        &mut self,
+        run: &Run,
+        frame: &AircraftStateFrame,
+        steps: u16,
+    ) -> Result<OutputFrame, SolveError> {
+        let t = self.solver.state().time;
+        let builtin = self.builtin_path();
+        let streamed = FramePath::new(&run.last, frame, run.origin);
+        let (aircraft, out) = match &builtin {
+            Some(path) => (path.state_at(t), self.solver.outputs(path)?),
+            None => (
+                FlightPath::<T>::state_at(&streamed, t),
+                self.solver.outputs(&streamed)?,
+            ),
+        };
+        let geometry = self.geometry;
+        let fp = FlightPathFrame::of(&aircraft);
+        let n = out.segment_count();
+        let (cable_clearance, _) = cable_plume_clearance(
+            &geometry.plume,
+            &aircraft,
+            (0..=n).map(|j| out.joint_position(j)),
+        );
+        let narrow = |v: T| v.to_f64() as f32;
+        let (position, euler, aoa, decoy_clearance) = match out.decoy() {
+            Some(d) => {
+                let c = fp.components(&(d.cg_position - aircraft.position));
+                let (roll, pitch, yaw) = fp.relative_euler(&d.attitude);
+                (
+                    [narrow(c.x), narrow(c.y), narrow(c.z)],
+                    [narrow(roll), narrow(pitch), narrow(yaw)],
+                    narrow(d.angle_of_attack),
+                    geometry
+                        .envelope
+                        .clearance(&to_body(&aircraft, &d.cg_position)),
+                )
+            }
+            None => (
+                [f32::NAN; 3],
+                [f32::NAN; 3],
+                f32::NAN,
+                T::lit(f64::INFINITY),
+            ),
+        };
+        let connection_tension = out.connection_tension();
+        let mut flags = StatusFlags::TRIMMED;
+        if builtin.is_some() {
+            flags |= StatusFlags::PROFILE_BUILTIN;
+        }
+        if connection_tension > self.allowable_tension_n {
+            flags |= StatusFlags::OVER_TENSION;
+        }
+        if cable_clearance < T::zero() {
+            flags |= StatusFlags::CABLE_IN_PLUME;
+        }
+        if decoy_clearance < T::lit(DECOY_NEAR_AIRCRAFT_M) {
+            flags |= StatusFlags::DECOY_NEAR_AIRCRAFT;
+        }
+        Ok(OutputFrame {
+            seq: frame.seq,
+            time_s: frame.time_s,
+            connection_tension_n: narrow(connection_tension),
+            tow_tension_n: narrow(out.tow_tension()),
+            decoy_position_fp_m: position,
+            decoy_euler_rel_rad: euler,
+            angle_of_attack_rad: aoa,
+            cable_clearance_exhaust_m: narrow(cable_clearance),
+            decoy_clearance_aircraft_m: narrow(decoy_clearance),
+            flags,
+            instructions: 0,
+            steps,
+        })
+    }
+}
+
+/// A built-in profile's flight path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum BuiltinPath {
+    Level(LevelAcceleration),
+    PullUp(PullUp),
+    Turn(LevelTurn),
+}
+
+impl<T: Real> FlightPath<T> for BuiltinPath {
+    fn state_at(&self, t: f64) -> AircraftState<T> {
+        match self {
+            BuiltinPath::Level(p) => p.state_at(t),
+            BuiltinPath::PullUp(p) => p.state_at(t),
+            BuiltinPath::Turn(p) => p.state_at(t),
+        }
+    }
+}

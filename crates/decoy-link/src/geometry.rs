@@ -1,0 +1,332 @@
+//! Frames and clearances, shared by the controller and the host's `decoy simulate`
+//! (decoy-sim re-exports these types), so both compute clearances the same way.
+//!
+//! - [`FlightPathFrame`]: x along the aircraft's velocity, y horizontal and to the
+//!   right, z = x cross y (down, perpendicular to the flight path).
+//! - [`ExhaustPlume`]: the hot jet, a truncated cone in the aircraft body frame.
+//! - [`Envelope`]: the aircraft's collision capsule in the body frame.
+//!
+//! Generic over the solver's scalar (`f32` on the Cortex-M4, `f64` on hosts).
+
+use nalgebra::{Rotation3, UnitQuaternion};
+use solver_core::{AircraftState, Real, Vec3};
+
+/// Speed below which the flight-path frame falls back to the aircraft's axes, m/s.
+const MIN_SPEED_MPS: f64 = 1e-6;
+
+/// The flight-path frame at one instant (axes in NED).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlightPathFrame<T: Real> {
+    /// Unit x axis (along the velocity), NED.
+    pub x: Vec3<T>,
+    /// Unit y axis (horizontal, right), NED.
+    pub y: Vec3<T>,
+    /// Unit z axis (down, perpendicular to x and y), NED.
+    pub z: Vec3<T>,
+}
+
+impl<T: Real> FlightPathFrame<T> {
+    /// The frame of `aircraft`'s velocity; for a (near) zero or vertical velocity
+    /// the aircraft's body axes stand in for the missing directions. Reduces to NED
+    /// rotated to the heading in level flight.
+    pub fn of(aircraft: &AircraftState<T>) -> Self {
+        let rotation = aircraft.rotation();
+        let speed = aircraft.velocity.norm();
+        let x = if speed > T::lit(MIN_SPEED_MPS) {
+            aircraft.velocity / speed
+        } else {
+            rotation * Vec3::x()
+        };
+        let right = Vec3::z().cross(&x);
+        let y = if right.norm() > T::lit(1e-6) {
+            right.normalize()
+        } else {
+            let body_y = rotation * Vec3::y();
+            (body_y - x * x.dot(&body_y)).normalize()
+        };
+        FlightPathFrame {
+            x,
+            y,
+            z: x.cross(&y),
+        }
+    }
+
+    /// The components of the NED vector `r` along x, y, z.
+    pub fn components(&self, r: &Vec3<T>) -> Vec3<T> {
+        Vec3::new(self.x.dot(r), self.y.dot(r), self.z.dot(r))
+    }
+
+    /// The rotation taking flight-path-frame vectors to NED.
+    pub fn rotation(&self) -> UnitQuaternion<T> {
+        UnitQuaternion::from_rotation_matrix(&Rotation3::from_basis_unchecked(&[
+            self.x, self.y, self.z,
+        ]))
+    }
+
+    /// Roll, pitch, yaw (ZYX), rad, of the body attitude `attitude` (body to NED)
+    /// relative to this frame.
+    pub fn relative_euler(&self, attitude: &UnitQuaternion<T>) -> (T, T, T) {
+        (self.rotation().inverse() * attitude).euler_angles()
+    }
+}
+
+/// The hot exhaust plume: a truncated cone in the aircraft body frame starting at
+/// the nozzle exit (radius `nozzle_radius`) and widening along `axis` with
+/// half-angle `atan(tan_half_angle)` for `length` metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExhaustPlume<T: Real> {
+    /// Nozzle exit centre, body frame, m.
+    pub nozzle: Vec3<T>,
+    /// Unit plume axis, body frame.
+    pub axis: Vec3<T>,
+    /// Nozzle exit radius, m.
+    pub nozzle_radius: T,
+    /// Tangent of the half angle.
+    pub tan_half_angle: T,
+    /// Length of the plume, m.
+    pub length: T,
+}
+
+impl<T: Real> ExhaustPlume<T> {
+    /// A plume from configuration values: `axis` need not be unit (it is
+    /// normalised), the half angle is in degrees.
+    pub fn new(
+        nozzle: [f64; 3],
+        axis: [f64; 3],
+        nozzle_radius: f64,
+        half_angle_deg: f64,
+        length: f64,
+    ) -> Self {
+        let axis = nalgebra::Vector3::from(axis).normalize();
+        let tan_half_angle = libm::tan(half_angle_deg.to_radians());
+        ExhaustPlume {
+            nozzle: lit3(nozzle),
+            axis: Vec3::new(T::lit(axis.x), T::lit(axis.y), T::lit(axis.z)),
+            nozzle_radius: T::lit(nozzle_radius),
+            tan_half_angle: T::lit(tan_half_angle),
+            length: T::lit(length),
+        }
+    }
+
+    /// Signed distance from the body-frame point `p` to the plume's surface
+    /// (nozzle disc, conical side, end disc), m: positive outside, negative inside.
+    ///
+    /// Computed in the meridian half-plane: s along the axis from the nozzle, rho
+    /// from the axis; the plume's section there is the trapezoid (0,0), (0,r0),
+    /// (L, r0 + L tan a), (L,0), and the distance to the solid of revolution is
+    /// the distance to the trapezoid's three edges off the axis.
+    pub fn clearance(&self, p: &Vec3<T>) -> T {
+        let d = p - self.nozzle;
+        let s = d.dot(&self.axis);
+        let rho = (d - self.axis * s).norm();
+        let zero = T::zero();
+        let end_radius = self.nozzle_radius + self.length * self.tan_half_angle;
+        let q = [s, rho];
+        let distance = segment_distance(q, [zero, zero], [zero, self.nozzle_radius])
+            .min(segment_distance(
+                q,
+                [zero, self.nozzle_radius],
+                [self.length, end_radius],
+            ))
+            .min(segment_distance(
+                q,
+                [self.length, end_radius],
+                [self.length, zero],
+            ));
+        let inside =
+            s >= zero && s <= self.length && rho <= self.nozzle_radius + s * self.tan_half_angle;
+        if inside { -distance } else { distance }
+    }
+}
+
+/// The aircraft's collision envelope: a capsule (a segment swept by a sphere) in
+/// the body frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Envelope<T: Real> {
+    /// Fore end of the axis, body frame, m.
+    pub fore: Vec3<T>,
+    /// Aft end of the axis, body frame, m.
+    pub aft: Vec3<T>,
+    /// Radius, m.
+    pub radius: T,
+}
+
+impl<T: Real> Envelope<T> {
+    /// A capsule from configuration values.
+    pub fn new(fore: [f64; 3], aft: [f64; 3], radius: f64) -> Self {
+        Envelope {
+            fore: lit3(fore),
+            aft: lit3(aft),
+            radius: T::lit(radius),
+        }
+    }
+
+    /// Distance from the body-frame point `p` to the capsule's surface, m
+    /// (negative inside).
+    pub fn clearance(&self, p: &Vec3<T>) -> T {
+        let axis = self.aft - self.fore;
+        let length2 = axis.norm_squared();
+        let t = if length2 > T::zero() {
+            clamp01((p - self.fore).dot(&axis) / length2)
+        } else {
+            T::zero()
+        };
+        (p - (self.fore + axis * t)).norm() - self.radius
+    }
+}
+
+/// The fixed geometry of the aircraft the clearances need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry<T: Real> {
+    /// The exhaust plume.
+    pub plume: ExhaustPlume<T>,
+    /// The collision capsule.
+    pub envelope: Envelope<T>,
+}
+
+/// The NED point `p` in the aircraft body frame (relative to its reference point).
+pub fn to_body<T: Real>(aircraft: &AircraftState<T>, p: &Vec3<T>) -> Vec3<T> {
+    aircraft
+        .rotation()
+        .inverse_transform_vector(&(p - aircraft.position))
+}
+
+/// The smallest plume clearance of a cable given by its joint positions (NED,
+/// joint 0 first), checked at every joint and every segment midpoint, and where it
+/// is: the index into that sequence of points (0 = joint 0, 2j - 1 = midpoint of
+/// segment j, 2j = joint j). Infinity and 0 for no joints.
+pub fn cable_plume_clearance<T: Real>(
+    plume: &ExhaustPlume<T>,
+    aircraft: &AircraftState<T>,
+    joints: impl IntoIterator<Item = Vec3<T>>,
+) -> (T, usize) {
+    let rotation = aircraft.rotation();
+    let clearance =
+        |p: &Vec3<T>| plume.clearance(&rotation.inverse_transform_vector(&(p - aircraft.position)));
+    let mut best = (T::lit(f64::INFINITY), 0);
+    let mut consider = |c: T, index: usize| {
+        if c < best.0 {
+            best = (c, index);
+        }
+    };
+    let mut previous: Option<Vec3<T>> = None;
+    let half = T::lit(0.5);
+    for (j, p) in joints.into_iter().enumerate() {
+        if let Some(q) = previous {
+            consider(clearance(&((q + p) * half)), 2 * j - 1);
+        }
+        consider(clearance(&p), 2 * j);
+        previous = Some(p);
+    }
+    best
+}
+
+fn lit3<T: Real>(v: [f64; 3]) -> Vec3<T> {
+    Vec3::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]))
+}
+
+fn clamp01<T: Real>(t: T) -> T {
+    t.max(T::zero()).min(T::one())
+}
+
+/// Distance from `q` to the segment a-b in the plane.
+fn segment_distance<T: Real>(q: [T; 2], a: [T; 2], b: [T; 2]) -> T {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let aq = [q[0] - a[0], q[1] - a[1]];
+    let length2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if length2 > T::zero() {
+        clamp01((aq[0] * ab[0] + aq[1] * ab[1]) / length2)
+    } else {
+        T::zero()
+    };
+    let dx = aq[0] - t * ab[0];
+    let dy = aq[1] - t * ab[1];
+    (dx * dx + dy * dy).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plume<T: Real>() -> ExhaustPlume<T> {
+        ExhaustPlume {
+            nozzle: lit3([-7.5, 0.0, 0.0]),
+            axis: lit3([-1.0, 0.0, 0.0]),
+            nozzle_radius: T::lit(0.5),
+            tan_half_angle: T::lit(0.1),
+            length: T::lit(50.0),
+        }
+    }
+
+    macro_rules! for_both {
+        ($name:ident, $body:ident) => {
+            mod $name {
+                #[test]
+                fn f32() {
+                    super::$body::<f32>(1e-5);
+                }
+                #[test]
+                fn f64() {
+                    super::$body::<f64>(1e-12);
+                }
+            }
+        };
+    }
+
+    fn plume_clearance_signs_and_values<T: Real>(tol: f64) {
+        let p = plume::<T>();
+        let side = |s: f64, rho: f64| p.clearance(&lit3([-7.5 - s, 0.0, rho])).to_f64();
+        // Outside: (rho - r(s)) times the cosine of the half angle.
+        let expected = 2.0 * libm::cos(libm::atan(0.1));
+        assert!((side(10.0, 3.5) - expected).abs() < tol * 10.0);
+        assert!(side(10.0, 0.0) < 0.0);
+        assert!((side(0.1, 0.0) + 0.1).abs() < tol * 10.0);
+        assert!((side(-2.0, 0.2) - 2.0).abs() < tol * 10.0);
+        assert!((side(53.0, 0.0) - 3.0).abs() < tol * 100.0);
+    }
+    for_both!(plume_clearance, plume_clearance_signs_and_values);
+
+    fn capsule_clearance<T: Real>(tol: f64) {
+        let e = Envelope::<T>::new([7.0, 0.0, 0.0], [-7.5, 0.0, 0.0], 1.6);
+        assert!((e.clearance(&lit3([0.0, 0.0, 5.0])).to_f64() - 3.4).abs() < tol * 10.0);
+        assert!((e.clearance(&lit3([-10.5, 0.0, 4.0])).to_f64() - 3.4).abs() < tol * 10.0);
+        assert!(e.clearance(&Vec3::zeros()) < T::zero());
+    }
+    for_both!(capsule, capsule_clearance);
+
+    fn frame_in_a_climb<T: Real>(tol: f64) {
+        let mut a = AircraftState::<T>::level(T::lit(9000.0), T::lit(100.0));
+        a.velocity = lit3([100.0 * libm::cos(0.5), 0.0, -100.0 * libm::sin(0.5)]);
+        let f = FlightPathFrame::of(&a);
+        assert!((f.y - Vec3::y()).norm().to_f64() < tol);
+        assert!(f.z.z > T::zero() && f.z.x > T::zero());
+        // The frame's own attitude has zero relative angles.
+        let (r, p, y) = f.relative_euler(&f.rotation());
+        assert!(r.abs().to_f64() < tol * 10.0 && p.abs().to_f64() < tol * 10.0);
+        assert!(y.abs().to_f64() < tol * 10.0);
+    }
+    for_both!(climb_frame, frame_in_a_climb);
+
+    #[test]
+    fn f32_and_f64_clearances_agree() {
+        let (p32, p64) = (plume::<f32>(), plume::<f64>());
+        for i in 0..200 {
+            let s = -10.0 + 0.37 * i as f64;
+            let rho = 0.05 * (i % 60) as f64;
+            let c32 = p32.clearance(&lit3([-7.5 - s, rho * 0.6, rho * 0.8]));
+            let c64 = p64.clearance(&lit3([-7.5 - s, rho * 0.6, rho * 0.8]));
+            assert!((c32 as f64 - c64).abs() < 1e-4, "{s} {rho}: {c32} {c64}");
+        }
+    }
+
+    #[test]
+    fn cable_clearance_checks_midpoints() {
+        let p = plume::<f64>();
+        let aircraft = AircraftState::<f64>::fixed(Vec3::zeros());
+        // Two joints either side of the plume: only the midpoint is inside.
+        let joints = [lit3([-20.0, 0.0, 3.0]), lit3([-20.0, 0.0, -3.0])];
+        let (c, at) = cable_plume_clearance(&p, &aircraft, joints);
+        assert!(c < 0.0);
+        assert_eq!(at, 1);
+    }
+}

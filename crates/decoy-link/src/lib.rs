@@ -1,0 +1,59 @@
+//! # decoy-link: the host <-> decoy-controller link
+//!
+//! The one crate both ends of the link use, so they cannot disagree:
+//!
+//! - [`framing`]: `0x00, COBS(postcard(message) ++ crc32_le), 0x00` frames
+//!   ([`encode`], [`Decoder`]), typed [`FrameError`]s, never a stall on garbage.
+//! - [`messages`]: [`HostMessage`] (State frames, commands) and [`DeviceMessage`]
+//!   (outputs, rejections, status, pong, hello), [`PROTOCOL_VERSION`].
+//! - [`validate`]: the checks a State frame passes before it reaches the solver.
+//! - [`path`]: [`FramePath`], the flight path between two State frames.
+//! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
+//!   and the aircraft (the host's `decoy simulate` uses the same code).
+//! - [`controller`]: [`Controller`], the pure state machine the firmware runs and
+//!   the host uses as its reference.
+//!
+//! docs/protocol.md is the wire format's reference. `no_std`, no heap, no
+//! `unsafe`; the `std` feature adds [`framing::encode_vec`] only.
+//!
+//! ```
+//! use decoy_link::{encode, Command, FrameDecoder, HostMessage, MAX_WIRE_BYTES};
+//! let mut wire = [0u8; MAX_WIRE_BYTES];
+//! let n = encode(&HostMessage::Command(Command::Ping { nonce: 7 }), &mut wire).unwrap();
+//! let mut decoder = FrameDecoder::new();
+//! let mut got = None;
+//! for &b in &wire[..n] {
+//!     if let Some(frame) = decoder.push::<HostMessage>(b) {
+//!         got = Some(frame.unwrap());
+//!     }
+//! }
+//! assert_eq!(got, Some(HostMessage::Command(Command::Ping { nonce: 7 })));
+//! ```
+#![cfg_attr(not(feature = "std"), no_std)]
+#![deny(missing_docs)]
+// `!(x > 0)` is deliberate: it is true for NaN, which must fail the check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod controller;
+pub mod framing;
+pub mod geometry;
+pub mod messages;
+pub mod path;
+pub mod validate;
+
+pub use controller::{
+    CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,
+    DECOY_NEAR_AIRCRAFT_M, InstructionCounter, MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S,
+    MAX_TIME_JUMP_S, NoCounter, SILENCE_MS, TIME_TOLERANCE_S,
+};
+#[cfg(feature = "std")]
+pub use framing::encode_vec;
+pub use framing::{
+    Decoder, EncodeError, FrameDecoder, FrameError, MAX_FRAME_BYTES, MAX_WIRE_BYTES, crc32, encode,
+};
+pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
+pub use messages::{
+    AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
+    PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
+};
+pub use path::FramePath;

@@ -1,0 +1,312 @@
+//! The messages of the link, in both directions (serde; postcard on the wire).
+//!
+//! Units SI; world frame NED (flat earth, z down, altitude = -z); body frames FRD;
+//! quaternions Hamilton, scalar first, body to NED. docs/protocol.md documents
+//! every field; the field comments here are the short form.
+
+use serde::{Deserialize, Serialize};
+
+/// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
+pub const PROTOCOL_VERSION: u16 = 1;
+
+/// Host to controller.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum HostMessage {
+    /// The aircraft's state at one instant: advance the solver to it and answer
+    /// with an [`OutputFrame`] (or a [`Rejected`]).
+    State(AircraftStateFrame),
+    /// A command, answered by a [`StatusFrame`] or a pong.
+    Command(Command),
+}
+
+/// The aircraft's state at one instant, as the host's flight simulation knows it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AircraftStateFrame {
+    /// Sequence number, echoed in the answer.
+    pub seq: u32,
+    /// Simulation time, s, strictly increasing from frame to frame.
+    pub time_s: f64,
+    /// Aircraft reference point, NED, m (altitude = -z).
+    pub position_ned_m: [f64; 3],
+    /// Velocity over the ground, NED, m/s.
+    pub velocity_ned_mps: [f32; 3],
+    /// Acceleration, NED, m/s^2.
+    pub acceleration_ned_mps2: [f32; 3],
+    /// Attitude, body (FRD) to NED, `[w, x, y, z]`; |q| within 1e-3 of 1 (the
+    /// receiver normalises it).
+    pub attitude_wxyz: [f32; 4],
+    /// Angular velocity, body frame, rad/s.
+    pub body_rate_radps: [f32; 3],
+    /// Angular acceleration, body frame, rad/s^2.
+    pub body_angular_acceleration_radps2: [f32; 3],
+}
+
+/// Commands from the host.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Command {
+    /// The next State frame starts a new run from the trim at that state (also
+    /// the state at boot). Answered by a Status frame.
+    ResetToTrim,
+    /// Fly a built-in profile (or go back to streamed kinematics); implies
+    /// [`Command::ResetToTrim`]. Answered by a Status frame.
+    SelectProfile(Profile),
+    /// Answered by a Status frame.
+    GetStatus,
+    /// Answered by a Pong carrying the same nonce.
+    Ping {
+        /// Any value; echoed.
+        nonce: u32,
+    },
+}
+
+/// Where the aircraft kinematics come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Profile {
+    /// From the State frames (the normal mode).
+    #[default]
+    Streamed,
+    /// Steady level flight, 9 km, Mach 0.8 (the State frames are the clock only).
+    Steady,
+    /// Mach 0.6 level at 9 km to t = 2 s, then +10 m/s^2 to Mach 0.8.
+    Acceleration,
+    /// Mach 0.6 level at 9 km to t = 2 s, then the flight path rotates up at
+    /// `rate_milli_radps` / 1000 rad/s for 5 s, then the climb is held.
+    PullUp {
+        /// Flight-path rotation rate, mrad/s (positive up).
+        rate_milli_radps: u16,
+    },
+    /// Level coordinated right turn at 9 km, Mach 0.8, from t = 0.
+    Turn {
+        /// Turn rate, mrad/s.
+        rate_milli_radps: u16,
+    },
+}
+
+/// Controller to host.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum DeviceMessage {
+    /// The answer to an accepted State frame.
+    Output(OutputFrame),
+    /// A frame was rejected; the controller's state is untouched.
+    Rejected(Rejected),
+    /// The answer to a command, and sent once when the link falls silent.
+    Status(StatusFrame),
+    /// The answer to [`Command::Ping`].
+    Pong {
+        /// The ping's nonce.
+        nonce: u32,
+        /// [`PROTOCOL_VERSION`].
+        protocol_version: u16,
+    },
+    /// Sent once at boot.
+    Hello(Hello),
+}
+
+/// The controller's answer to an accepted State frame: the solver's outputs at
+/// the frame's time.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutputFrame {
+    /// `seq` of the State frame answered.
+    pub seq: u32,
+    /// Time of the outputs, s (the frame's `time_s`).
+    pub time_s: f64,
+    /// Cable tension at the connection point (joint 0), N, positive pulling.
+    pub connection_tension_n: f32,
+    /// Cable tension at the towing point (joint N), N, positive pulling.
+    pub tow_tension_n: f32,
+    /// Decoy CG relative to the aircraft reference point, flight-path frame
+    /// (x along the aircraft velocity, y right, z down), m.
+    pub decoy_position_fp_m: [f32; 3],
+    /// Decoy roll, pitch, yaw (ZYX), rad, relative to the flight-path frame.
+    pub decoy_euler_rel_rad: [f32; 3],
+    /// Decoy total angle of attack, rad.
+    pub angle_of_attack_rad: f32,
+    /// Smallest distance from the cable (joints and segment midpoints) to the
+    /// exhaust plume's surface, m (negative: inside).
+    pub cable_clearance_exhaust_m: f32,
+    /// Decoy CG to the aircraft's collision capsule, m (negative: inside).
+    pub decoy_clearance_aircraft_m: f32,
+    /// [`StatusFlags`] bits.
+    pub flags: u16,
+    /// Instructions (SysTick under QEMU `-icount`) spent on this frame: all RK4
+    /// steps and the outputs.
+    pub instructions: u32,
+    /// RK4 steps taken for this frame (0 for the frame that trimmed).
+    pub steps: u16,
+}
+
+/// A rejected frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Rejected {
+    /// `seq` of the rejected State frame; `None` if the frame could not be decoded
+    /// or was a command.
+    pub seq: Option<u32>,
+    /// Why.
+    pub reason: RejectReason,
+    /// The counter of that reason, this rejection included.
+    pub count: u32,
+}
+
+/// Why a frame was rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum RejectReason {
+    /// Longer than [`crate::framing::MAX_FRAME_BYTES`] between delimiters.
+    Oversize,
+    /// Not valid COBS.
+    Cobs,
+    /// CRC-32 mismatch.
+    Crc,
+    /// Shorter than the CRC.
+    Truncated,
+    /// The payload is not a postcard-encoded host message (or has trailing bytes).
+    Decode,
+    /// A field is NaN or infinite.
+    NonFinite,
+    /// Altitude outside -500 m..20 km or Mach outside (0, 2].
+    OutOfRange,
+    /// `time_s` not after the previous accepted frame's.
+    TimeNotIncreasing,
+    /// `time_s` more than [`crate::MAX_TIME_JUMP_S`] after the previous accepted frame's.
+    TimeJump,
+    /// No trim exists at that state.
+    NotTrimmed,
+    /// The solver failed on the way to that frame; the state is the previous frame's.
+    SolverFailure,
+    /// The frame does not fit the controller's mode.
+    WrongMode,
+    /// |q| outside [0.999, 1.001].
+    BadQuaternion,
+}
+
+/// The controller's status.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StatusFrame {
+    /// [`PROTOCOL_VERSION`].
+    pub protocol_version: u16,
+    /// [`StatusFlags`] bits.
+    pub flags: u16,
+    /// Segments of the model.
+    pub segments: u16,
+    /// Time of the last accepted State frame, s (0 before any).
+    pub time_s: f64,
+    /// Every counter.
+    pub counters: Counters,
+}
+
+/// Counters since boot (wrapping at 2^32).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Counters {
+    /// Accepted frames (State frames answered by an Output, and commands).
+    pub frames_ok: u32,
+    /// [`RejectReason::Oversize`] rejections.
+    pub oversize: u32,
+    /// [`RejectReason::Cobs`] rejections.
+    pub cobs: u32,
+    /// [`RejectReason::Crc`] rejections.
+    pub crc: u32,
+    /// [`RejectReason::Truncated`] rejections.
+    pub truncated: u32,
+    /// [`RejectReason::Decode`] rejections.
+    pub decode: u32,
+    /// [`RejectReason::NonFinite`] rejections.
+    pub non_finite: u32,
+    /// [`RejectReason::OutOfRange`] rejections.
+    pub out_of_range: u32,
+    /// [`RejectReason::TimeNotIncreasing`] rejections.
+    pub time_not_increasing: u32,
+    /// [`RejectReason::TimeJump`] rejections.
+    pub time_jump: u32,
+    /// [`RejectReason::NotTrimmed`] rejections.
+    pub not_trimmed: u32,
+    /// [`RejectReason::SolverFailure`] rejections.
+    pub solver_failure: u32,
+    /// [`RejectReason::WrongMode`] rejections.
+    pub wrong_mode: u32,
+    /// [`RejectReason::BadQuaternion`] rejections.
+    pub bad_quaternion: u32,
+    /// Silences: times the link fell silent for [`crate::SILENCE_MS`].
+    pub silences: u32,
+}
+
+impl Counters {
+    /// Counts one rejection for `reason` and returns the new count.
+    pub fn count(&mut self, reason: RejectReason) -> u32 {
+        let counter = match reason {
+            RejectReason::Oversize => &mut self.oversize,
+            RejectReason::Cobs => &mut self.cobs,
+            RejectReason::Crc => &mut self.crc,
+            RejectReason::Truncated => &mut self.truncated,
+            RejectReason::Decode => &mut self.decode,
+            RejectReason::NonFinite => &mut self.non_finite,
+            RejectReason::OutOfRange => &mut self.out_of_range,
+            RejectReason::TimeNotIncreasing => &mut self.time_not_increasing,
+            RejectReason::TimeJump => &mut self.time_jump,
+            RejectReason::NotTrimmed => &mut self.not_trimmed,
+            RejectReason::SolverFailure => &mut self.solver_failure,
+            RejectReason::WrongMode => &mut self.wrong_mode,
+            RejectReason::BadQuaternion => &mut self.bad_quaternion,
+        };
+        *counter = counter.wrapping_add(1);
+        *counter
+    }
+
+    /// The counter of `reason`.
+    pub fn of(&self, reason: RejectReason) -> u32 {
+        let mut copy = *self;
+        copy.count(reason).wrapping_sub(1)
+    }
+}
+
+/// The controller's hardware and precision.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Board {
+    /// Cortex-M4F (QEMU `mps2-an386`), f32 in hardware.
+    M4,
+    /// Cortex-M7 (QEMU `mps2-an500`), f64 in hardware.
+    M7,
+}
+
+/// Sent once at boot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Hello {
+    /// [`PROTOCOL_VERSION`].
+    pub protocol_version: u16,
+    /// The board.
+    pub board: Board,
+    /// Bits of the solver's scalar: 32 or 64.
+    pub precision_bits: u8,
+    /// Segments of the model.
+    pub segments: u16,
+    /// Segment capacity of the solver (compile time).
+    pub capacity: u16,
+    /// The control period the host is expected to use, us.
+    pub control_period_us: u32,
+    /// The longest RK4 step, us ([`crate::MAX_STEP_S`]).
+    pub max_step_us: u32,
+}
+
+/// The bits of `flags` in [`OutputFrame`] and [`StatusFrame`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct StatusFlags(pub u16);
+
+impl StatusFlags {
+    /// The solver runs from a trim (cleared by a reset until the next State frame).
+    pub const TRIMMED: u16 = 1;
+    /// The link has been silent longer than [`crate::SILENCE_MS`].
+    pub const DEGRADED: u16 = 2;
+    /// Connection tension above the cable's allowable tension.
+    pub const OVER_TENSION: u16 = 4;
+    /// The cable is inside the exhaust plume (clearance < 0).
+    pub const CABLE_IN_PLUME: u16 = 8;
+    /// The decoy CG is less than [`crate::DECOY_NEAR_AIRCRAFT_M`] from the aircraft's capsule.
+    pub const DECOY_NEAR_AIRCRAFT: u16 = 16;
+    /// A built-in profile drives the aircraft.
+    pub const PROFILE_BUILTIN: u16 = 32;
+    /// The first answer after a silence.
+    pub const RECOVERED: u16 = 64;
+
+    /// True when every bit of `bits` is set.
+    pub fn contains(self, bits: u16) -> bool {
+        self.0 & bits == bits
+    }
+}

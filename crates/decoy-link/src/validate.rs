@@ -1,0 +1,72 @@
+//! Validation of a State frame, before anything touches the solver.
+
+use solver_core::{Atmosphere, Real, Vec3};
+
+use crate::messages::{AircraftStateFrame, RejectReason};
+
+/// Lowest accepted altitude of the aircraft reference point, m.
+pub const MIN_ALTITUDE_M: f64 = solver_core::atmosphere::MIN_ALTITUDE_M;
+/// Highest accepted altitude of the aircraft reference point, m.
+pub const MAX_ALTITUDE_M: f64 = solver_core::atmosphere::MAX_ALTITUDE_M;
+/// Highest accepted Mach number.
+pub const MAX_MACH: f64 = 2.0;
+/// Largest accepted deviation of |q| from 1.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
+
+/// True when every field of the frame is finite.
+pub fn is_finite(frame: &AircraftStateFrame) -> bool {
+    let f32s = frame
+        .velocity_ned_mps
+        .iter()
+        .chain(&frame.acceleration_ned_mps2)
+        .chain(&frame.attitude_wxyz)
+        .chain(&frame.body_rate_radps)
+        .chain(&frame.body_angular_acceleration_radps2);
+    frame.time_s.is_finite()
+        && frame.position_ned_m.iter().all(|v| v.is_finite())
+        && f32s.into_iter().all(|v| v.is_finite())
+}
+
+/// Checks a frame whose kinematics drive the solver (streamed mode), in this
+/// order: every field finite ([`RejectReason::NonFinite`]); |q| in [0.999, 1.001]
+/// ([`RejectReason::BadQuaternion`]); the altitude -z within
+/// [`MIN_ALTITUDE_M`]..=[`MAX_ALTITUDE_M`] and the Mach number
+/// |v - wind| / a(altitude) in (0, [`MAX_MACH`]] ([`RejectReason::OutOfRange`]).
+/// The speed of sound comes from `atmosphere` in the solver's precision.
+pub fn validate_streamed<T: Real>(
+    frame: &AircraftStateFrame,
+    atmosphere: &Atmosphere<T>,
+    wind: &Vec3<T>,
+) -> Result<(), RejectReason> {
+    if !is_finite(frame) {
+        return Err(RejectReason::NonFinite);
+    }
+    let norm2: f64 = frame
+        .attitude_wxyz
+        .iter()
+        .map(|&c| f64::from(c) * f64::from(c))
+        .sum();
+    let norm = libm::sqrt(norm2);
+    if !((1.0 - QUATERNION_NORM_TOLERANCE)..=(1.0 + QUATERNION_NORM_TOLERANCE)).contains(&norm) {
+        return Err(RejectReason::BadQuaternion);
+    }
+    let altitude = -frame.position_ned_m[2];
+    if !(MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&altitude) {
+        return Err(RejectReason::OutOfRange);
+    }
+    let air = atmosphere
+        .at(T::lit(altitude))
+        .map_err(|_| RejectReason::OutOfRange)?;
+    let v = frame.velocity_ned_mps;
+    let relative = [0, 1, 2].map(|i| f64::from(v[i]) - wind[i].to_f64());
+    let airspeed = libm::sqrt(relative.iter().map(|c| c * c).sum::<f64>());
+    let speed_of_sound = air.speed_of_sound.to_f64();
+    if !(speed_of_sound > 0.0) {
+        return Err(RejectReason::OutOfRange);
+    }
+    let mach = airspeed / speed_of_sound;
+    if !(mach > 0.0 && mach <= MAX_MACH) {
+        return Err(RejectReason::OutOfRange);
+    }
+    Ok(())
+}

@@ -1,0 +1,80 @@
+//! Shared helpers: the reference system's controller and steady-flight frames.
+#![allow(dead_code)]
+
+use decoy_config::SystemConfig;
+use decoy_link::{
+    AircraftStateFrame, Controller, ControllerConfig, DeviceMessage, Envelope, ExhaustPlume,
+    Geometry, HostMessage, NoCounter, OutputFrame,
+};
+use solver_core::Real;
+
+/// Capacity of the test controllers (the firmware's).
+pub const CAPACITY: usize = 64;
+/// Flight speed of the test frames, m/s (Mach 0.6 at 9 km).
+pub const SPEED: f64 = 182.0;
+/// Altitude of the test frames, m.
+pub const ALTITUDE: f64 = 9000.0;
+
+/// The reference system's controller configuration in `T`, 16 graded segments.
+pub fn config<T: Real>() -> ControllerConfig<T> {
+    let system = SystemConfig::builtin().unwrap();
+    let a = &system.aircraft;
+    ControllerConfig {
+        params: system.model_params(system.embedded_layout()).unwrap(),
+        geometry: Geometry {
+            plume: ExhaustPlume::new(
+                a.exhaust_nozzle,
+                a.exhaust_axis,
+                a.exhaust_nozzle_radius,
+                a.exhaust_half_angle_deg,
+                a.exhaust_length,
+            ),
+            envelope: Envelope::new(a.envelope_fore, a.envelope_aft, a.envelope_radius),
+        },
+        allowable_tension_n: T::lit(system.cable.allowable_tension),
+    }
+}
+
+/// A fresh f32 controller (the firmware's precision).
+pub fn controller() -> Controller<f32, CAPACITY> {
+    Controller::new(config()).unwrap()
+}
+
+/// Steady level flight heading north at [`SPEED`], frame `seq` at `time_s`.
+pub fn frame(seq: u32, time_s: f64) -> AircraftStateFrame {
+    AircraftStateFrame {
+        seq,
+        time_s,
+        position_ned_m: [SPEED * time_s + 1000.0, -250.0, -ALTITUDE],
+        velocity_ned_mps: [SPEED as f32, 0.0, 0.0],
+        acceleration_ned_mps2: [0.0; 3],
+        attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
+        body_rate_radps: [0.0; 3],
+        body_angular_acceleration_radps2: [0.0; 3],
+    }
+}
+
+/// Sends a State frame, returns the answer.
+pub fn send<T: Real, const N: usize>(
+    c: &mut Controller<T, N>,
+    f: AircraftStateFrame,
+) -> DeviceMessage {
+    c.handle(HostMessage::State(f), &mut NoCounter)
+}
+
+/// The Output of an answer (panics otherwise: tests only).
+pub fn output(answer: DeviceMessage) -> OutputFrame {
+    match answer {
+        DeviceMessage::Output(o) => o,
+        other => panic!("expected an Output, got {other:?}"),
+    }
+}
+
+/// A controller trimmed at t = 0 and stepped through `frames` 10 ms frames.
+pub fn running(frames: u32) -> Controller<f32, CAPACITY> {
+    let mut c = controller();
+    for k in 0..=frames {
+        output(send(&mut c, frame(k, 0.01 * f64::from(k))));
+    }
+    c
+}

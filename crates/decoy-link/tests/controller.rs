@@ -1,0 +1,444 @@
+//! The controller's robustness: every rejection leaves its state bit-identical and
+//! the next valid frame is answered exactly as if the bad frame had never come;
+//! the stepping rule; silence, degradation and recovery; profiles; commands.
+
+mod common;
+
+use common::{CAPACITY, controller, frame, output, running, send};
+use decoy_link::{
+    Board, Command, Controller, DeviceMessage, FrameDecoder, HostMessage, InstructionCounter,
+    MAX_WIRE_BYTES, NoCounter, PROTOCOL_VERSION, Profile, RejectReason, SILENCE_MS, StatusFlags,
+    encode,
+};
+
+fn rejected(answer: DeviceMessage) -> (Option<u32>, RejectReason, u32) {
+    match answer {
+        DeviceMessage::Rejected(r) => (r.seq, r.reason, r.count),
+        other => panic!("expected a rejection, got {other:?}"),
+    }
+}
+
+fn status_flags(answer: DeviceMessage) -> u16 {
+    match answer {
+        DeviceMessage::Status(s) => s.flags,
+        other => panic!("expected a Status, got {other:?}"),
+    }
+}
+
+fn wire(message: &HostMessage) -> Vec<u8> {
+    let mut out = [0u8; MAX_WIRE_BYTES];
+    let n = encode(message, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// Feeds `bad` to a running controller, checks it is rejected for `reason` with
+/// the state untouched, then checks the next valid frame gets exactly the answer
+/// a controller that never saw `bad` gives.
+fn rejects_cleanly(bad: decoy_link::AircraftStateFrame, reason: RejectReason) {
+    let mut clean = running(5);
+    let mut tested = running(5);
+    let before = tested.snapshot();
+    assert_eq!(
+        rejected(send(&mut tested, bad)),
+        (Some(bad.seq), reason, 1),
+        "{bad:?}"
+    );
+    assert_eq!(tested.snapshot(), before, "state changed by {reason:?}");
+    assert_eq!(tested.counters().of(reason), 1);
+    let next = frame(6, 0.06);
+    let (a, b) = (
+        output(send(&mut clean, next)),
+        output(send(&mut tested, next)),
+    );
+    assert_eq!(wire_output(&a), wire_output(&b));
+    assert_eq!(clean.snapshot(), tested.snapshot());
+}
+
+fn wire_output(o: &decoy_link::OutputFrame) -> Vec<u8> {
+    let mut out = [0u8; MAX_WIRE_BYTES];
+    let n = encode(&DeviceMessage::Output(*o), &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+#[test]
+fn steady_flight_stays_at_the_trim_with_two_steps_per_frame() {
+    let mut c = controller();
+    let first = output(send(&mut c, frame(0, 0.0)));
+    assert_eq!(first.steps, 0);
+    assert!(StatusFlags(first.flags).contains(StatusFlags::TRIMMED));
+    let t0 = first.connection_tension_n;
+    assert!(t0 > 50.0 && t0 < 1200.0, "{t0}");
+    for k in 1..=100 {
+        let o = output(send(&mut c, frame(k, 0.01 * f64::from(k))));
+        assert_eq!((o.seq, o.steps), (k, 2));
+        assert_eq!(o.time_s, 0.01 * f64::from(k));
+        assert!(
+            ((o.connection_tension_n - t0) / t0).abs() < 5e-3,
+            "{k}: {o:?}"
+        );
+        // The decoy hangs behind and below, clear of the plume and the aircraft.
+        assert!(o.decoy_position_fp_m[0] < -50.0 && o.decoy_position_fp_m[2] > 0.0);
+        assert!(o.cable_clearance_exhaust_m > 0.0 && o.decoy_clearance_aircraft_m > 1.0);
+        assert_eq!(o.flags, StatusFlags::TRIMMED);
+    }
+}
+
+#[test]
+fn the_stepping_rule() {
+    // n = ceil(dt / 5 ms - 1e-9): 5 ms -> 1, 10 ms -> 2, 12 ms -> 3, 100 ms -> 20.
+    let mut c = running(0);
+    let mut t = 0.0;
+    for (dt, steps) in [(0.005, 1), (0.01, 2), (0.012, 3), (0.0001, 1), (0.1, 20)] {
+        t += dt;
+        assert_eq!(output(send(&mut c, frame(1, t))).steps, steps, "{dt}");
+        assert_eq!(c.state().time, t);
+    }
+}
+
+#[test]
+fn non_finite_fields_are_rejected() {
+    let setters: [fn(&mut decoy_link::AircraftStateFrame, f64); 8] = [
+        |f, v| f.time_s = v,
+        |f, v| f.position_ned_m[1] = v,
+        |f, v| f.velocity_ned_mps[0] = v as f32,
+        |f, v| f.acceleration_ned_mps2[2] = v as f32,
+        |f, v| f.attitude_wxyz[3] = v as f32,
+        |f, v| f.body_rate_radps[1] = v as f32,
+        |f, v| f.body_angular_acceleration_radps2[0] = v as f32,
+        |f, v| f.position_ned_m[2] = v,
+    ];
+    for set in setters {
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut bad = frame(6, 0.06);
+            set(&mut bad, v);
+            rejects_cleanly(bad, RejectReason::NonFinite);
+        }
+    }
+}
+
+#[test]
+fn out_of_range_values_are_rejected() {
+    let cases: [fn(&mut decoy_link::AircraftStateFrame); 7] = [
+        // Zero airspeed: zero dynamic pressure.
+        |f| f.velocity_ned_mps = [0.0; 3],
+        // Mach 2.1 at 9 km (a = 303.8 m/s).
+        |f| f.velocity_ned_mps = [2.1 * 303.8, 0.0, 0.0],
+        // Below -500 m and above 20 km.
+        |f| f.position_ned_m[2] = 501.0,
+        |f| f.position_ned_m[2] = -20_001.0,
+        |f| f.position_ned_m[2] = 1e300,
+        // Enormous but finite velocity.
+        |f| f.velocity_ned_mps = [f32::MAX, f32::MAX, 0.0],
+        |f| f.velocity_ned_mps = [-1e6, 0.0, 0.0],
+    ];
+    for set in cases {
+        let mut bad = frame(6, 0.06);
+        set(&mut bad);
+        rejects_cleanly(bad, RejectReason::OutOfRange);
+    }
+}
+
+#[test]
+fn bad_quaternions_are_rejected_and_near_unit_ones_accepted() {
+    for q in [[1.01, 0.0, 0.0, 0.0], [0.0; 4], [0.5, 0.5, 0.5, 0.0]] {
+        let mut bad = frame(6, 0.06);
+        bad.attitude_wxyz = q;
+        rejects_cleanly(bad, RejectReason::BadQuaternion);
+    }
+    let mut c = running(2);
+    let mut ok = frame(3, 0.03);
+    ok.attitude_wxyz = [1.0005, 0.0, 0.0, 0.0];
+    output(send(&mut c, ok));
+}
+
+#[test]
+fn time_going_backwards_standing_still_or_jumping_is_rejected() {
+    rejects_cleanly(frame(6, 0.05), RejectReason::TimeNotIncreasing);
+    rejects_cleanly(frame(6, 0.04), RejectReason::TimeNotIncreasing);
+    rejects_cleanly(frame(6, -1.0), RejectReason::TimeNotIncreasing);
+    rejects_cleanly(frame(6, 0.05 + 0.1 + 1e-6), RejectReason::TimeJump);
+    rejects_cleanly(frame(6, 1e9), RejectReason::TimeJump);
+    // Exactly the limit is accepted.
+    let mut c = running(5);
+    output(send(&mut c, frame(6, 0.05 + 0.1)));
+}
+
+#[test]
+fn a_reset_accepts_any_time_and_trims_again() {
+    let mut c = running(5);
+    let status = c.handle(HostMessage::Command(Command::ResetToTrim), &mut NoCounter);
+    assert_eq!(status_flags(status) & StatusFlags::TRIMMED, 0);
+    assert!(!c.is_trimmed());
+    let trimmed = output(send(&mut c, frame(7, 100.0)));
+    assert_eq!(trimmed.steps, 0);
+    let stepped = output(send(&mut c, frame(8, 100.01)));
+    assert_eq!(stepped.steps, 2);
+    // Exactly what a fresh controller trimmed at that frame answers.
+    let mut fresh = controller();
+    assert_eq!(
+        wire_output(&output(send(&mut fresh, frame(7, 100.0)))),
+        wire_output(&trimmed)
+    );
+    assert_eq!(
+        wire_output(&output(send(&mut fresh, frame(8, 100.01)))),
+        wire_output(&stepped)
+    );
+    assert_eq!(fresh.snapshot(), c.snapshot());
+}
+
+#[test]
+fn frame_errors_are_answered_without_seq_and_change_nothing() {
+    let mut c = running(5);
+    let before = c.snapshot();
+    let mut decoder = FrameDecoder::new();
+    let mut answers = Vec::new();
+    let good = wire(&HostMessage::State(frame(6, 0.06)));
+    let mut corrupted = good.clone();
+    corrupted[10] ^= 0x40;
+    let mut stream = vec![0x11, 0x22, 0x33]; // garbage before a frame
+    stream.extend_from_slice(&corrupted); // CRC error
+    stream.extend_from_slice(&good[..good.len() / 2]); // truncated...
+    stream.extend(std::iter::repeat_n(0x7F, 400)); // ...then oversize
+    stream.push(0);
+    c.handle_bytes(&mut decoder, &stream, &mut NoCounter, |a| answers.push(*a));
+    assert!(answers.len() >= 3, "{answers:?}");
+    for a in &answers {
+        let (seq, _, _) = rejected(*a);
+        assert_eq!(seq, None);
+    }
+    assert_eq!(c.snapshot(), before);
+    assert_eq!(c.counters().oversize, 1);
+    assert!(c.counters().crc + c.counters().cobs + c.counters().decode >= 2);
+    // The next valid frame is answered as by a controller that saw none of it.
+    answers.clear();
+    c.handle_bytes(&mut decoder, &good, &mut NoCounter, |a| answers.push(*a));
+    let mut clean = running(5);
+    assert_eq!(
+        wire_output(&output(answers[0])),
+        wire_output(&output(send(&mut clean, frame(6, 0.06))))
+    );
+}
+
+#[test]
+fn silence_degrades_once_and_the_next_frame_recovers() {
+    let mut c = running(5);
+    assert_eq!(c.poll_silence(1_000), None);
+    assert_eq!(c.poll_silence(1_000 + SILENCE_MS - 1), None);
+    let status = c
+        .poll_silence(1_000 + SILENCE_MS)
+        .expect("a Status at the silence");
+    assert!(
+        StatusFlags(status_flags(status)).contains(StatusFlags::DEGRADED | StatusFlags::TRIMMED)
+    );
+    assert_eq!(c.counters().silences, 1);
+    // Reported once per silence.
+    assert_eq!(c.poll_silence(5_000), None);
+    assert_eq!(c.counters().silences, 1);
+    // Garbage does not end a silence.
+    let answer = c.on_frame_error(decoy_link::FrameError::Crc);
+    assert_eq!(rejected(answer).1, RejectReason::Crc);
+    assert!(StatusFlags(c.flags()).contains(StatusFlags::DEGRADED));
+    // The next valid frame does; its Output says RECOVERED, the one after does not.
+    let o = output(send(&mut c, frame(6, 0.06)));
+    assert_eq!(o.flags, StatusFlags::TRIMMED | StatusFlags::RECOVERED);
+    assert_eq!(c.flags() & StatusFlags::DEGRADED, 0);
+    assert_eq!(
+        output(send(&mut c, frame(7, 0.07))).flags,
+        StatusFlags::TRIMMED
+    );
+    // Frames keep the link alive; a second silence is counted again.
+    assert_eq!(c.poll_silence(5_100), None);
+    assert_eq!(c.poll_silence(5_299), None);
+    assert!(c.poll_silence(5_300).is_some());
+    assert_eq!(c.counters().silences, 2);
+}
+
+#[test]
+fn supervision_starts_with_the_first_valid_frame() {
+    let mut c = controller();
+    assert_eq!(c.poll_silence(0), None);
+    assert_eq!(c.poll_silence(10 * SILENCE_MS), None);
+    assert_eq!(c.counters().silences, 0);
+    // A command is a valid frame too.
+    c.handle(HostMessage::Command(Command::GetStatus), &mut NoCounter);
+    assert_eq!(c.poll_silence(20 * SILENCE_MS), None);
+    assert!(c.poll_silence(21 * SILENCE_MS).is_some());
+    let o = output(send(&mut c, frame(0, 0.0)));
+    assert!(StatusFlags(o.flags).contains(StatusFlags::RECOVERED));
+}
+
+#[test]
+fn no_trim_and_solver_failures_leave_the_state_alone() {
+    // A vertical climb: the flight-path frame degenerates and no trim exists (or
+    // the decoy cannot trim); either way a typed rejection, no panic.
+    let mut c = controller();
+    let before = c.snapshot();
+    let mut f = frame(0, 0.0);
+    f.velocity_ned_mps = [0.0, 0.0, -200.0];
+    f.attitude_wxyz = [
+        core::f32::consts::FRAC_1_SQRT_2,
+        0.0,
+        core::f32::consts::FRAC_1_SQRT_2,
+        0.0,
+    ];
+    match send(&mut c, f) {
+        DeviceMessage::Rejected(r) => {
+            assert!(matches!(
+                r.reason,
+                RejectReason::NotTrimmed | RejectReason::SolverFailure
+            ));
+            assert_eq!(c.snapshot(), before);
+        }
+        DeviceMessage::Output(_) => {}
+        other => panic!("{other:?}"),
+    }
+    // A violent, inconsistent manoeuvre: 10 g sideways jumps in 10 ms, repeatedly.
+    let mut c = running(5);
+    for k in 6..200u32 {
+        let mut f = frame(k, 0.01 * f64::from(k));
+        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+        f.position_ned_m[1] += sign * 50.0;
+        f.velocity_ned_mps[1] = (sign * 3000.0) as f32;
+        f.acceleration_ned_mps2[1] = (sign * 1e5) as f32;
+        f.body_rate_radps = [(sign * 50.0) as f32, 0.0, 0.0];
+        let before = c.snapshot();
+        match send(&mut c, f) {
+            DeviceMessage::Output(o) => assert!(o.connection_tension_n.is_finite()),
+            DeviceMessage::Rejected(r) => {
+                assert_eq!(c.snapshot(), before, "{r:?}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}
+
+#[test]
+fn commands_are_answered() {
+    let mut c = running(1);
+    let h = c.hello(Board::M4);
+    assert_eq!(
+        h,
+        DeviceMessage::Hello(decoy_link::Hello {
+            protocol_version: PROTOCOL_VERSION,
+            board: Board::M4,
+            precision_bits: 32,
+            segments: 16,
+            capacity: CAPACITY as u16,
+            control_period_us: 10_000,
+            max_step_us: 5_000,
+        })
+    );
+    assert_eq!(
+        c.handle(
+            HostMessage::Command(Command::Ping { nonce: 42 }),
+            &mut NoCounter
+        ),
+        DeviceMessage::Pong {
+            nonce: 42,
+            protocol_version: PROTOCOL_VERSION
+        }
+    );
+    match c.handle(HostMessage::Command(Command::GetStatus), &mut NoCounter) {
+        DeviceMessage::Status(s) => {
+            assert_eq!(
+                (s.protocol_version, s.segments, s.time_s),
+                (PROTOCOL_VERSION, 16, 0.01)
+            );
+            assert_eq!(s.counters.frames_ok, 4);
+            assert_eq!(s.flags, StatusFlags::TRIMMED);
+        }
+        other => panic!("{other:?}"),
+    }
+    let too_fast = Profile::Turn {
+        rate_milli_radps: 5000,
+    };
+    let before = c.snapshot();
+    let answer = c.handle(
+        HostMessage::Command(Command::SelectProfile(too_fast)),
+        &mut NoCounter,
+    );
+    assert_eq!(rejected(answer), (None, RejectReason::OutOfRange, 1));
+    assert_eq!(c.snapshot(), before);
+}
+
+#[test]
+fn the_acceleration_profile_uses_frames_as_the_clock() {
+    let mut c = controller();
+    let status = c.handle(
+        HostMessage::Command(Command::SelectProfile(Profile::Acceleration)),
+        &mut NoCounter,
+    );
+    assert!(StatusFlags(status_flags(status)).contains(StatusFlags::PROFILE_BUILTIN));
+    // The frames' kinematics are ignored (here: nonsense, but finite), only the clock counts.
+    let clock = |seq: u32, t: f64| {
+        let mut f = frame(seq, t);
+        f.velocity_ned_mps = [0.0; 3];
+        f.attitude_wxyz = [3.0, 0.0, 0.0, 0.0];
+        f.position_ned_m[2] = 1e6;
+        f
+    };
+    let start = 50.0;
+    let first = output(send(&mut c, clock(0, start)));
+    assert!(StatusFlags(first.flags).contains(StatusFlags::PROFILE_BUILTIN | StatusFlags::TRIMMED));
+    let mut peak: f32 = 0.0;
+    for k in 1..=400u32 {
+        let o = output(send(&mut c, clock(k, start + 0.01 * f64::from(k))));
+        peak = peak.max(o.connection_tension_n);
+    }
+    // The run started at the profile's t = 0; it accelerated from t = 2 s.
+    assert!((c.state().time - 4.0).abs() < 1e-9);
+    assert!(
+        peak > 1.2 * first.connection_tension_n,
+        "{peak} vs {}",
+        first.connection_tension_n
+    );
+    // Non-finite clock frames are still rejected.
+    let mut bad = clock(401, start + 4.01);
+    bad.body_rate_radps[0] = f32::NAN;
+    assert_eq!(rejected(send(&mut c, bad)).1, RejectReason::NonFinite);
+}
+
+#[test]
+fn the_counter_measures_state_frames() {
+    struct Ticking(std::cell::Cell<u32>);
+    impl InstructionCounter for Ticking {
+        fn now(&self) -> u32 {
+            self.0.set(self.0.get().wrapping_add(1000));
+            self.0.get()
+        }
+    }
+    let mut c = running(1);
+    let mut counter = Ticking(std::cell::Cell::new(u32::MAX - 500));
+    let o = output(c.handle(HostMessage::State(frame(2, 0.02)), &mut counter));
+    assert_eq!(o.instructions, 1000);
+}
+
+#[test]
+fn f64_controllers_agree_with_f32_ones() {
+    let mut c64: Controller<f64, 16> = Controller::new(common::config()).unwrap();
+    let mut c32 = running(0);
+    output(send(&mut c64, frame(0, 0.0)));
+    for k in 1..=50u32 {
+        let f = frame(k, 0.01 * f64::from(k));
+        let (a, b) = (output(send(&mut c64, f)), output(send(&mut c32, f)));
+        let rel =
+            ((a.connection_tension_n - b.connection_tension_n) / a.connection_tension_n).abs();
+        assert!(rel < 1e-3, "{k}: {a:?} {b:?}");
+        assert!((a.cable_clearance_exhaust_m - b.cable_clearance_exhaust_m).abs() < 1e-2);
+        for i in 0..3 {
+            assert!((a.decoy_position_fp_m[i] - b.decoy_position_fp_m[i]).abs() < 1e-2);
+        }
+    }
+    assert_eq!(
+        c64.hello(Board::M7),
+        DeviceMessage::Hello(decoy_link::Hello {
+            protocol_version: PROTOCOL_VERSION,
+            board: Board::M7,
+            precision_bits: 64,
+            segments: 16,
+            capacity: 16,
+            control_period_us: 10_000,
+            max_step_us: 5_000,
+        })
+    );
+}

@@ -1,0 +1,392 @@
+//! The framing: round trips of every message kind (property-style, seeded), and
+//! the decoder's answers to corrupted, truncated, oversize and garbage input.
+
+use decoy_link::framing::{CRC_BYTES, MAX_PAYLOAD_BYTES};
+use decoy_link::{
+    AircraftStateFrame, Board, Command, Counters, DeviceMessage, FrameDecoder, FrameError, Hello,
+    HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, OutputFrame, Profile, RejectReason, Rejected,
+    StatusFrame, crc32, encode,
+};
+
+/// A small deterministic generator (SplitMix64), so failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn u32(&mut self) -> u32 {
+        self.next() as u32
+    }
+    fn u16(&mut self) -> u16 {
+        self.next() as u16
+    }
+    /// Any finite f64, from tiny to huge, including zeros and negatives.
+    fn f64(&mut self) -> f64 {
+        loop {
+            let v = f64::from_bits(self.next());
+            if v.is_finite() {
+                return v;
+            }
+        }
+    }
+    fn f32(&mut self) -> f32 {
+        loop {
+            let v = f32::from_bits(self.u32());
+            if v.is_finite() {
+                return v;
+            }
+        }
+    }
+    fn byte(&mut self) -> u8 {
+        self.next() as u8
+    }
+}
+
+fn state(r: &mut Rng) -> AircraftStateFrame {
+    AircraftStateFrame {
+        seq: r.u32(),
+        time_s: r.f64(),
+        position_ned_m: [r.f64(), r.f64(), r.f64()],
+        velocity_ned_mps: [r.f32(), r.f32(), r.f32()],
+        acceleration_ned_mps2: [r.f32(), r.f32(), r.f32()],
+        attitude_wxyz: [r.f32(), r.f32(), r.f32(), r.f32()],
+        body_rate_radps: [r.f32(), r.f32(), r.f32()],
+        body_angular_acceleration_radps2: [r.f32(), r.f32(), r.f32()],
+    }
+}
+
+fn host_message(r: &mut Rng) -> HostMessage {
+    match r.next() % 8 {
+        0..=2 => HostMessage::State(state(r)),
+        3 => HostMessage::Command(Command::ResetToTrim),
+        4 => HostMessage::Command(Command::GetStatus),
+        5 => HostMessage::Command(Command::Ping { nonce: r.u32() }),
+        6 => HostMessage::Command(Command::SelectProfile(match r.next() % 5 {
+            0 => Profile::Streamed,
+            1 => Profile::Steady,
+            2 => Profile::Acceleration,
+            3 => Profile::PullUp {
+                rate_milli_radps: r.u16(),
+            },
+            _ => Profile::Turn {
+                rate_milli_radps: r.u16(),
+            },
+        })),
+        _ => HostMessage::State(AircraftStateFrame {
+            seq: u32::MAX,
+            ..state(r)
+        }),
+    }
+}
+
+fn counters(r: &mut Rng) -> Counters {
+    Counters {
+        frames_ok: r.u32(),
+        oversize: r.u32(),
+        cobs: r.u32(),
+        crc: r.u32(),
+        truncated: r.u32(),
+        decode: r.u32(),
+        non_finite: r.u32(),
+        out_of_range: r.u32(),
+        time_not_increasing: r.u32(),
+        time_jump: r.u32(),
+        not_trimmed: r.u32(),
+        solver_failure: r.u32(),
+        wrong_mode: r.u32(),
+        bad_quaternion: r.u32(),
+        silences: r.u32(),
+    }
+}
+
+fn device_message(r: &mut Rng) -> DeviceMessage {
+    match r.next() % 5 {
+        0 => DeviceMessage::Output(OutputFrame {
+            seq: r.u32(),
+            time_s: r.f64(),
+            connection_tension_n: r.f32(),
+            tow_tension_n: r.f32(),
+            decoy_position_fp_m: [r.f32(), r.f32(), r.f32()],
+            decoy_euler_rel_rad: [r.f32(), r.f32(), r.f32()],
+            angle_of_attack_rad: r.f32(),
+            cable_clearance_exhaust_m: r.f32(),
+            decoy_clearance_aircraft_m: r.f32(),
+            flags: r.u16(),
+            instructions: r.u32(),
+            steps: r.u16(),
+        }),
+        1 => DeviceMessage::Rejected(Rejected {
+            seq: if r.next().is_multiple_of(2) {
+                None
+            } else {
+                Some(r.u32())
+            },
+            reason: [
+                RejectReason::Oversize,
+                RejectReason::Cobs,
+                RejectReason::Crc,
+                RejectReason::Truncated,
+                RejectReason::Decode,
+                RejectReason::NonFinite,
+                RejectReason::OutOfRange,
+                RejectReason::TimeNotIncreasing,
+                RejectReason::TimeJump,
+                RejectReason::NotTrimmed,
+                RejectReason::SolverFailure,
+                RejectReason::WrongMode,
+                RejectReason::BadQuaternion,
+            ][(r.next() % 13) as usize],
+            count: r.u32(),
+        }),
+        2 => DeviceMessage::Status(StatusFrame {
+            protocol_version: r.u16(),
+            flags: r.u16(),
+            segments: r.u16(),
+            time_s: r.f64(),
+            counters: counters(r),
+        }),
+        3 => DeviceMessage::Pong {
+            nonce: r.u32(),
+            protocol_version: r.u16(),
+        },
+        _ => DeviceMessage::Hello(Hello {
+            protocol_version: r.u16(),
+            board: if r.next().is_multiple_of(2) {
+                Board::M4
+            } else {
+                Board::M7
+            },
+            precision_bits: r.byte(),
+            segments: r.u16(),
+            capacity: r.u16(),
+            control_period_us: r.u32(),
+            max_step_us: r.u32(),
+        }),
+    }
+}
+
+/// Every frame decoded from `bytes`.
+fn decode_all<M: serde::de::DeserializeOwned>(bytes: &[u8]) -> Vec<Result<M, FrameError>> {
+    let mut decoder = FrameDecoder::new();
+    let mut frames = Vec::new();
+    decoder.push_slice(bytes, |f| frames.push(f));
+    frames
+}
+
+fn wire<M: serde::Serialize>(message: &M) -> Vec<u8> {
+    let mut out = [0u8; MAX_WIRE_BYTES];
+    let n = encode(message, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// A frame with an arbitrary payload and trailer (for hand-made errors).
+fn raw_frame(raw: &[u8]) -> Vec<u8> {
+    let mut out = vec![0u8; raw.len() + raw.len() / 254 + 3];
+    let n = cobs::encode(raw, &mut out[1..]);
+    out.truncate(n + 2);
+    out[n + 1] = 0;
+    out
+}
+
+#[test]
+fn every_message_round_trips_and_frames_are_well_formed() {
+    let mut r = Rng(0x5EED);
+    for _ in 0..5000 {
+        let host = host_message(&mut r);
+        let bytes = wire(&host);
+        assert!(bytes.len() <= MAX_WIRE_BYTES);
+        assert_eq!((bytes[0], bytes[bytes.len() - 1]), (0, 0));
+        assert!(bytes[1..bytes.len() - 1].iter().all(|&b| b != 0));
+        assert_eq!(decode_all::<HostMessage>(&bytes), vec![Ok(host)]);
+
+        let device = device_message(&mut r);
+        let bytes = wire(&device);
+        assert!(bytes.len() <= MAX_WIRE_BYTES);
+        assert_eq!(decode_all::<DeviceMessage>(&bytes), vec![Ok(device)]);
+    }
+}
+
+#[test]
+fn back_to_back_frames_share_delimiters() {
+    let mut r = Rng(7);
+    let messages: Vec<HostMessage> = (0..50).map(|_| host_message(&mut r)).collect();
+    let mut stream = Vec::new();
+    for m in &messages {
+        // Drop the leading delimiter: the previous frame's trailing one serves.
+        stream.extend_from_slice(&wire(m)[1..]);
+    }
+    let decoded: Vec<HostMessage> = decode_all(&stream)
+        .into_iter()
+        .map(|f| f.unwrap())
+        .collect();
+    assert_eq!(decoded, messages);
+}
+
+#[test]
+fn non_finite_values_round_trip_bit_for_bit() {
+    let mut r = Rng(3);
+    let mut s = state(&mut r);
+    s.time_s = f64::NAN;
+    s.velocity_ned_mps[1] = f32::NEG_INFINITY;
+    let bytes = wire(&HostMessage::State(s));
+    let back = decode_all::<HostMessage>(&bytes).pop().unwrap().unwrap();
+    assert_eq!(wire(&back), bytes);
+}
+
+#[test]
+fn a_wrong_crc_is_a_crc_error() {
+    let payload = postcard::to_allocvec(&HostMessage::Command(Command::GetStatus)).unwrap();
+    let mut raw = payload.clone();
+    raw.extend_from_slice(&(crc32(&payload) ^ 1).to_le_bytes());
+    assert_eq!(
+        decode_all::<HostMessage>(&raw_frame(&raw)),
+        vec![Err(FrameError::Crc)]
+    );
+}
+
+#[test]
+fn every_single_bit_flip_is_detected() {
+    let message = HostMessage::State(state(&mut Rng(11)));
+    let good = wire(&message);
+    for i in 1..good.len() - 1 {
+        for bit in 0..8 {
+            let mut bad = good.clone();
+            bad[i] ^= 1 << bit;
+            let frames = decode_all::<HostMessage>(&bad);
+            assert!(!frames.is_empty(), "byte {i} bit {bit}: nothing reported");
+            assert!(
+                frames.iter().all(|f| f.is_err()),
+                "byte {i} bit {bit}: {frames:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_truncation_is_an_error_and_the_next_frame_decodes() {
+    let message = HostMessage::State(state(&mut Rng(12)));
+    let good = wire(&message);
+    for cut in 2..good.len() - 1 {
+        let mut bytes = good[..cut].to_vec();
+        bytes.extend_from_slice(&good);
+        let frames = decode_all::<HostMessage>(&bytes);
+        assert_eq!(frames.len(), 2, "cut at {cut}");
+        assert!(frames[0].is_err(), "cut at {cut}: {:?}", frames[0]);
+        assert_eq!(frames[1], Ok(message));
+    }
+}
+
+#[test]
+fn shorter_than_the_crc_is_truncated() {
+    for n in 1..CRC_BYTES {
+        let raw: Vec<u8> = (1..=n as u8).collect();
+        assert_eq!(
+            decode_all::<HostMessage>(&raw_frame(&raw)),
+            vec![Err(FrameError::Truncated)]
+        );
+    }
+}
+
+#[test]
+fn invalid_cobs_and_trailing_bytes_are_reported() {
+    // A code byte pointing past the end of the chunk.
+    assert_eq!(
+        decode_all::<HostMessage>(&[0, 9, 1, 2, 0]),
+        vec![Err(FrameError::Cobs)]
+    );
+    // A valid CRC over a message followed by extra bytes.
+    let mut payload = postcard::to_allocvec(&HostMessage::Command(Command::GetStatus)).unwrap();
+    payload.push(42);
+    let mut raw = payload.clone();
+    raw.extend_from_slice(&crc32(&payload).to_le_bytes());
+    assert_eq!(
+        decode_all::<HostMessage>(&raw_frame(&raw)),
+        vec![Err(FrameError::Decode)]
+    );
+    // A valid CRC over bytes that are no message (enum tag 200).
+    let payload = [200u8, 1, 2];
+    let mut raw = payload.to_vec();
+    raw.extend_from_slice(&crc32(&payload).to_le_bytes());
+    assert_eq!(
+        decode_all::<HostMessage>(&raw_frame(&raw)),
+        vec![Err(FrameError::Decode)]
+    );
+}
+
+#[test]
+fn oversize_chunks_are_dropped_once_and_the_decoder_recovers() {
+    let message = HostMessage::Command(Command::Ping { nonce: 99 });
+    for length in [MAX_FRAME_BYTES + 1, 1000, 10_000] {
+        let mut bytes = vec![0u8];
+        bytes.extend(std::iter::repeat_n(0x55, length));
+        bytes.extend_from_slice(&wire(&message));
+        assert_eq!(
+            decode_all::<HostMessage>(&bytes),
+            vec![Err(FrameError::Oversize), Ok(message)],
+            "{length}"
+        );
+    }
+    // Exactly MAX_FRAME_BYTES is not oversize (it fails later, as bad COBS or CRC).
+    let mut bytes = vec![0u8];
+    bytes.extend(std::iter::repeat_n(0x55, MAX_FRAME_BYTES));
+    bytes.push(0);
+    let frames = decode_all::<HostMessage>(&bytes);
+    assert_eq!(frames.len(), 1);
+    assert_ne!(frames[0], Err(FrameError::Oversize));
+}
+
+#[test]
+fn garbage_between_frames_costs_one_error_each_and_never_a_frame() {
+    let mut r = Rng(21);
+    let messages: Vec<HostMessage> = (0..200).map(|_| host_message(&mut r)).collect();
+    let mut stream = Vec::new();
+    let mut garbage_chunks = 0;
+    for m in &messages {
+        let length = (r.next() % 40) as usize;
+        let garbage: Vec<u8> = (0..length).map(|_| r.byte() | 1).collect();
+        if !garbage.is_empty() {
+            garbage_chunks += 1;
+        }
+        stream.extend_from_slice(&garbage);
+        stream.extend_from_slice(&wire(m));
+    }
+    let frames = decode_all::<HostMessage>(&stream);
+    let ok: Vec<HostMessage> = frames.iter().filter_map(|f| f.ok()).collect();
+    assert_eq!(ok, messages);
+    assert_eq!(frames.len() - ok.len(), garbage_chunks);
+}
+
+#[test]
+fn random_noise_never_stalls_the_decoder() {
+    let mut r = Rng(99);
+    let noise: Vec<u8> = (0..100_000).map(|_| r.byte()).collect();
+    let mut stream = noise;
+    let message = HostMessage::Command(Command::Ping { nonce: 1 });
+    stream.extend_from_slice(&wire(&message));
+    let frames = decode_all::<HostMessage>(&stream);
+    assert_eq!(frames.last(), Some(&Ok(message)));
+}
+
+#[test]
+fn encode_reports_a_short_buffer() {
+    let message = HostMessage::State(state(&mut Rng(5)));
+    let needed = wire(&message).len();
+    let mut out = vec![0u8; needed - 1];
+    assert!(encode(&message, &mut out).is_err());
+    const { assert!(MAX_PAYLOAD_BYTES + CRC_BYTES < MAX_FRAME_BYTES) };
+}
+
+/// The example of docs/protocol.md, byte for byte.
+#[test]
+fn the_documented_ping_frame() {
+    let ping = HostMessage::Command(Command::Ping { nonce: 7 });
+    assert_eq!(
+        wire(&ping),
+        [0x00, 0x08, 0x01, 0x03, 0x07, 0x45, 0x75, 0xca, 0x4b, 0x00]
+    );
+}
