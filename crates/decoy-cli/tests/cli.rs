@@ -799,3 +799,28 @@ fn sweep_errors_are_usage_errors() {
         assert!(message.contains(expected), "{args:?}: {message}");
     }
 }
+
+#[test]
+fn hil_bad_input_is_a_usage_error() {
+    let e = error_of(&["hil", "--scenario", "no-such-scenario"], 2);
+    assert!(e.contains("acceleration"), "{e}");
+    let e = error_of(
+        &["hil", "--scenario", "acceleration", "--segments", "65"],
+        2,
+    );
+    assert!(e.contains("--segments"), "{e}");
+    let e = error_of(&["hil", "--scenario", "acceleration", "--segments", "0"], 2);
+    assert!(e.contains("segments"), "{e}");
+    let e = error_of(&["hil", "--scenario", "acceleration", "--board", "m9"], 2);
+    assert!(e.contains("m9"), "{e}");
+    let e = error_of(&["hil", "--scenario", "steady", "--rate", "0.1"], 2);
+    assert!(e.contains("--rate"), "{e}");
+    let e = error_of(&["hil", "--scenario", "acceleration", "--t-end", "-1"], 2);
+    assert!(e.contains("--t-end"), "{e}");
+    let config = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../config/reference-system.toml"
+    );
+    let e = error_of(&["--config", config, "hil", "--scenario", "turn"], 2);
+    assert!(e.contains("--config"), "{e}");
+}

@@ -15,7 +15,12 @@
 
 pub mod defmt;
 pub mod firmware;
+pub mod flight;
+pub mod hil_run;
+pub mod host;
+pub mod link;
 pub mod qemu;
+pub mod reference;
 pub mod report;
 pub mod serial;
 
