@@ -22,6 +22,7 @@ use crate::flight::{
 };
 use crate::link::{LinkError, Session};
 use crate::qemu::Board;
+use crate::reference::{Reference, ReferenceError};
 
 /// Time limit of a firmware build.
 pub const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
@@ -85,8 +86,9 @@ pub struct HilSummary {
     /// Largest difference of either tension from the host's f64 solution, N.
     #[serde(rename = "max_tension_diff_vs_host_N")]
     pub max_tension_diff_vs_host_n: f64,
-    /// Largest difference of either tension from the host running the firmware's
-    /// own precision (f32 on the M4), N.
+    /// Largest difference of either tension from the host reference in the
+    /// firmware's own precision with the target's maths (`hil-reference`; f32 on
+    /// the M4), N: 0 when they agree bit for bit.
     #[serde(rename = "max_tension_diff_vs_host_same_precision_N")]
     pub max_tension_diff_vs_host_same_precision_n: f64,
     /// Of the output frames, those equal to the host's same-precision ones in every
@@ -126,6 +128,8 @@ pub enum HilError {
     Build(BuildError),
     /// The host reference could not be built.
     Host(HostSetupError),
+    /// The host reference with the target's maths (`hil-reference`) failed.
+    Reference(ReferenceError),
     /// QEMU or the link failed.
     Link(LinkError),
     /// The firmware rejected a frame of the scenario (the outputs up to then are
@@ -160,6 +164,7 @@ impl fmt::Display for HilError {
             HilError::Scenario(e) => write!(f, "{e}"),
             HilError::Build(e) => write!(f, "{e}"),
             HilError::Host(e) => write!(f, "{e}"),
+            HilError::Reference(e) => write!(f, "{e}"),
             HilError::Link(e) => write!(f, "{e}"),
             HilError::Stopped {
                 t_s,
@@ -184,18 +189,25 @@ pub fn build_firmware(
     segments: usize,
     configured: usize,
 ) -> Result<PathBuf, HilError> {
-    if !(1..=firmware::MAX_SEGMENTS).contains(&segments) {
-        return Err(HilError::Usage(format!(
-            "--segments must be between 1 and {} (the firmware's capacity), got {segments}",
-            firmware::MAX_SEGMENTS
-        )));
-    }
+    check_segments(segments)?;
     let elf = if segments == configured {
         firmware::build_board(board, BUILD_TIMEOUT)
     } else {
         firmware::build_board_with_segments(board, segments, BUILD_TIMEOUT)
     };
     elf.map_err(HilError::Build)
+}
+
+/// `--segments` must fit the firmware's solver.
+fn check_segments(segments: usize) -> Result<(), HilError> {
+    if (1..=firmware::MAX_SEGMENTS).contains(&segments) {
+        Ok(())
+    } else {
+        Err(HilError::Usage(format!(
+            "--segments must be between 1 and {} (the firmware's capacity), got {segments}",
+            firmware::MAX_SEGMENTS
+        )))
+    }
 }
 
 /// Flies `scenario` on the firmware in QEMU (`options.board`) and on the host, and
@@ -209,6 +221,7 @@ pub fn run_hil(
 ) -> Result<HilRun, HilError> {
     let configured = config.solver.segments_embedded;
     let segments = options.segments.unwrap_or(configured);
+    check_segments(segments)?;
     if scenario.kind == ScenarioKind::Recorded && options.rate.is_some() {
         return Err(HilError::Usage(
             "--rate does not apply to a recorded flight".to_owned(),
@@ -251,12 +264,11 @@ pub fn run_hil(
         let mut c = flight::host_controller::<f64>(&config).map_err(HilError::Host)?;
         flight::replay(&mut c, &sent)
     };
-    let same_precision = if hello.precision_bits == 64 {
-        host64.clone()
-    } else {
-        let mut c = flight::host_controller::<f32>(&config).map_err(HilError::Host)?;
-        flight::replay(&mut c, &sent)
-    };
+    // The firmware's precision with the target's maths: bit for bit.
+    let reference = crate::reference::build(BUILD_TIMEOUT).map_err(HilError::Reference)?;
+    let same_precision = Reference::start(&reference, hello.precision_bits, segments)
+        .and_then(|mut r| r.replay(&sent))
+        .map_err(HilError::Reference)?;
     let (vs64, _) = flight::compare(&answers, &host64);
     let (vs_same, _) = flight::compare(&answers, &same_precision);
     let stats: InstructionStats = flight::instruction_stats(&answers);
@@ -417,7 +429,8 @@ pub fn sample(out: &OutputFrame, frame: &AircraftStateFrame, lateral_sign: f64) 
         t: out.time_s,
         tension_connection: f64::from(out.connection_tension_n),
         tension_tow: f64::from(out.tow_tension_n),
-        cg: [-p[0], -p[1] * lateral_sign, p[2]],
+        // `0.0 - x`, not `-x`: no negative zero in the files.
+        cg: [0.0 - p[0], (0.0 - p[1]) * lateral_sign + 0.0, p[2]],
         euler_deg: e,
         aoa_deg: f64::from(out.angle_of_attack_rad).to_degrees(),
         exhaust_clearance: f64::from(out.cable_clearance_exhaust_m),
