@@ -3,9 +3,16 @@
 //! 1. Links the board's memory map: copies `memory-mps2.x` to `OUT_DIR` as
 //!    `memory.x`, where cortex-m-rt's `link.x` finds it. (A `memory.x` in the crate
 //!    root would silently win over `OUT_DIR`, so there is none.)
-//! 2. Generates `OUT_DIR/reference.rs`, the reference system's constants, from the
+//! 2. Passes the linker scripts (`-Tlink.x`, and `-Tdefmt.x` for defmt) from here
+//!    rather than from `rustflags`, so that a `RUSTFLAGS` in the environment (for
+//!    example `-C target-cpu=cortex-m7`) cannot drop them.
+//! 3. Generates `OUT_DIR/reference.rs`, the reference system's constants, from the
 //!    project's configuration files `../config/reference-system.toml` and the
-//!    aerodynamic table it names, so the firmware cannot drift from them.
+//!    aerodynamic table it names, so the firmware cannot drift from them: the
+//!    model, the exhaust plume and collision capsule, the allowable tension.
+//!    Derived values (the plume's unit axis and the tangent of its half angle) are
+//!    computed here in f64 with std, exactly as the host's `decoy_sim::geometry`
+//!    computes them, so host reference and target use the same numbers.
 
 use std::env;
 use std::error::Error;
@@ -29,6 +36,17 @@ fn main() -> Result<()> {
         .map_err(|e| format!("cannot copy {MEMORY_MAP}: {e}"))?;
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={MEMORY_MAP}");
+    println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    // The M7 profile's f64 runs in hardware only with the Cortex-M7's FPv5-D16.
+    if env::var_os("CARGO_FEATURE_M7").is_some() {
+        let flags = env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
+        if !flags.contains("target-cpu=cortex-m7") {
+            println!(
+                "cargo:warning=feature `m7` without `-C target-cpu=cortex-m7`: f64 is software-emulated; build with `cargo build-m7`"
+            );
+        }
+    }
 
     let toml_path = Path::new(SYSTEM_TOML);
     println!("cargo:rerun-if-changed={SYSTEM_TOML}");
@@ -208,6 +226,20 @@ fn generate(config: &Config, aero_rows: &[[f64; 4]], aero_file: &str) -> Result<
         ("DECOY_CM_Q", "decoy", "cm_q", "per rad"),
         ("DECOY_CL_P", "decoy", "cl_p", "per rad"),
         (
+            "ALLOWABLE_TENSION",
+            "cable",
+            "allowable_tension",
+            "N, management limit at the connection point",
+        ),
+        (
+            "EXHAUST_NOZZLE_RADIUS",
+            "aircraft",
+            "exhaust_nozzle_radius",
+            "m",
+        ),
+        ("EXHAUST_LENGTH", "aircraft", "exhaust_length", "m"),
+        ("ENVELOPE_RADIUS", "aircraft", "envelope_radius", "m"),
+        (
             "GRADING_RATIO_EMBEDDED",
             "solver",
             "grading_ratio_embedded",
@@ -228,6 +260,24 @@ fn generate(config: &Config, aero_rows: &[[f64; 4]], aero_file: &str) -> Result<
             "m, aircraft body frame (FRD)",
         ),
         (
+            "EXHAUST_NOZZLE",
+            "aircraft",
+            "exhaust_nozzle",
+            "m, aircraft body frame (FRD)",
+        ),
+        (
+            "ENVELOPE_FORE",
+            "aircraft",
+            "envelope_fore",
+            "m, aircraft body frame (FRD)",
+        ),
+        (
+            "ENVELOPE_AFT",
+            "aircraft",
+            "envelope_aft",
+            "m, aircraft body frame (FRD)",
+        ),
+        (
             "DECOY_INERTIA_CG",
             "decoy",
             "inertia_cg",
@@ -239,6 +289,33 @@ fn generate(config: &Config, aero_rows: &[[f64; 4]], aero_file: &str) -> Result<
         writeln!(s, "/// `{section}.{key}`, {unit}.")?;
         writeln!(s, "pub const {name}: [f64; 3] = {};", vec_literal(&v))?;
     }
+    // Derived geometry, in f64 with std (as decoy_sim::geometry::plume_from_config).
+    let axis = config.vec3("aircraft", "exhaust_axis")?;
+    let norm = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+    if norm.is_nan() || norm <= 0.0 {
+        return Err(format!("{}: `aircraft.exhaust_axis` must not be zero", config.file).into());
+    }
+    let unit = [axis[0] / norm, axis[1] / norm, axis[2] / norm];
+    writeln!(
+        s,
+        "/// `aircraft.exhaust_axis` normalised: the plume axis, aircraft body frame (FRD)."
+    )?;
+    writeln!(
+        s,
+        "pub const EXHAUST_AXIS_UNIT: [f64; 3] = {};",
+        vec_literal(&unit)
+    )?;
+    let half_angle = config.number("aircraft", "exhaust_half_angle_deg")?;
+    writeln!(
+        s,
+        "/// tan(`aircraft.exhaust_half_angle_deg`): the plume's spread per metre."
+    )?;
+    writeln!(
+        s,
+        "pub const EXHAUST_TAN_HALF_ANGLE: f64 = {};",
+        literal(half_angle.to_radians().tan())
+    )?;
+
     let segments = config.count("solver", "segments_embedded")?;
     writeln!(
         s,

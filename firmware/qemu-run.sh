@@ -1,11 +1,29 @@
 #!/usr/bin/env bash
-# Boots a firmware ELF on QEMU's MPS2 AN386 board (Cortex-M4F) and returns its
-# semihosting exit code. Semihosting output goes to stdout.
+# Boots a firmware ELF under QEMU and returns QEMU's exit code (the firmware's
+# semihosting exit status on a failure; the controller itself runs until QEMU is
+# stopped). `cargo run --release` calls it (the runner in .cargo/config.toml).
 #
-# -icount shift=0,align=off,sleep=off makes virtual time advance exactly 1 ns per
-# executed instruction, so the SysTick counter measures instructions,
-# deterministically (see /work/shared/TOOLCHAIN.md). QEMU_TIMEOUT (seconds,
-# default 120) bounds a run that never exits.
+#   ./qemu-run.sh ELF
+#
+# Environment:
+#   DECOY_BOARD        m4 (mps2-an386, Cortex-M4F) or m7 (mps2-an500, Cortex-M7).
+#                      Default: m7 if the ELF is under a `m7/` target dir
+#                      (`cargo build-m7`), else m4.
+#   DECOY_LINK_PORT    the host link: UART0 connects as a TCP client to
+#                      127.0.0.1:PORT, where the host must already listen (what
+#                      the HIL tests and `decoy hil` do).
+#   DECOY_LINK_LISTEN  for a person: QEMU listens on 127.0.0.1:PORT and boots
+#                      without waiting; connect any client that speaks
+#                      docs/protocol.md.
+#                      Neither set: UART0 is not connected (the firmware boots,
+#                      logs and idles).
+#   QEMU_TIMEOUT       seconds before the run is stopped (default 120).
+#   DEFMT_RAW=1        write the raw defmt stream to stdout instead of decoding it
+#                      with `defmt-print -e ELF` (install: cargo install defmt-print --locked).
+#
+# -icount shift=0,align=off,sleep=off: virtual time advances exactly 1 ns per
+# executed instruction, so SysTick counts instructions deterministically
+# (/work/shared/TOOLCHAIN.md). Semihosting carries the defmt logs and the exit code.
 set -euo pipefail
 
 if [[ $# -lt 1 ]]; then
@@ -19,9 +37,40 @@ if ! command -v qemu-system-arm >/dev/null; then
     exit 127
 fi
 
-exec timeout --kill-after=5 "${QEMU_TIMEOUT:-120}" \
-    qemu-system-arm -M mps2-an386 -cpu cortex-m4 \
-    -display none -monitor none -serial none \
-    -semihosting-config enable=on,target=native \
-    -icount shift=0,align=off,sleep=off \
-    -kernel "$ELF"
+board="${DECOY_BOARD:-}"
+if [[ -z "$board" ]]; then
+    case "$ELF" in
+        */m7/*) board=m7 ;;
+        *) board=m4 ;;
+    esac
+fi
+case "$board" in
+    m4) machine=(-M mps2-an386 -cpu cortex-m4) ;;
+    m7) machine=(-M mps2-an500 -cpu cortex-m7) ;;
+    *) echo "DECOY_BOARD must be m4 or m7, not '$board'" >&2; exit 2 ;;
+esac
+
+if [[ -n "${DECOY_LINK_PORT:-}" ]]; then
+    serial=(-serial "tcp:127.0.0.1:${DECOY_LINK_PORT},nodelay=on")
+elif [[ -n "${DECOY_LINK_LISTEN:-}" ]]; then
+    serial=(-serial "tcp:127.0.0.1:${DECOY_LINK_LISTEN},server=on,wait=off,nodelay=on")
+else
+    serial=(-serial null)
+fi
+
+qemu=(timeout --kill-after=5 "${QEMU_TIMEOUT:-120}"
+    qemu-system-arm "${machine[@]}"
+    -display none -monitor none
+    -semihosting-config enable=on,target=native
+    -icount shift=0,align=off,sleep=off
+    "${serial[@]}"
+    -kernel "$ELF")
+
+if [[ "${DEFMT_RAW:-0}" == 1 ]]; then
+    exec "${qemu[@]}"
+fi
+if ! command -v defmt-print >/dev/null; then
+    echo "defmt-print not found: cargo install defmt-print --locked (or DEFMT_RAW=1)" >&2
+    exit 127
+fi
+"${qemu[@]}" | defmt-print -e "$ELF"

@@ -1,33 +1,96 @@
-//! The board: QEMU's MPS2 AN386 (Cortex-M4F, 25 MHz core clock), and how the
-//! application uses it. Everything hardware-specific lives here.
+//! The board: QEMU's MPS2 AN386 (Cortex-M4F) or AN500 (Cortex-M7), both with a
+//! 25 MHz core clock and the same memory map, and how the application uses it.
+//! Everything hardware-specific lives here.
 //!
 //! | role | peripheral |
 //! |---|---|
-//! | instruction counter | SysTick on the core clock, counting down from 0xFF_FFFF |
-//! | console and exit code | Arm semihosting (`hprintln!`, `debug::exit`) |
+//! | host link | CMSDK APB UART0 at 0x4000_4000 (`embedded-io` 0.7 [`Uart`]) |
+//! | instruction counter, millisecond clock | SysTick on the core clock, free-running, extended in software ([`Clock`]) |
+//! | logs | defmt over semihosting (feature `defmt-semihosting`) or RTT (`rtt`) |
+//! | exit code (QEMU) | Arm semihosting `SYS_EXIT` (feature `qemu`) |
 //! | stack high-water mark | stack painting (cortex-m-stack, cortex-m-rt's `_stack_end`) |
 //!
-//! Failures (panics, HardFaults) print through semihosting and exit QEMU with a
-//! failure code, so a test run never hangs on them.
+//! Failures: a panic or a HardFault logs what it can, then, under QEMU (feature
+//! `qemu`, the default) exits QEMU with status 1 so a test never hangs; without
+//! `qemu` (hardware) it goes to the safe state: the UART's transmitter and
+//! receiver are switched off (the host sees the link fall silent and its own
+//! supervision takes over), interrupts are masked and the core is parked. A
+//! watchdog, where the hardware has one, would then reset it.
+
+use core::cell::Cell;
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, exception};
-use cortex_m_semihosting::{debug, hprintln};
+
+#[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
+compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
+#[cfg(not(any(feature = "defmt-semihosting", feature = "rtt")))]
+compile_error!("a defmt transport is needed: feature `defmt-semihosting` or `rtt`");
+
+#[cfg(feature = "rtt")]
+use defmt_rtt as _;
+#[cfg(feature = "defmt-semihosting")]
+use defmt_semihosting as _;
 
 /// SysTick's reload value: the full 24-bit range.
 const SYSTICK_RELOAD: u32 = 0x00FF_FFFF;
+/// SysTick ticks per millisecond (25 MHz core clock).
+const TICKS_PER_MS: u64 = 25_000;
 
 /// Executed instructions per SysTick tick under `-icount shift=0`: virtual time
 /// advances 1 ns per instruction and SysTick runs on the 25 MHz core clock, so one
-/// tick (40 ns) is 40 instructions. Measured: a 200,002-instruction delay loop
-/// reads 5,000 ticks. Counts are therefore multiples of 40.
+/// tick (40 ns) is 40 instructions. Counts are therefore multiples of 40.
 pub const INSTRUCTIONS_PER_TICK: u32 = 40;
 
-/// The peripherals the application uses.
+/// The register-level access to memory-mapped peripherals: the crate's only
+/// unsafe code besides the HardFault handler cortex-m-rt requires.
+mod mmio {
+    /// Reads the 32-bit device register at `address`.
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    pub fn read(address: usize) -> u32 {
+        // SAFETY: only called with the addresses of the CMSDK UART0 registers
+        // (`super::uart_registers`), which are valid, aligned device memory on
+        // both MPS2 boards; volatile, so every access reaches the device.
+        unsafe { core::ptr::read_volatile(address as *const u32) }
+    }
+
+    /// Writes the 32-bit device register at `address`.
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    pub fn write(address: usize, value: u32) {
+        // SAFETY: as in `read`.
+        unsafe { core::ptr::write_volatile(address as *mut u32, value) }
+    }
+}
+
+/// CMSDK APB UART0 registers (ARM DDI 0479, "APB UART").
+mod uart_registers {
+    /// Base address of UART0 on MPS2 AN386/AN500.
+    pub const BASE: usize = 0x4000_4000;
+    /// Received / to-transmit byte.
+    pub const DATA: usize = BASE;
+    /// bit 0 TX buffer full, bit 1 RX buffer full, bit 2 TX overrun, bit 3 RX overrun (write 1 to clear).
+    pub const STATE: usize = BASE + 0x04;
+    /// bit 0 TX enable, bit 1 RX enable (interrupts unused).
+    pub const CTRL: usize = BASE + 0x08;
+    /// Baud-rate divider (>= 16); QEMU ignores it.
+    pub const BAUDDIV: usize = BASE + 0x10;
+
+    pub const STATE_TX_FULL: u32 = 1 << 0;
+    pub const STATE_RX_FULL: u32 = 1 << 1;
+    pub const STATE_RX_OVERRUN: u32 = 1 << 3;
+    pub const CTRL_TX_ENABLE: u32 = 1 << 0;
+    pub const CTRL_RX_ENABLE: u32 = 1 << 1;
+}
+
+/// The board's peripherals, as the application uses them.
 pub struct Board {
-    /// Counts executed instructions (under QEMU `-icount`).
-    pub instructions: InstructionCounter,
+    /// The host link.
+    pub uart: Uart,
+    /// Instruction counter and millisecond clock.
+    pub clock: Clock,
 }
 
 impl Board {
@@ -35,25 +98,163 @@ impl Board {
     pub fn take() -> Option<Self> {
         let peripherals = cortex_m::Peripherals::take()?;
         Some(Board {
-            instructions: InstructionCounter::new(peripherals.SYST),
+            uart: Uart::new(),
+            clock: Clock::new(peripherals.SYST),
         })
     }
 }
 
-/// A reading of the instruction counter, see [`InstructionCounter::now`].
-#[derive(Clone, Copy, Debug)]
-pub struct Instant(u32);
-
-/// SysTick as a free-running down-counter of executed instructions.
-///
-/// Under QEMU `-icount shift=0,align=off,sleep=off` virtual time advances exactly
-/// 1 ns per executed instruction, so the count is deterministic run to run and
-/// independent of host load. On real hardware it would count core cycles / 40.
-pub struct InstructionCounter {
-    _systick: SYST,
+/// The host link's UART: CMSDK APB UART0, polled, 115,200 baud on hardware
+/// (QEMU's model moves bytes as fast as its chardev does).
+pub struct Uart {
+    _private: (),
 }
 
-impl InstructionCounter {
+/// What can go wrong on the UART.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum UartError {
+    /// A received byte was lost because the previous one had not been read (the
+    /// frame it belonged to will fail its CRC).
+    RxOverrun,
+}
+
+impl core::fmt::Display for UartError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            UartError::RxOverrun => f.write_str("UART receive overrun: a byte was lost"),
+        }
+    }
+}
+
+impl core::error::Error for UartError {}
+
+impl embedded_io::Error for UartError {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::Other
+    }
+}
+
+/// Core clock / 115,200 baud.
+const BAUD_DIVIDER: u32 = 25_000_000 / 115_200;
+
+impl Uart {
+    /// Enables UART0's transmitter and receiver. The one dummy DATA read after
+    /// enabling RX avoids QEMU's one-second stall on the first received frame
+    /// (TOOLCHAIN.md).
+    fn new() -> Self {
+        use uart_registers::*;
+        mmio::write(BAUDDIV, BAUD_DIVIDER);
+        mmio::write(CTRL, CTRL_TX_ENABLE | CTRL_RX_ENABLE);
+        let _ = mmio::read(DATA);
+        mmio::write(STATE, STATE_RX_OVERRUN);
+        Uart { _private: () }
+    }
+
+    fn state() -> u32 {
+        mmio::read(uart_registers::STATE)
+    }
+
+    /// Reads one byte if one is waiting.
+    fn try_read_byte(&mut self) -> Result<Option<u8>, UartError> {
+        use uart_registers::*;
+        let state = Self::state();
+        if state & STATE_RX_OVERRUN != 0 {
+            mmio::write(STATE, STATE_RX_OVERRUN);
+            return Err(UartError::RxOverrun);
+        }
+        if state & STATE_RX_FULL == 0 {
+            return Ok(None);
+        }
+        Ok(Some(mmio::read(DATA) as u8))
+    }
+}
+
+/// Switches the UART off (the safe state: nothing more goes to the host).
+fn uart_off() {
+    mmio::write(uart_registers::CTRL, 0);
+}
+
+impl embedded_io::ErrorType for Uart {
+    type Error = UartError;
+}
+
+impl embedded_io::Read for Uart {
+    /// Blocks until at least one byte is available, then returns those waiting
+    /// (the receive buffer holds one byte).
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        let mut count = 0;
+        while count < buf.len() {
+            match self.try_read_byte()? {
+                Some(byte) => {
+                    buf[count] = byte;
+                    count += 1;
+                }
+                None if count > 0 => break,
+                None => {}
+            }
+        }
+        Ok(count)
+    }
+}
+
+impl embedded_io::ReadReady for Uart {
+    fn read_ready(&mut self) -> Result<bool, UartError> {
+        Ok(Self::state() & uart_registers::STATE_RX_FULL != 0)
+    }
+}
+
+impl embedded_io::Write for Uart {
+    /// Blocks until the transmit buffer takes the first byte, then writes as many
+    /// as it takes without waiting again.
+    fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
+        use uart_registers::*;
+        let mut count = 0;
+        for &byte in buf {
+            if Self::state() & STATE_TX_FULL != 0 {
+                if count > 0 {
+                    break;
+                }
+                while Self::state() & STATE_TX_FULL != 0 {}
+            }
+            mmio::write(DATA, u32::from(byte));
+            count += 1;
+        }
+        Ok(count)
+    }
+
+    /// Waits until the transmit buffer has room, i.e. the last byte is on its way.
+    fn flush(&mut self) -> Result<(), UartError> {
+        while Self::state() & uart_registers::STATE_TX_FULL != 0 {}
+        Ok(())
+    }
+}
+
+impl embedded_io::WriteReady for Uart {
+    fn write_ready(&mut self) -> Result<bool, UartError> {
+        Ok(Self::state() & uart_registers::STATE_TX_FULL == 0)
+    }
+}
+
+/// SysTick as a free-running counter of executed instructions (under QEMU
+/// `-icount shift=0,align=off,sleep=off`, where virtual time advances exactly 1 ns
+/// per instruction; on hardware, core cycles / 40), extended to 64 bits in
+/// software, and the millisecond clock derived from it.
+///
+/// The 24-bit counter wraps every 2^24 ticks (671 M instructions, 0.67 s); each
+/// reading adds the ticks since the previous one, so it must be read at least
+/// that often. The application's idle loop reads it every few dozen
+/// instructions, and the longest work between two readings (a trim, about 1.3 M
+/// instructions) is far shorter.
+pub struct Clock {
+    _systick: SYST,
+    last_reading: Cell<u32>,
+    ticks: Cell<u64>,
+}
+
+impl Clock {
     /// Starts SysTick on the core clock, counting down from [`SYSTICK_RELOAD`],
     /// without interrupts.
     fn new(mut systick: SYST) -> Self {
@@ -62,25 +263,36 @@ impl InstructionCounter {
         systick.set_reload(SYSTICK_RELOAD);
         systick.clear_current();
         systick.enable_counter();
-        InstructionCounter { _systick: systick }
+        Clock {
+            _systick: systick,
+            last_reading: Cell::new(SYST::get_current()),
+            ticks: Cell::new(0),
+        }
     }
 
-    /// The current reading.
+    /// Ticks since the clock started.
     #[inline(always)]
-    pub fn now(&self) -> Instant {
-        Instant(SYST::get_current())
+    fn ticks(&self) -> u64 {
+        let now = SYST::get_current();
+        let elapsed = self.last_reading.get().wrapping_sub(now) & SYSTICK_RELOAD;
+        self.last_reading.set(now);
+        let ticks = self.ticks.get() + u64::from(elapsed);
+        self.ticks.set(ticks);
+        ticks
     }
 
-    /// Instructions executed since `start`, in multiples of
+    /// Milliseconds since the clock started (wrapping after 49 days).
+    pub fn now_ms(&self) -> u32 {
+        (self.ticks() / TICKS_PER_MS) as u32
+    }
+}
+
+impl decoy_link::InstructionCounter for Clock {
+    /// Instructions since the clock started, wrapping at 2^32, in multiples of
     /// [`INSTRUCTIONS_PER_TICK`].
-    ///
-    /// The counter wraps every 2^24 ticks (671 M instructions); the modular
-    /// difference is right for any interval shorter than that, which a control
-    /// step (about 10^5) and the trim (about 10^7) are by far.
     #[inline(always)]
-    pub fn since(&self, start: Instant) -> u32 {
-        let ticks = start.0.wrapping_sub(SYST::get_current()) & SYSTICK_RELOAD;
-        ticks * INSTRUCTIONS_PER_TICK
+    fn now(&self) -> u32 {
+        (self.ticks() as u32).wrapping_mul(INSTRUCTIONS_PER_TICK)
     }
 }
 
@@ -89,8 +301,7 @@ pub fn paint_stack() {
     cortex_m_stack::repaint_stack();
 }
 
-/// Bytes of stack used at the deepest point since [`paint_stack`], out of
-/// [`stack_size`] (an estimate: the first unpainted word from the bottom).
+/// Bytes of stack used at the deepest point since [`paint_stack`].
 pub fn stack_high_water() -> u32 {
     cortex_m_stack::stack_size() - cortex_m_stack::stack_painted()
 }
@@ -100,20 +311,13 @@ pub fn stack_size() -> u32 {
     cortex_m_stack::stack_size()
 }
 
-/// Ends the run: QEMU exits with status 0.
-pub fn exit_success() -> ! {
-    debug::exit(debug::EXIT_SUCCESS);
-    unreachable_exit()
-}
-
-/// Ends the run: QEMU exits with status 1.
-pub fn exit_failure() -> ! {
-    debug::exit(debug::EXIT_FAILURE);
-    unreachable_exit()
-}
-
-/// Semihosting exit returns only without a debugger or QEMU; park the core.
-fn unreachable_exit() -> ! {
+/// Ends the program after a failure: under QEMU, exit status 1; on hardware the
+/// safe state (UART off, interrupts masked, core parked).
+pub fn fail() -> ! {
+    uart_off();
+    cortex_m::interrupt::disable();
+    #[cfg(feature = "qemu")]
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
     loop {
         cortex_m::asm::wfi();
     }
@@ -121,16 +325,20 @@ fn unreachable_exit() -> ! {
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("panic: {}", info);
-    exit_failure()
+    defmt::error!("panic: {}", defmt::Display2Format(info));
+    fail()
 }
 
 // cortex-m-rt requires the HardFault handler to be an `unsafe fn` (it runs on a
-// possibly corrupt stack); this is the crate's only unsafe code, and it does nothing
-// unsafe: it prints the stacked frame and exits.
+// possibly corrupt stack); it does nothing unsafe: it logs the faulting address
+// and fails.
 #[allow(unsafe_code)]
 #[exception]
 unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    hprintln!("hardfault: {:?}", frame);
-    exit_failure()
+    defmt::error!(
+        "hardfault: pc={=u32:#x} lr={=u32:#x}",
+        frame.pc(),
+        frame.lr()
+    );
+    fail()
 }

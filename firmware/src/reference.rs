@@ -4,6 +4,7 @@
 //! names (`config/decoy-aero.csv`): `build.rs` generates them from those files at
 //! build time, so the firmware and the host tools read the same numbers.
 
+use decoy_link::{Envelope, ExhaustPlume, Geometry};
 use solver_core::{
     AeroTable, AeroTableError, Atmosphere, CableParams, DecoyParams, EndBody, Environment,
     ModelParams, Real, SegmentLayout, Vec3,
@@ -66,4 +67,23 @@ pub fn model_params<T: Real>(layout: SegmentLayout<T>) -> Result<ModelParams<T>,
             aero: AeroTable::from_degrees(&AERO_ROWS)?,
         }),
     })
+}
+
+/// The aircraft's exhaust plume and collision capsule (`[aircraft]`), with the
+/// plume axis and half-angle tangent derived in f64 by `build.rs`.
+pub fn geometry<T: Real>() -> Geometry<T> {
+    Geometry {
+        plume: ExhaustPlume {
+            nozzle: vec3(EXHAUST_NOZZLE),
+            axis: vec3(EXHAUST_AXIS_UNIT),
+            nozzle_radius: T::lit(EXHAUST_NOZZLE_RADIUS),
+            tan_half_angle: T::lit(EXHAUST_TAN_HALF_ANGLE),
+            length: T::lit(EXHAUST_LENGTH),
+        },
+        envelope: Envelope {
+            fore: vec3(ENVELOPE_FORE),
+            aft: vec3(ENVELOPE_AFT),
+            radius: T::lit(ENVELOPE_RADIUS),
+        },
+    }
 }

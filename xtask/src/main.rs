@@ -146,13 +146,18 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
     };
 
     let firmware_dir = root.join("firmware");
-    let firmware = if firmware_dir.join("Cargo.toml").is_file() {
-        let mut cmd = toolchain.cargo(&firmware_dir, &["build", "--release"]);
-        let_directory_choose_toolchain(&mut cmd);
-        Action::Run(cmd)
-    } else {
-        Action::Skip("firmware/Cargo.toml does not exist yet".into())
+    let firmware_build = |args: &[&str]| {
+        if firmware_dir.join("Cargo.toml").is_file() {
+            let mut cmd = toolchain.cargo(&firmware_dir, args);
+            let_directory_choose_toolchain(&mut cmd);
+            Action::Run(cmd)
+        } else {
+            Action::Skip("firmware/Cargo.toml does not exist yet".into())
+        }
     };
+    let firmware = firmware_build(&["build", "--release"]);
+    // The Cortex-M7 f64 profile (alias in firmware/.cargo/config.toml).
+    let firmware_m7 = firmware_build(&["build-m7"]);
 
     vec![
         Stage {
@@ -195,6 +200,10 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
         Stage {
             name: "firmware build",
             action: firmware,
+        },
+        Stage {
+            name: "firmware build (Cortex-M7, f64)",
+            action: firmware_m7,
         },
     ]
 }

@@ -47,6 +47,16 @@ pub trait InstructionCounter {
     }
 }
 
+/// A shared counter counts too (the firmware's clock also serves the silence timer).
+impl<C: InstructionCounter + ?Sized> InstructionCounter for &C {
+    fn now(&self) -> u32 {
+        (**self).now()
+    }
+    fn elapsed(&self, start: u32) -> u32 {
+        (**self).elapsed(start)
+    }
+}
+
 /// A counter that always reads 0 (hosts that do not measure).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoCounter;

@@ -43,23 +43,26 @@ fn normalised(q: [f64; 4]) -> [f64; 4] {
     }
 }
 
-fn lerp3(a: &[f64; 3], b: &[f64; 3], s: f64) -> [f64; 3] {
-    [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * s)
-}
-
 fn to_t<T: Real>(v: [f64; 3]) -> Vec3<T> {
     Vec3::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]))
 }
 
 /// The flight path over [t0, t1] between the previous accepted State frame (t0)
-/// and the current one (t1). Computed in f64 and rounded to the solver's scalar:
+/// and the current one (t1). The frames are normalised and the displacement
+/// p1 - p0 taken in f64 once; every sample is then computed in the solver's
+/// precision (f32 on the Cortex-M4F, where f64 is software-emulated), with
+/// s = (t - t0)/h, h = t1 - t0:
 ///
 /// - position and velocity: the cubic Hermite through both frames' positions and
-///   velocities (with s = (t - t0)/h, h = t1 - t0: p = h00 p0 + h10 h v0 + h01 p1 +
-///   h11 h v1 and its derivative);
+///   velocities, written about p0: p = p0 + h01 (p1 - p0) + h h10 v0 + h h11 v1,
+///   v = (p1 - p0) h01'/h + h10' v0 + h11' v1 (so the small displacement keeps
+///   full relative precision even in f32);
 /// - acceleration, body rate and body angular acceleration: linear in s;
 /// - attitude: normalised linear interpolation (nlerp) of the normalised
 ///   quaternions along the shorter arc.
+///
+/// At t1 the position is p0 + (p1 - p0) rounded to the solver's precision (the
+/// controller evaluates its outputs on the constant path of the frame itself).
 ///
 /// Positions are relative to `origin` (NED, m), which the controller sets to the
 /// horizontal position of the frame it trimmed at, so that an f32 solver keeps
@@ -70,6 +73,8 @@ fn to_t<T: Real>(v: [f64; 3]) -> Vec3<T> {
 pub struct FramePath {
     from: Sample,
     to: Sample,
+    /// `to.position - from.position`, m, in f64.
+    displacement: [f64; 3],
 }
 
 impl FramePath {
@@ -86,7 +91,12 @@ impl FramePath {
         if dot < 0.0 {
             to.attitude = to.attitude.map(|c| -c);
         }
-        FramePath { from, to }
+        let displacement = [0, 1, 2].map(|i| to.position[i] - from.position[i]);
+        FramePath {
+            from,
+            to,
+            displacement,
+        }
     }
 
     /// The constant path at one frame (its state at every time).
@@ -95,6 +105,7 @@ impl FramePath {
         FramePath {
             from: sample,
             to: sample,
+            displacement: [0.0; 3],
         }
     }
 
@@ -108,46 +119,53 @@ impl<T: Real> FlightPath<T> for FramePath {
     fn state_at(&self, t: f64) -> AircraftState<T> {
         let (a, b) = (&self.from, &self.to);
         let h = b.time - a.time;
-        let s = if h > 0.0 {
-            ((t - a.time) / h).clamp(0.0, 1.0)
-        } else {
-            1.0
+        if !(h > 0.0) {
+            return AircraftState {
+                position: to_t(b.position),
+                velocity: to_t(b.velocity),
+                acceleration: to_t(b.acceleration),
+                attitude: b.attitude.map(T::lit),
+                angular_rate: to_t(b.rate),
+                angular_acceleration: to_t(b.angular_acceleration),
+            };
+        }
+        let s = T::lit(((t - a.time) / h).clamp(0.0, 1.0));
+        let step = T::lit(h);
+        let lit = T::lit;
+        // Hermite basis (h01 = 1 - h00, so p = p0 + h01 (p1 - p0) + ...) and its
+        // derivatives per unit s (d00 = -d01).
+        let (s2, s3) = (s * s, s * s * s);
+        let h10 = s3 - lit(2.0) * s2 + s;
+        let h01 = lit(3.0) * s2 - lit(2.0) * s3;
+        let h11 = s3 - s2;
+        let d10 = lit(3.0) * s2 - lit(4.0) * s + T::one();
+        let d01 = lit(6.0) * (s - s2);
+        let d11 = lit(3.0) * s2 - lit(2.0) * s;
+        let delta: Vec3<T> = to_t(self.displacement);
+        let (v0, v1): (Vec3<T>, Vec3<T>) = (to_t(a.velocity), to_t(b.velocity));
+        let position = to_t::<T>(a.position) + delta * h01 + (v0 * h10 + v1 * h11) * step;
+        let velocity = delta * (d01 / step) + v0 * d10 + v1 * d11;
+        let lerp = |x: &[f64; 3], y: &[f64; 3]| -> Vec3<T> {
+            let x: Vec3<T> = to_t(*x);
+            x + (to_t::<T>(*y) - x) * s
         };
-        let (position, velocity) = if h > 0.0 {
-            // Hermite basis and derivatives (per unit s).
-            let (s2, s3) = (s * s, s * s * s);
-            let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
-            let h10 = s3 - 2.0 * s2 + s;
-            let h01 = -2.0 * s3 + 3.0 * s2;
-            let h11 = s3 - s2;
-            let d00 = 6.0 * s2 - 6.0 * s;
-            let d10 = 3.0 * s2 - 4.0 * s + 1.0;
-            let d01 = -6.0 * s2 + 6.0 * s;
-            let d11 = 3.0 * s2 - 2.0 * s;
-            let p = [0, 1, 2].map(|i| {
-                h00 * a.position[i]
-                    + h10 * h * a.velocity[i]
-                    + h01 * b.position[i]
-                    + h11 * h * b.velocity[i]
-            });
-            let v = [0, 1, 2].map(|i| {
-                (d00 * a.position[i] + d01 * b.position[i]) / h
-                    + d10 * a.velocity[i]
-                    + d11 * b.velocity[i]
-            });
-            (p, v)
+        let q = [0, 1, 2, 3].map(|i| {
+            let qa = T::lit(a.attitude[i]);
+            qa + (T::lit(b.attitude[i]) - qa) * s
+        });
+        let norm = q.iter().fold(T::zero(), |sum, c| sum + *c * *c).sqrt();
+        let attitude = if norm > T::zero() {
+            q.map(|c| c / norm)
         } else {
-            (b.position, b.velocity)
+            [T::one(), T::zero(), T::zero(), T::zero()]
         };
-        let q =
-            normalised([0, 1, 2, 3].map(|i| a.attitude[i] + (b.attitude[i] - a.attitude[i]) * s));
         AircraftState {
-            position: to_t(position),
-            velocity: to_t(velocity),
-            acceleration: to_t(lerp3(&a.acceleration, &b.acceleration, s)),
-            attitude: q.map(T::lit),
-            angular_rate: to_t(lerp3(&a.rate, &b.rate, s)),
-            angular_acceleration: to_t(lerp3(&a.angular_acceleration, &b.angular_acceleration, s)),
+            position,
+            velocity,
+            acceleration: lerp(&a.acceleration, &b.acceleration),
+            attitude,
+            angular_rate: lerp(&a.rate, &b.rate),
+            angular_acceleration: lerp(&a.angular_acceleration, &b.angular_acceleration),
         }
     }
 }
@@ -195,5 +213,19 @@ mod tests {
         f1.attitude_wxyz = [-1.0, 0.0, 0.0, 0.0];
         let s = FramePath::new(&f0, &f1, [0.0; 3]).state_f64(0.005);
         assert!((s.attitude[0].abs() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn f32_samples_keep_the_velocity_far_from_the_origin() {
+        // 50 km from the origin an f32 position has a 4 mm resolution; the
+        // velocity must still come out right, from the f64 displacement.
+        let (f0, f1) = (frame(10.0, 50_000.0, 240.0), frame(10.01, 50_002.4, 240.0));
+        let path = FramePath::new(&f0, &f1, [0.0; 3]);
+        for k in 0..=4 {
+            let s: AircraftState<f32> = path.state_at(10.0 + 0.0025 * k as f64);
+            assert!((s.velocity.x - 240.0).abs() < 1e-3, "{}", s.velocity.x);
+            let expected = 50_000.0 + 240.0 * 0.0025 * k as f64;
+            assert!((f64::from(s.position.x) - expected).abs() < 5e-3);
+        }
     }
 }
