@@ -321,7 +321,12 @@ fn prepare_variant(root: &Path, segments: usize) -> std::io::Result<()> {
     )?;
     // `firmware/` is a workspace of its own because the root manifest excludes it;
     // the copy sits under the root workspace's directory, so it says so itself.
-    let manifest = fs::read_to_string(firmware_dir().join("Cargo.toml"))?;
+    // Its path dependencies point at the workspace's crates themselves (not through
+    // the `crates` link below): decoy-link inherits solver-core from the root
+    // workspace, and two paths to one package collide in the lockfile.
+    let crates = workspace.join("crates");
+    let manifest = fs::read_to_string(firmware_dir().join("Cargo.toml"))?
+        .replace("\"../crates/", &format!("\"{}/", crates.display()));
     write_if_changed(
         &root.join("firmware").join("Cargo.toml"),
         format!("{manifest}\n# Added by hil_tests::firmware::build_with_segments.\n[workspace]\n")

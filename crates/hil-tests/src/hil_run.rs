@@ -377,9 +377,13 @@ fn fly_until_rejected(
     for (i, message) in messages.iter().enumerate() {
         let answer = session.link.request(message)?;
         let rejected = match (&answer, message) {
-            (DeviceMessage::Rejected(r), HostMessage::State(_)) => {
-                Some(format!("{:?} (the {} such rejection)", r.reason, r.count))
-            }
+            (DeviceMessage::Rejected(r), HostMessage::State(frame)) => Some(format!(
+                "frame {} (t = {} s) rejected: {:?} ({} so far)",
+                frame.seq,
+                format_time(frame.time_s),
+                r.reason,
+                r.count
+            )),
             (DeviceMessage::Output(o), _) => {
                 last_time = o.time_s;
                 None
