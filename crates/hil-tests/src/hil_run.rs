@@ -341,6 +341,12 @@ pub fn run_hil(
         )
         .map_err(|e| HilError::Output(e.to_string()))?;
         files.extend(plotted);
+        files.extend(instructions_plot(
+            &plan.name,
+            options.board,
+            &rows,
+            &out_dir,
+        )?);
     }
     if let Some((t_s, reason)) = stop {
         return Err(HilError::Stopped {
@@ -421,6 +427,51 @@ fn paired_rows(
         })
         .collect()
 }
+
+/// The file stem of the instruction-count plot.
+pub const INSTRUCTIONS_PLOT: &str = "instructions";
+
+/// Draws the instructions of every control step against time (the trim frame
+/// left out), with the target for comparison.
+fn instructions_plot(
+    name: &str,
+    board: Board,
+    rows: &[(AircraftStateFrame, OutputFrame, OutputFrame)],
+    dir: &Path,
+) -> Result<Vec<PathBuf>, HilError> {
+    let steps: Vec<&OutputFrame> = rows
+        .iter()
+        .map(|(_, o, _)| o)
+        .filter(|o| o.steps > 0)
+        .collect();
+    let t: Vec<f64> = steps.iter().map(|o| o.time_s).collect();
+    let mut series = vec![decoy_plots::Series {
+        label: format!("firmware ({board})"),
+        x: t.clone(),
+        y: steps.iter().map(|o| f64::from(o.instructions)).collect(),
+    }];
+    if let (Some(first), Some(last)) = (t.first(), t.last()) {
+        series.push(decoy_plots::Series {
+            label: format!("target {INSTRUCTIONS_TARGET}"),
+            x: vec![*first, *last],
+            y: vec![f64::from(INSTRUCTIONS_TARGET); 2],
+        });
+    }
+    let plot = decoy_plots::Plot {
+        title: format!("{name} (HIL, {board}): instructions per 10 ms control step"),
+        x_label: "t [s]".to_owned(),
+        y_label: "instructions".to_owned(),
+        series,
+        aspect: decoy_plots::Aspect::Free,
+        invert_y: false,
+    };
+    decoy_plots::write_plot(&plot, &dir.join(INSTRUCTIONS_PLOT))
+        .map(Vec::from)
+        .map_err(|e| HilError::Output(format!("the {INSTRUCTIONS_PLOT} plot: {e}")))
+}
+
+/// The target of instructions per 10 ms control step, drawn for comparison.
+pub const INSTRUCTIONS_TARGET: u32 = 100_000;
 
 /// One output as a `decoy simulate` sample (flight-path frame, degrees; angles
 /// relative to the flight-path frame; the closest point's position along the
