@@ -17,9 +17,7 @@ use decoy_sim::{
 use serde::Serialize;
 
 use crate::firmware::{self, BuildError};
-use crate::flight::{
-    self, CONTROL_PERIOD_S, CONTROLLER_CAPACITY, HostSetupError, InstructionStats,
-};
+use crate::flight::{self, HostSetupError, InstructionStats};
 use crate::link::{LinkError, Session};
 use crate::qemu::Board;
 use crate::reference::{Reference, ReferenceError};
@@ -543,11 +541,6 @@ fn write_timeseries(
     fs::write(path, text)
         .map_err(|e| HilError::Output(format!("cannot write {}: {e}", path.display())))
 }
-
-/// The capacity every controller (target and host) is built with.
-pub const CAPACITY: usize = CONTROLLER_CAPACITY;
-/// The period of the frames `decoy hil` sends, s.
-pub const PERIOD_S: f64 = CONTROL_PERIOD_S;
 
 #[cfg(test)]
 mod tests {
