@@ -14,7 +14,7 @@
 //!   the host uses as its reference.
 //!
 //! docs/protocol.md is the wire format's reference. `no_std`, no heap, no
-//! `unsafe`; the `std` feature adds [`framing::encode_vec`] only.
+//! `unsafe`; the `std` feature adds `framing::encode_vec` only.
 //!
 //! ```
 //! use decoy_link::{encode, Command, FrameDecoder, HostMessage, MAX_WIRE_BYTES};
