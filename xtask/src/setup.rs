@@ -185,6 +185,7 @@ pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
             components(&mut report);
             let toolchain = target(root, &mut report, &mut apt)?;
             qemu(&mut report, &mut apt)?;
+            defmt_print(&mut report)?;
             Some(toolchain)
         }
     };
@@ -367,6 +368,39 @@ fn qemu(report: &mut Report, apt: &mut Apt) -> Result<()> {
         .ok_or_else(|| format!("{package} was installed but `{binary} --version` does not run"))?;
     println!("now present: {binary} ({v})");
     report.installed.push(format!("{package} (apt)"));
+    Ok(())
+}
+
+/// The host decoder of the firmware's defmt log (crate and binary): the HIL tests
+/// and `decoy hil` pipe QEMU's semihosting output through it.
+pub const DEFMT_PRINT: &str = "defmt-print";
+
+/// Time limit of `cargo install defmt-print` (about 2 to 4 minutes cold).
+const DEFMT_PRINT_INSTALL_TIMEOUT: Duration = Duration::from_secs(1800);
+
+/// Makes sure `defmt-print` runs, installing it with `cargo install defmt-print
+/// --locked` when missing (and saying so).
+fn defmt_print(report: &mut Report) -> Result<()> {
+    if let Some(v) = version(DEFMT_PRINT, &["--version"]) {
+        println!("found: {v}");
+        report
+            .present
+            .push(format!("{DEFMT_PRINT} (cargo install)"));
+        return Ok(());
+    }
+    println!(
+        "missing: {DEFMT_PRINT}; installing it with `cargo install {DEFMT_PRINT} --locked` (about 3 minutes)"
+    );
+    process::run_with_timeout(
+        Command::new("cargo").args(["install", DEFMT_PRINT, "--locked"]),
+        DEFMT_PRINT_INSTALL_TIMEOUT,
+    )
+    .map_err(|e| format!("cannot install {DEFMT_PRINT}: {e}"))?;
+    let now = version(DEFMT_PRINT, &["--version"]).ok_or_else(|| {
+        format!("{DEFMT_PRINT} was installed but does not run (is ~/.cargo/bin on PATH?)")
+    })?;
+    println!("installed: {now}");
+    report.installed.push(format!("{now} (cargo install)"));
     Ok(())
 }
 

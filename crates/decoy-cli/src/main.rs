@@ -13,6 +13,9 @@
 //! - `decoy study discretisation`: the segment-count study (Figs. 13-14) and the
 //!   choice of the embedded model.
 //! - `decoy report`: regenerates `docs/paper-reproduction.md` and its figures.
+//! - `decoy hil`: flies a scenario on the decoy controller firmware under QEMU,
+//!   frame by frame over the decoy link, beside the host's solution
+//!   (`hil_tests::hil_run`).
 //!
 //! Human-readable output by default, `--json` for machines. Errors are one line
 //! `error: ...` on stderr; the exit code is 2 for usage and configuration errors and
@@ -29,6 +32,8 @@ mod studies;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
+use hil_tests::hil_run::{HilOptions, HilRun};
+use hil_tests::qemu::Board;
 use progress::Progress;
 use serde::Serialize;
 use solver_core::dense::evaluate_dense;
@@ -89,6 +94,44 @@ enum Command {
     /// Regenerate the paper reproduction report (docs/paper-reproduction.md and
     /// its figures).
     Report(studies::ReportArgs),
+    /// Fly a scenario on the controller firmware under QEMU (hardware in the loop,
+    /// 10 ms frames over the UART) beside the host's solution: timeseries.csv,
+    /// summary.json, firmware.log and plots.
+    Hil(HilArgs),
+}
+
+#[derive(Args, Debug)]
+struct HilArgs {
+    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE")]
+    scenario: String,
+    /// The board: m4 (Cortex-M4F, f32, mps2-an386) or m7 (Cortex-M7, f64, mps2-an500).
+    #[arg(long, value_enum, default_value_t = BoardArg::M4)]
+    board: BoardArg,
+    /// Cable segments (default: the configuration's solver.segments_embedded; another count builds a firmware variant).
+    #[arg(long, value_name = "N")]
+    segments: Option<usize>,
+    /// Simulated time, s (default: the scenario's).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    t_end: Option<f64>,
+    /// Flight-path rotation rate of a pull-up or turn, rad/s.
+    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    rate: Option<f64>,
+    /// Output directory (default: out/hil-NAME).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Do not draw the plots.
+    #[arg(long)]
+    no_plots: bool,
+}
+
+/// The board `decoy hil` runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BoardArg {
+    /// Cortex-M4F (QEMU mps2-an386), f32: the decoy controller.
+    M4,
+    /// Cortex-M7 (QEMU mps2-an500), f64 in hardware.
+    M7,
 }
 
 #[derive(Args, Debug)]
@@ -325,6 +368,14 @@ fn run(cli: &Cli) -> Result<String, Failure> {
             };
             studies::study_command(&config, args, cli.json)
         }
+        Command::Hil(args) => {
+            if cli.config.is_some() {
+                return Err(usage(
+                    "--config does not apply to `decoy hil`: the firmware is built from config/reference-system.toml",
+                ));
+            }
+            hil_command(&SystemConfig::builtin()?, args, cli.json)
+        }
         Command::Report(args) => {
             let config = match config {
                 Some(c) => c,
@@ -473,6 +524,92 @@ fn simulate_text(
         String::new()
     };
     let _ = writeln!(s, "Wall time {:.3} s{speed}", r.wall_s);
+    let _ = writeln!(s, "Files written to {}:", run.out_dir.display());
+    for file in &run.files {
+        let name = file.file_name().map_or_else(
+            || file.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let _ = writeln!(s, "  {name}");
+    }
+    s
+}
+
+// ---------------------------------------------------------------- hil
+
+fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<String, Failure> {
+    let scenario = Scenario::load(&args.scenario)?;
+    let options = HilOptions {
+        board: match args.board {
+            BoardArg::M4 => Board::M4,
+            BoardArg::M7 => Board::M7,
+        },
+        segments: args.segments,
+        t_end: args.t_end,
+        rate: args.rate,
+        out_dir: args.out.clone(),
+        plots: !args.no_plots,
+    };
+    let mut bar = Progress::new("flying on the firmware", json);
+    let result = hil_tests::hil_run::run_hil(config, &scenario, &options, |f| bar.update(f));
+    bar.finish();
+    let run = result.map_err(|e| {
+        if e.is_usage() {
+            Failure::Usage(e.to_string())
+        } else {
+            Failure::Solver(e.to_string())
+        }
+    })?;
+    if json {
+        let mut text = serde_json::to_string_pretty(&run.summary)
+            .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
+        text.push('\n');
+        return Ok(text);
+    }
+    Ok(hil_text(config, &run))
+}
+
+fn hil_text(config: &SystemConfig, run: &HilRun) -> String {
+    let h = &run.summary;
+    let r = &h.run;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Hardware in the loop `{}` on the {} ({}-bit floats, {} segments), QEMU -icount",
+        r.scenario, h.board, h.precision_bits, r.segments
+    );
+    let _ = writeln!(
+        s,
+        "  {} frames sent, {} answered with an output, {:.0} round trips/s over the UART",
+        h.frames_sent, h.frames_answered, h.link_frames_per_s
+    );
+    let _ = writeln!(
+        s,
+        "Instructions per 10 ms control step  max {}, mean {:.0}",
+        h.instructions_per_step_max, h.instructions_per_step_mean
+    );
+    let _ = writeln!(
+        s,
+        "Connection-point tension             maximum {:.3} N at t = {} s ({:.1} % of the {} N allowable), final {:.3} N",
+        r.max_tension_connection_n,
+        r.t_at_max_tension_s,
+        100.0 * r.max_tension_connection_n / config.cable.allowable_tension,
+        config.cable.allowable_tension,
+        r.final_values.tension_connection_n
+    );
+    let _ = writeln!(
+        s,
+        "Against the host                     max tension difference {:.4} N (f64), {:.4} N (same precision; {} of {} outputs identical)",
+        h.max_tension_diff_vs_host_n,
+        h.max_tension_diff_vs_host_same_precision_n,
+        h.frames_identical_to_host_same_precision,
+        h.frames_answered
+    );
+    let _ = writeln!(
+        s,
+        "Firmware                             flash {} B, static RAM {} B ({})",
+        h.flash_bytes, h.ram_bytes, h.elf
+    );
     let _ = writeln!(s, "Files written to {}:", run.out_dir.display());
     for file in &run.files {
         let name = file.file_name().map_or_else(

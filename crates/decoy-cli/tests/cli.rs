@@ -799,3 +799,89 @@ fn sweep_errors_are_usage_errors() {
         assert!(message.contains(expected), "{args:?}: {message}");
     }
 }
+
+#[test]
+fn hil_bad_input_is_a_usage_error() {
+    let e = error_of(&["hil", "--scenario", "no-such-scenario"], 2);
+    assert!(e.contains("acceleration"), "{e}");
+    let e = error_of(
+        &["hil", "--scenario", "acceleration", "--segments", "65"],
+        2,
+    );
+    assert!(e.contains("--segments"), "{e}");
+    let e = error_of(&["hil", "--scenario", "acceleration", "--segments", "0"], 2);
+    assert!(e.contains("segments"), "{e}");
+    let e = error_of(&["hil", "--scenario", "acceleration", "--board", "m9"], 2);
+    assert!(e.contains("m9"), "{e}");
+    let e = error_of(&["hil", "--scenario", "steady", "--rate", "0.1"], 2);
+    assert!(e.contains("--rate"), "{e}");
+    let e = error_of(&["hil", "--scenario", "acceleration", "--t-end", "-1"], 2);
+    assert!(e.contains("--t-end"), "{e}");
+    let config = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../config/reference-system.toml"
+    );
+    let e = error_of(&["--config", config, "hil", "--scenario", "turn"], 2);
+    assert!(e.contains("--config"), "{e}");
+}
+
+/// `decoy hil` end to end: the firmware under QEMU flies 1 s of the acceleration
+/// case; the summary has the keys of `decoy simulate` and of the run in the loop,
+/// the firmware agrees with the host reference bit for bit, and the files exist.
+#[test]
+fn hil_flies_the_firmware_and_writes_the_outputs() {
+    let dir = std::env::temp_dir().join(format!("decoy-cli-hil-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.to_str().unwrap();
+    let summary = json(&[
+        "hil",
+        "--scenario",
+        "acceleration",
+        "--t-end",
+        "1",
+        "--out",
+        out,
+        "--json",
+    ]);
+    for key in [
+        "scenario",
+        "segments",
+        "max_tension_connection_N",
+        "final",
+        "instructions_per_step_max",
+        "instructions_per_step_mean",
+        "frames_sent",
+        "frames_answered",
+        "max_tension_diff_vs_host_N",
+        "ram_bytes",
+        "flash_bytes",
+    ] {
+        assert!(summary.get(key).is_some(), "no `{key}` in {summary}");
+    }
+    assert_eq!(summary["board"], "m4");
+    assert_eq!(num(&summary, "segments"), 16.0);
+    assert_eq!(num(&summary, "frames_sent"), 102.0);
+    assert_eq!(num(&summary, "frames_answered"), 101.0);
+    assert_eq!(
+        num(&summary, "max_tension_diff_vs_host_same_precision_N"),
+        0.0
+    );
+    assert!(
+        num(&summary, "max_tension_diff_vs_host_N") < 1.0,
+        "{summary}"
+    );
+    assert!(num(&summary, "instructions_per_step_max") > 10_000.0);
+    assert!(num(&summary, "ram_bytes") > 0.0 && num(&summary, "flash_bytes") > 0.0);
+    let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 101);
+    assert!(csv.starts_with("t_s,seq,tension_connection_N,"), "{csv}");
+    for file in [
+        "summary.json",
+        "firmware.log",
+        "tensions.png",
+        "attitude.svg",
+    ] {
+        assert!(dir.join(file).is_file(), "{file} missing");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

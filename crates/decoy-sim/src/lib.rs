@@ -57,12 +57,12 @@ pub mod trace;
 
 pub use error::SimError;
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
-pub use plots::PLOT_NAMES;
+pub use plots::{COMPARISON_PLOT_NAMES, PLOT_NAMES, write_comparison_plots};
 pub use profile::FlightProfile;
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
 pub use run::{
     CABLE_HEADER, FinalValues, InitialState, RunOptions, RunOutput, Sample, Snapshot, StoppedAt,
-    Summary, TIMESERIES_HEADER, describe_layout, simulate,
+    Summary, TIMESERIES_HEADER, describe_layout, format_time, format_value, simulate, summarize,
 };
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,

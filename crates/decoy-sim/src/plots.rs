@@ -17,6 +17,12 @@ pub const PLOT_NAMES: [&str; 5] = [
     "tension-profile",
 ];
 
+/// A quantity of a sample, named.
+type Quantity = (&'static str, fn(&Sample) -> f64);
+
+/// The file stems [`write_comparison_plots`] writes, in order.
+pub const COMPARISON_PLOT_NAMES: [&str; 2] = ["tensions", "attitude"];
+
 fn series(label: &str, samples: &[Sample], y: impl Fn(&Sample) -> f64) -> Series {
     Series {
         label: label.to_owned(),
@@ -147,6 +153,70 @@ pub(crate) fn write_all(
     emit(
         "tension-profile",
         write_plot(&profile, &dir.join("tension-profile")),
+    )?;
+    Ok(files)
+}
+
+/// Draws the time-series plots of several runs of one scenario on common axes
+/// (`tensions`: connection- and towing-point tension; `attitude`: decoy pitch and
+/// angle of attack, and yaw), one line per run and quantity, labelled
+/// `"<run label>: <quantity>"`; for example the firmware in the loop beside the
+/// host solver (`decoy hil`). Returns the files written (PNG and SVG of each of
+/// [`COMPARISON_PLOT_NAMES`]).
+pub fn write_comparison_plots(
+    name: &str,
+    runs: &[(&str, &[Sample])],
+    dir: &Path,
+) -> Result<Vec<PathBuf>, SimError> {
+    let time = "t [s]";
+    let mut files = Vec::new();
+    let mut emit = |stem: &str, result: Result<[PathBuf; 2], PlotError>| match result {
+        Ok(paths) => {
+            files.extend(paths);
+            Ok(())
+        }
+        Err(e) => Err(SimError::Plot {
+            stem: dir.join(stem),
+            message: e.to_string(),
+        }),
+    };
+    let lines = |quantities: &[Quantity]| -> Vec<Series> {
+        runs.iter()
+            .flat_map(|(label, samples)| {
+                quantities
+                    .iter()
+                    .map(move |(what, y)| series(&format!("{label}: {what}"), samples, y))
+            })
+            .collect()
+    };
+    let tensions = plot(
+        format!("{name}: cable tension"),
+        time,
+        "tension [N]",
+        lines(&[
+            ("connection point", |s| s.tension_connection),
+            ("towing point", |s| s.tension_tow),
+        ]),
+    );
+    emit("tensions", write_plot(&tensions, &dir.join("tensions")))?;
+    let pitch = plot(
+        format!("{name}: decoy pitch and angle of attack"),
+        time,
+        "angle [deg]",
+        lines(&[
+            ("pitch", |s| s.euler_deg[1]),
+            ("angle of attack", |s| s.aoa_deg),
+        ]),
+    );
+    let yaw = plot(
+        format!("{name}: decoy yaw"),
+        time,
+        "yaw [deg]",
+        lines(&[("yaw", |s| s.euler_deg[2])]),
+    );
+    emit(
+        "attitude",
+        write_stacked(&[pitch, yaw], &dir.join("attitude")),
     )?;
     Ok(files)
 }

@@ -474,6 +474,58 @@ pub(crate) struct Recorder<'a> {
     pub dt: f64,
 }
 
+/// The summary of a run measured elsewhere (for example by the firmware in the
+/// loop, `decoy hil`) from its samples, with the same definitions as
+/// [`simulate`]'s: `samples` in time order, every one of them measured (maxima,
+/// minima, pitch amplitude from `manoeuvre_start` on) and taken as the rows of
+/// `timeseries.csv` (settling time). `stopped` says why such a run ended early.
+#[allow(clippy::too_many_arguments)]
+pub fn summarize(
+    scenario: &str,
+    segments: usize,
+    dt: f64,
+    t_end: f64,
+    manoeuvre_start: f64,
+    samples: &[Sample],
+    wall_s: f64,
+    stopped: Option<String>,
+) -> Summary {
+    let mut statistics = Statistics::new(manoeuvre_start);
+    for s in samples {
+        statistics.add(s);
+    }
+    let last = samples.last().copied().unwrap_or_default();
+    Summary {
+        scenario: scenario.to_owned(),
+        segments,
+        dt,
+        t_end,
+        max_tension_connection_n: statistics.max_tension,
+        t_at_max_tension_s: round_time(statistics.t_at_max),
+        pitch_oscillation_amplitude_deg: statistics.pitch_amplitude(),
+        settling_time_s: if stopped.is_some() {
+            None
+        } else {
+            settling_time(samples).map(round_time)
+        },
+        final_values: FinalValues {
+            tension_connection_n: last.tension_connection,
+            tension_tow_n: last.tension_tow,
+            decoy_pitch_deg: last.euler_deg[1],
+            decoy_cg_behind_m: last.cg[0],
+            decoy_cg_below_m: last.cg[2],
+            decoy_cg_lateral_m: last.cg[1],
+        },
+        min_cable_clearance_to_exhaust_m: statistics.min_exhaust,
+        min_decoy_clearance_to_aircraft_m: statistics.min_decoy,
+        wall_s,
+        stopped: stopped.map(|reason| StoppedAt {
+            t_s: round_time(last.t),
+            reason,
+        }),
+    }
+}
+
 /// Why a run stopped early: the reason in words and the solver's error.
 pub(crate) type Stop = (String, Option<SolveError>);
 
@@ -844,7 +896,7 @@ pub(crate) fn round_time(t: f64) -> f64 {
 }
 
 /// Times in the CSV files: up to nine decimals, trailing zeros dropped.
-pub(crate) fn format_time(t: f64) -> String {
+pub fn format_time(t: f64) -> String {
     let s = format!("{t:.9}");
     let s = s.trim_end_matches('0');
     let s = s.strip_suffix('.').unwrap_or(s);
@@ -856,7 +908,7 @@ pub(crate) fn format_time(t: f64) -> String {
 }
 
 /// Values in the CSV files: six decimals (no negative zero).
-pub(crate) fn format_value(v: f64) -> String {
+pub fn format_value(v: f64) -> String {
     let s = format!("{v:.6}");
     if s == "-0.000000" {
         "0.000000".to_owned()
@@ -914,6 +966,40 @@ mod tests {
         let large = run(MAX_SEGMENTS);
         let _ = std::fs::remove_dir_all(&dir);
         assert!(small == large);
+    }
+
+    #[test]
+    fn summarize_measures_the_samples() {
+        let sample = |t: f64, tension_connection: f64, pitch: f64| Sample {
+            t,
+            tension_connection,
+            euler_deg: [0.0, pitch, 0.0],
+            exhaust_clearance: -t,
+            decoy_clearance: 10.0 + t,
+            ..Sample::default()
+        };
+        let samples: Vec<Sample> = (0..=300)
+            .map(|k| {
+                let t = f64::from(k) * 0.01;
+                let bump = if (1.0..1.2).contains(&t) { 50.0 } else { 0.0 };
+                sample(
+                    t,
+                    100.0 + bump,
+                    if t >= 1.0 { 2.0 + bump / 50.0 } else { 2.0 },
+                )
+            })
+            .collect();
+        let s = summarize("x", 16, 0.005, 3.0, 1.0, &samples, 0.5, None);
+        assert_eq!(s.max_tension_connection_n, 150.0);
+        assert_eq!(s.t_at_max_tension_s, 1.0);
+        assert_eq!(s.pitch_oscillation_amplitude_deg, 0.5);
+        assert_eq!(s.settling_time_s, Some(1.2));
+        assert_eq!(s.final_values.tension_connection_n, 100.0);
+        assert_eq!(s.min_cable_clearance_to_exhaust_m, -3.0);
+        assert_eq!(s.min_decoy_clearance_to_aircraft_m, 10.0);
+        let stopped = summarize("x", 16, 0.005, 3.0, 1.0, &samples, 0.5, Some("why".into()));
+        assert_eq!(stopped.settling_time_s, None);
+        assert_eq!(stopped.stopped.unwrap().t_s, 3.0);
     }
 
     #[test]

@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use object::{Object, ObjectSection, SectionFlags, SectionKind};
 
-use crate::qemu::{Captured, RunError, run_with_timeout};
+use crate::qemu::{Board, Captured, RunError, run_with_timeout};
 
 /// The bare-metal target of the firmware.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
@@ -43,6 +43,28 @@ pub fn release_elf() -> PathBuf {
         .join("release")
         .join(BINARY)
 }
+
+/// The ELF of the M7 profile that [`build_board`] produces
+/// (`firmware/target/m7/...`: its own target directory, so the two profiles do
+/// not rebuild each other).
+pub fn release_elf_m7() -> PathBuf {
+    firmware_dir()
+        .join("target")
+        .join("m7")
+        .join(TARGET)
+        .join("release")
+        .join(BINARY)
+}
+
+/// Cargo arguments of the M7 profile (the firmware's `cargo build-m7` alias): the
+/// `m7` feature (f64 solver, `Board::M7` in Hello) and code for the Cortex-M7's
+/// double-precision FPU.
+pub const M7_ARGS: &[&str] = &[
+    "--features",
+    "m7",
+    "--config",
+    "target.thumbv7em-none-eabihf.rustflags=[\"-C\", \"target-cpu=cortex-m7\"]",
+];
 
 /// Why the firmware could not be built.
 #[derive(Debug)]
@@ -99,6 +121,11 @@ pub fn build_command() -> Command {
 /// [`build_command`] for a firmware workspace at `dir` (the firmware itself, or a
 /// [`build_with_segments`] copy of it).
 fn build_command_in(dir: &Path) -> Command {
+    build_command_with(dir, &[])
+}
+
+/// [`build_command_in`] with further cargo arguments.
+fn build_command_with(dir: &Path, extra: &[&str]) -> Command {
     let manifest = dir.join("Cargo.toml");
     let mut cmd = if debian_toolchain() {
         let mut cmd = Command::new("rustup");
@@ -116,7 +143,10 @@ fn build_command_in(dir: &Path) -> Command {
         cmd.args(["build", "--release"]);
         cmd
     };
-    cmd.arg("--manifest-path").arg(manifest).current_dir(dir);
+    cmd.args(extra)
+        .arg("--manifest-path")
+        .arg(manifest)
+        .current_dir(dir);
     for var in [
         "RUSTFLAGS",
         "CARGO_ENCODED_RUSTFLAGS",
@@ -149,9 +179,82 @@ pub fn build_release(timeout: Duration) -> Result<PathBuf, BuildError> {
     }
 }
 
+/// Builds the firmware for `board` within `timeout` and returns its ELF: the
+/// default build for [`Board::M4`], the M7 profile ([`M7_ARGS`], target directory
+/// `firmware/target/m7`) for [`Board::M7`].
+pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildError> {
+    match board {
+        Board::M4 => build_release(timeout),
+        Board::M7 => {
+            let target_dir = firmware_dir().join("target").join("m7");
+            let mut cmd = build_command_with(&firmware_dir(), M7_ARGS);
+            cmd.arg("--target-dir").arg(&target_dir);
+            run_build(&mut cmd, timeout, release_elf_m7())
+        }
+    }
+}
+
+/// Runs a firmware build and checks that it produced `elf`.
+fn run_build(cmd: &mut Command, timeout: Duration, elf: PathBuf) -> Result<PathBuf, BuildError> {
+    let out = run_with_timeout(
+        cmd,
+        timeout,
+        "cargo is not on PATH; install Rust with rustup",
+    )
+    .map_err(BuildError::Run)?;
+    if !out.status.success() {
+        return Err(BuildError::Failed(out));
+    }
+    if elf.is_file() {
+        Ok(elf)
+    } else {
+        Err(BuildError::MissingElf(elf))
+    }
+}
+
+/// [`build_with_segments`] for `board` (the M7 profile's variants have their own
+/// target directory and ELF names `decoy-firmware-m7-<segments>seg`). Errors if
+/// `segments` is 0 or more than [`MAX_SEGMENTS`].
+pub fn build_board_with_segments(
+    board: Board,
+    segments: usize,
+    timeout: Duration,
+) -> Result<PathBuf, BuildError> {
+    if !(1..=MAX_SEGMENTS).contains(&segments) {
+        return Err(BuildError::Variant(format!(
+            "the firmware's solver holds 1 to {MAX_SEGMENTS} segments, not {segments}"
+        )));
+    }
+    match board {
+        Board::M4 => build_with_segments(segments, timeout),
+        Board::M7 => {
+            let variants = variants_dir();
+            let root = variants.join(format!("segments-{segments}"));
+            prepare_variant(&root, segments).map_err(|e| {
+                BuildError::Variant(format!(
+                    "preparing the sources for the {segments}-segment firmware: {e}"
+                ))
+            })?;
+            let target_dir = variants.join("target-m7");
+            let mut cmd = build_command_with(&root.join("firmware"), M7_ARGS);
+            cmd.arg("--target-dir").arg(&target_dir);
+            let built = run_build(
+                &mut cmd,
+                timeout,
+                target_dir.join(TARGET).join("release").join(BINARY),
+            )?;
+            let elf = variants.join(format!("{BINARY}-m7-{segments}seg"));
+            fs::copy(&built, &elf).map_err(|e| {
+                BuildError::Variant(format!("copying the {segments}-segment M7 ELF: {e}"))
+            })?;
+            Ok(elf)
+        }
+    }
+}
+
 /// The segment counts [`build_with_segments`] accepts: the firmware's solver has
-/// room for [`crate::scenario::SEGMENT_CAPACITY`] segments.
-pub const MAX_SEGMENTS: usize = crate::scenario::SEGMENT_CAPACITY;
+/// room for [`crate::flight::CONTROLLER_CAPACITY`] segments.
+pub const MAX_SEGMENTS: usize = crate::flight::CONTROLLER_CAPACITY;
 
 /// Where [`build_with_segments`] puts its copies, their shared target directory and
 /// the ELFs: `target/firmware-variants/` of the root workspace.
@@ -218,7 +321,12 @@ fn prepare_variant(root: &Path, segments: usize) -> std::io::Result<()> {
     )?;
     // `firmware/` is a workspace of its own because the root manifest excludes it;
     // the copy sits under the root workspace's directory, so it says so itself.
-    let manifest = fs::read_to_string(firmware_dir().join("Cargo.toml"))?;
+    // Its path dependencies point at the workspace's crates themselves (not through
+    // the `crates` link below): decoy-link inherits solver-core from the root
+    // workspace, and two paths to one package collide in the lockfile.
+    let crates = workspace.join("crates");
+    let manifest = fs::read_to_string(firmware_dir().join("Cargo.toml"))?
+        .replace("\"../crates/", &format!("\"{}/", crates.display()));
     write_if_changed(
         &root.join("firmware").join("Cargo.toml"),
         format!("{manifest}\n# Added by hil_tests::firmware::build_with_segments.\n[workspace]\n")

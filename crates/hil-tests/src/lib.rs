@@ -1,23 +1,33 @@
 //! # hil-tests: the firmware in the loop
 //!
-//! Host-side helpers that build the firmware (`firmware/`, a workspace of its own),
-//! boot it on QEMU's Cortex-M4F board with deterministic instruction counting, and
-//! read what it prints; the integration tests in `tests/` compare that with the
-//! host solver.
+//! Host-side tools that build the decoy controller firmware (`firmware/`, a
+//! workspace of its own), boot it under QEMU with deterministic instruction
+//! counting (`-icount`), talk the decoy link (`decoy_link`) to it over its UART,
+//! and compare its answers with the same controller run on the host. The
+//! integration tests in `tests/` assert that; `decoy hil` ([`hil_run`]) is the
+//! same run for people, with `decoy simulate`'s outputs.
 //!
 //! - [`qemu`]: run a program with a time limit, killed on timeout and on drop;
-//!   the QEMU command line of the board.
-//! - [`firmware`]: build the firmware (also with another segment count, for the
-//!   benchmark report), locate its ELF, read its memory use.
-//! - [`report`]: parse the firmware's semihosting output.
-//! - [`scenario`]: the scenario the firmware runs (the same source file).
+//!   the QEMU command line of the boards ([`qemu::Board`]: M4, M7).
+//! - [`firmware`]: build the firmware (M4, M7, other segment counts), locate its
+//!   ELF, read its memory use.
+//! - [`serial`]: the UART's TCP listener (ephemeral port, accept with a deadline).
+//! - [`link`]: [`link::Session`] (QEMU + link, killed on drop, defmt log shown
+//!   when a test fails) and [`link::Link`] (frames with deadlines).
+//! - [`defmt`]: decoding the firmware's defmt log with `defmt-print`.
+//! - [`flight`]: scenario frames every 10 ms, lock-step flying, the host replay
+//!   and the comparison.
+//! - [`host`], [`reference`]: the host controller's configuration, and
+//!   `hil-reference`, the host controller with the target's maths (bit for bit).
+//! - [`hil_run`]: `decoy hil`.
 #![deny(missing_docs)]
 
+pub mod defmt;
 pub mod firmware;
+pub mod flight;
+pub mod hil_run;
+pub mod host;
+pub mod link;
 pub mod qemu;
-pub mod report;
-
-// The firmware's own scenario module, compiled here unchanged, so that the host
-// replays exactly the flight path and step sequence the target runs.
-#[path = "../../../firmware/src/scenario.rs"]
-pub mod scenario;
+pub mod reference;
+pub mod serial;

@@ -19,6 +19,44 @@ pub const QEMU: &str = "qemu-system-arm";
 /// Board and CPU: MPS2 AN386, Cortex-M4F (4 MiB flash at 0, 4 MiB RAM at 0x2000_0000).
 pub const BOARD_ARGS: &[&str] = &["-M", "mps2-an386", "-cpu", "cortex-m4"];
 
+/// Board and CPU of the M7 profile: MPS2 AN500, Cortex-M7 (same memory map; f64 in
+/// hardware with the firmware's `cortex-m7` build).
+pub const BOARD_ARGS_M7: &[&str] = &["-M", "mps2-an500", "-cpu", "cortex-m7"];
+
+/// The QEMU board a firmware runs on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Board {
+    /// MPS2 AN386 with a Cortex-M4F (single-precision FPU): the decoy controller.
+    #[default]
+    M4,
+    /// MPS2 AN500 with a Cortex-M7 (double-precision FPU).
+    M7,
+}
+
+impl Board {
+    /// QEMU's `-M` and `-cpu` arguments for this board.
+    pub fn qemu_args(self) -> &'static [&'static str] {
+        match self {
+            Board::M4 => BOARD_ARGS,
+            Board::M7 => BOARD_ARGS_M7,
+        }
+    }
+
+    /// The board's name on the command line (`m4`, `m7`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Board::M4 => "m4",
+            Board::M7 => "m7",
+        }
+    }
+}
+
+impl fmt::Display for Board {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// No display or monitor; semihosting on (console and exit code to the host);
 /// virtual time 1 ns per executed instruction, so SysTick counts instructions
 /// deterministically. Mirrors `firmware/qemu-run.sh`.
@@ -137,9 +175,20 @@ impl Supervised {
         timeout: Duration,
         hint: &'static str,
     ) -> Result<Self, RunError> {
+        Self::spawn_with_stdin(cmd, Stdio::null(), timeout, hint)
+    }
+
+    /// [`Supervised::spawn`] with `stdin` as the child's standard input (a file to
+    /// feed it, for example).
+    pub fn spawn_with_stdin(
+        cmd: &mut Command,
+        stdin: Stdio,
+        timeout: Duration,
+        hint: &'static str,
+    ) -> Result<Self, RunError> {
         let program = cmd.get_program().to_string_lossy().into_owned();
         let mut child = cmd
-            .stdin(Stdio::null())
+            .stdin(stdin)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
@@ -198,6 +247,18 @@ impl Supervised {
                 }
             }
         }
+    }
+
+    /// Whether the child is still running (an error to watch it counts as not).
+    pub fn is_running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+
+    /// Kills the child if it still runs, and returns what it printed: for programs
+    /// such as the firmware under QEMU that run until stopped.
+    pub fn stop(mut self) -> Result<Captured, RunError> {
+        let status = self.kill().map_err(|error| self.io_error(error))?;
+        Ok(self.collect(status))
     }
 
     /// Kills the child (if still running) and reaps it. Only the child itself: the
@@ -264,6 +325,7 @@ pub const QEMU_MISSING_HINT: &str =
 #[derive(Clone, Debug)]
 pub struct Qemu {
     program: PathBuf,
+    board: Board,
     timeout: Duration,
     serial: OsString,
     extra: Vec<OsString>,
@@ -280,10 +342,17 @@ impl Qemu {
     pub fn new() -> Self {
         Qemu {
             program: PathBuf::from(QEMU),
+            board: Board::M4,
             timeout: Duration::from_secs(120),
             serial: OsString::from("none"),
             extra: Vec::new(),
         }
+    }
+
+    /// Sets the board (default [`Board::M4`]).
+    pub fn board(mut self, board: Board) -> Self {
+        self.board = board;
+        self
     }
 
     /// Sets the time limit of a run.
@@ -308,7 +377,7 @@ impl Qemu {
     /// The command line that boots `elf`.
     pub fn command(&self, elf: &Path) -> Command {
         let mut cmd = Command::new(&self.program);
-        cmd.args(BOARD_ARGS)
+        cmd.args(self.board.qemu_args())
             .args(HEADLESS_ARGS)
             .arg("-serial")
             .arg(&self.serial)
@@ -399,5 +468,41 @@ mod tests {
         );
         assert!(line.contains("-serial none"), "{line}");
         assert!(line.ends_with("-kernel fw.elf"), "{line}");
+    }
+
+    #[test]
+    fn m7_board_and_tcp_serial() {
+        let cmd = Qemu::new()
+            .board(Board::M7)
+            .serial("tcp:127.0.0.1:4567,nodelay=on")
+            .command(Path::new("fw.elf"));
+        let line = cmd
+            .get_args()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join(" ");
+        assert!(line.starts_with("-M mps2-an500 -cpu cortex-m7"), "{line}");
+        assert!(
+            line.contains("-serial tcp:127.0.0.1:4567,nodelay=on"),
+            "{line}"
+        );
+        assert!(
+            line.contains("-semihosting-config enable=on,target=native"),
+            "{line}"
+        );
+    }
+
+    #[test]
+    fn stop_kills_a_running_child_and_keeps_its_output() {
+        let mut child = Supervised::spawn(
+            Command::new("sh").args(["-c", "echo up; exec sleep 30"]),
+            Duration::from_secs(60),
+            "",
+        )
+        .unwrap();
+        thread::sleep(Duration::from_millis(200));
+        assert!(child.is_running());
+        let out = child.stop().unwrap();
+        assert_eq!(out.stdout_text(), "up\n");
     }
 }

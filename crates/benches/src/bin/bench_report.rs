@@ -15,12 +15,14 @@ use benches::report::{
     self, FIRMWARE_SEGMENTS, FirmwareRow, Inputs, Machine, read_criterion, read_gungraun,
 };
 use hil_tests::firmware;
-use hil_tests::qemu::Qemu;
+use hil_tests::flight;
+use hil_tests::link::Session;
+use hil_tests::qemu::Board;
 
 /// Time limit of one firmware build.
 const BUILD_TIMEOUT: Duration = Duration::from_secs(600);
-/// Time limit of one QEMU run.
-const QEMU_TIMEOUT: Duration = Duration::from_secs(300);
+/// Simulated time of the acceleration flown for the instruction counts, s.
+const FIRMWARE_RUN_S: f64 = 3.0;
 
 fn main() -> ExitCode {
     match run() {
@@ -115,28 +117,44 @@ fn firmware_row(segments: usize) -> FirmwareRow {
     FirmwareRow { segments, outcome }
 }
 
+/// Builds the firmware with `segments` segments, boots it under QEMU and flies
+/// 3 s of the acceleration scenario over the decoy link (frames every 10 ms);
+/// returns the max and mean instructions per control step.
 fn firmware_counts(segments: usize) -> Result<(u64, u64), String> {
     let elf = firmware::build_with_segments(segments, BUILD_TIMEOUT).map_err(|e| e.to_string())?;
-    let output = Qemu::new()
-        .timeout(QEMU_TIMEOUT)
-        .run(&elf)
+    let mut config = decoy_config::SystemConfig::builtin().map_err(|e| e.to_string())?;
+    config.solver.segments_embedded = segments;
+    let plan = decoy_sim::Scenario::builtin("acceleration")
+        .and_then(|s| {
+            s.plan(
+                &config,
+                &decoy_sim::RunOptions {
+                    segments: Some(segments),
+                    grading: Some(config.solver.grading_ratio_embedded),
+                    t_end: Some(FIRMWARE_RUN_S),
+                    plots: false,
+                    ..decoy_sim::RunOptions::default()
+                },
+            )
+        })
         .map_err(|e| e.to_string())?;
-    if !output.status.success() {
-        let last = output
-            .stdout_text()
-            .lines()
-            .last()
-            .unwrap_or("no output")
-            .to_owned();
+    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(FIRMWARE_RUN_S));
+    let messages = flight::scenario_messages(&frames);
+    let mut session = Session::start(&elf, Board::M4).map_err(|e| e.to_string())?;
+    let flown = flight::fly(&mut session, &messages, |_| {}).map_err(|e| e.to_string())?;
+    let answers = flown.answers();
+    if let Some(rejected) = answers.iter().find_map(|a| match a {
+        decoy_link::DeviceMessage::Rejected(r) => Some(*r),
+        _ => None,
+    }) {
         return Err(format!(
-            "pending firmware issue: the firmware stops with `{last}`. Its scenario \
-             (firmware/src/scenario.rs) fixes the RK4 step at 5 ms, which is unstable \
-             with this many segments; measuring it needs a firmware option for the step \
-             (or a steady-flight benchmark mode)"
+            "pending firmware issue: the firmware rejects frame {:?} ({:?}): the link's \
+             5 ms RK4 step is unstable with this many segments",
+            rejected.seq, rejected.reason
         ));
     }
-    let parsed = hil_tests::report::parse(&output.stdout_text()).map_err(|e| e.to_string())?;
-    Ok((parsed.done.max_instructions, parsed.done.mean_instructions))
+    let stats = flight::instruction_stats(&answers);
+    Ok((u64::from(stats.max), stats.mean.round() as u64))
 }
 
 /// First line of a command's stdout, or `unknown`.

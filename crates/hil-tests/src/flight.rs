@@ -1,0 +1,393 @@
+//! Flying a scenario over the link: aircraft state frames every control period from
+//! the same flight profiles `decoy simulate` flies, sent in lock step to the
+//! firmware, and the host's replay of the very same messages through
+//! `decoy_link::Controller` (f32 and f64) for comparison.
+
+use std::time::{Duration, Instant};
+
+use decoy_config::SystemConfig;
+use decoy_link::{
+    AircraftStateFrame, Command, Controller, DeviceMessage, HostMessage, NoCounter, OutputFrame,
+};
+use solver_core::{AircraftState, FlightPath, Real};
+
+use crate::link::{LinkError, Session};
+
+/// The controller's period: one aircraft state frame every 10 ms of simulated time.
+pub const CONTROL_PERIOD_S: f64 = 0.01;
+
+/// Segment capacity of the controller on the target and on the host.
+pub const CONTROLLER_CAPACITY: usize = 64;
+
+/// The aircraft state of `path` at `time_s` as a frame numbered `seq`.
+pub fn state_frame(seq: u32, time_s: f64, state: &AircraftState<f64>) -> AircraftStateFrame {
+    let f32s = |v: &solver_core::Vec3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    AircraftStateFrame {
+        seq,
+        time_s,
+        position_ned_m: [state.position.x, state.position.y, state.position.z],
+        velocity_ned_mps: f32s(&state.velocity),
+        acceleration_ned_mps2: f32s(&state.acceleration),
+        attitude_wxyz: state.attitude.map(|q| q as f32),
+        body_rate_radps: f32s(&state.angular_rate),
+        body_angular_acceleration_radps2: f32s(&state.angular_acceleration),
+    }
+}
+
+/// Frames `0..=count` of `path`, frame k at t = k [`CONTROL_PERIOD_S`] (computed
+/// as a product, not a running sum, so the times carry no accumulated error).
+pub fn scenario_frames<P: FlightPath<f64>>(path: &P, count: u32) -> Vec<AircraftStateFrame> {
+    (0..=count)
+        .map(|k| {
+            let t = f64::from(k) * CONTROL_PERIOD_S;
+            state_frame(k, t, &path.state_at(t))
+        })
+        .collect()
+}
+
+/// Frames needed to fly `t_end` seconds: the last one at or just after `t_end`.
+pub fn frame_count(t_end: f64) -> u32 {
+    (t_end / CONTROL_PERIOD_S - 1e-9).ceil().max(1.0) as u32
+}
+
+/// A run's messages: `ResetToTrim`, then every frame (the first one trims).
+pub fn scenario_messages(frames: &[AircraftStateFrame]) -> Vec<HostMessage> {
+    std::iter::once(HostMessage::Command(Command::ResetToTrim))
+        .chain(frames.iter().copied().map(HostMessage::State))
+        .collect()
+}
+
+/// One message sent and the firmware's answer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Exchange {
+    /// What the host sent.
+    pub sent: HostMessage,
+    /// What the firmware answered.
+    pub answer: DeviceMessage,
+}
+
+/// A flown sequence of messages.
+#[derive(Clone, Debug)]
+pub struct Flown {
+    /// Every message and its answer, in order.
+    pub exchanges: Vec<Exchange>,
+    /// Wall-clock time of the exchanges.
+    pub wall: Duration,
+}
+
+impl Flown {
+    /// The answers, in order.
+    pub fn answers(&self) -> Vec<DeviceMessage> {
+        self.exchanges.iter().map(|e| e.answer).collect()
+    }
+
+    /// Round trips per second of wall-clock time.
+    pub fn frames_per_second(&self) -> f64 {
+        self.exchanges.len() as f64 / self.wall.as_secs_f64().max(1e-9)
+    }
+}
+
+/// Sends each message in lock step (the next one only after the answer to the
+/// previous one), calling `progress` with the fraction done now and then.
+pub fn fly(
+    session: &mut Session,
+    messages: &[HostMessage],
+    mut progress: impl FnMut(f64),
+) -> Result<Flown, LinkError> {
+    let started = Instant::now();
+    let mut exchanges = Vec::with_capacity(messages.len());
+    let every = (messages.len() / 200).max(1);
+    for (i, message) in messages.iter().enumerate() {
+        let answer = session.link.request(message)?;
+        exchanges.push(Exchange {
+            sent: *message,
+            answer,
+        });
+        if i % every == 0 {
+            progress(i as f64 / messages.len() as f64);
+        }
+    }
+    progress(1.0);
+    Ok(Flown {
+        exchanges,
+        wall: started.elapsed(),
+    })
+}
+
+/// Why the host controller could not be built.
+#[derive(Debug)]
+pub struct HostSetupError(pub String);
+
+impl std::fmt::Display for HostSetupError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "cannot build the host controller: {}", self.0)
+    }
+}
+
+impl std::error::Error for HostSetupError {}
+
+/// The host's copy of the controller the firmware runs, in precision `T`, built
+/// from `config` (its embedded segment layout).
+pub fn host_controller<T: Real>(
+    config: &SystemConfig,
+) -> Result<Box<Controller<T, CONTROLLER_CAPACITY>>, HostSetupError> {
+    let controller_config =
+        crate::host::controller_config::<T>(config).map_err(|e| HostSetupError(e.to_string()))?;
+    Controller::new(controller_config)
+        .map(Box::new)
+        .map_err(|e| HostSetupError(e.to_string()))
+}
+
+/// Feeds `messages` to the host controller and returns its answers, one per
+/// message, as the firmware gives them.
+pub fn replay<T: Real>(
+    controller: &mut Controller<T, CONTROLLER_CAPACITY>,
+    messages: &[HostMessage],
+) -> Vec<DeviceMessage> {
+    messages
+        .iter()
+        .map(|m| controller.handle(*m, &mut NoCounter))
+        .collect()
+}
+
+/// The largest differences between the firmware's outputs and the host's.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Agreement {
+    /// Output frames compared.
+    pub outputs: usize,
+    /// Of these, frames equal in every field but `instructions`.
+    pub identical: usize,
+    /// Largest relative difference of either tension.
+    pub max_relative_tension: f64,
+    /// Largest absolute difference of either tension, N.
+    pub max_tension_diff_n: f64,
+    /// Largest difference of a decoy Euler angle or the angle of attack, rad.
+    pub max_angle_diff_rad: f64,
+    /// Largest difference of a decoy position component, m.
+    pub max_position_diff_m: f64,
+}
+
+/// An answer that is not of the same kind, or not the same value (ignoring
+/// `instructions`), on both sides.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mismatch {
+    /// Index of the exchange.
+    pub index: usize,
+    /// The firmware's answer (`None`: it gave fewer answers).
+    pub firmware: Option<DeviceMessage>,
+    /// The host's answer (`None`: it gave fewer answers).
+    pub host: Option<DeviceMessage>,
+}
+
+/// Compares the firmware's answers with the host's. Outputs are compared field by
+/// field; every other answer (rejections, status) must be equal.
+pub fn compare(firmware: &[DeviceMessage], host: &[DeviceMessage]) -> (Agreement, Vec<Mismatch>) {
+    let mut agreement = Agreement::default();
+    let mut mismatches = Vec::new();
+    if firmware.len() != host.len() {
+        let index = firmware.len().min(host.len());
+        mismatches.push(Mismatch {
+            index,
+            firmware: firmware.get(index).copied(),
+            host: host.get(index).copied(),
+        });
+    }
+    for (index, (f, h)) in firmware.iter().zip(host).enumerate() {
+        match (f, h) {
+            (DeviceMessage::Output(a), DeviceMessage::Output(b)) => {
+                agreement.outputs += 1;
+                let mut a_masked = *a;
+                a_masked.instructions = b.instructions;
+                if a_masked == *b {
+                    agreement.identical += 1;
+                }
+                if a.seq != b.seq || a.steps != b.steps || a.flags != b.flags {
+                    mismatches.push(Mismatch {
+                        index,
+                        firmware: Some(*f),
+                        host: Some(*h),
+                    });
+                }
+                accumulate(&mut agreement, a, b);
+            }
+            _ if f == h => {}
+            _ => mismatches.push(Mismatch {
+                index,
+                firmware: Some(*f),
+                host: Some(*h),
+            }),
+        }
+    }
+    (agreement, mismatches)
+}
+
+fn accumulate(agreement: &mut Agreement, a: &OutputFrame, b: &OutputFrame) {
+    for (x, y) in [
+        (a.connection_tension_n, b.connection_tension_n),
+        (a.tow_tension_n, b.tow_tension_n),
+    ] {
+        let (x, y) = (f64::from(x), f64::from(y));
+        let diff = (x - y).abs();
+        agreement.max_tension_diff_n = agreement.max_tension_diff_n.max(diff);
+        agreement.max_relative_tension = agreement
+            .max_relative_tension
+            .max(diff / y.abs().max(1e-30));
+    }
+    let angles = a
+        .decoy_euler_rel_rad
+        .iter()
+        .zip(&b.decoy_euler_rel_rad)
+        .chain(std::iter::once((
+            &a.angle_of_attack_rad,
+            &b.angle_of_attack_rad,
+        )));
+    for (x, y) in angles {
+        agreement.max_angle_diff_rad = agreement
+            .max_angle_diff_rad
+            .max(f64::from(wrap_pi(x - y)).abs());
+    }
+    for (x, y) in a.decoy_position_fp_m.iter().zip(&b.decoy_position_fp_m) {
+        agreement.max_position_diff_m = agreement.max_position_diff_m.max(f64::from(x - y).abs());
+    }
+}
+
+/// An angle difference brought into (-pi, pi].
+fn wrap_pi(d: f32) -> f32 {
+    let two_pi = 2.0 * core::f32::consts::PI;
+    let mut d = d % two_pi;
+    if d > core::f32::consts::PI {
+        d -= two_pi;
+    } else if d <= -core::f32::consts::PI {
+        d += two_pi;
+    }
+    d
+}
+
+/// Instructions per control step over a run's outputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InstructionStats {
+    /// Control steps counted (outputs that integrated at least one RK4 step).
+    pub steps: usize,
+    /// Most instructions in one control step.
+    pub max: u32,
+    /// Mean instructions per control step.
+    pub mean: f64,
+    /// The `seq` of the costliest step.
+    pub max_seq: u32,
+}
+
+/// The instruction statistics of the outputs among `answers` that integrated
+/// (the trim frame, with no RK4 step, is left out).
+pub fn instruction_stats(answers: &[DeviceMessage]) -> InstructionStats {
+    let mut stats = InstructionStats::default();
+    let mut total = 0u64;
+    for answer in answers {
+        if let DeviceMessage::Output(out) = answer
+            && out.steps > 0
+        {
+            stats.steps += 1;
+            total += u64::from(out.instructions);
+            if out.instructions > stats.max {
+                stats.max = out.instructions;
+                stats.max_seq = out.seq;
+            }
+        }
+    }
+    if stats.steps > 0 {
+        stats.mean = total as f64 / stats.steps as f64;
+    }
+    stats
+}
+
+/// The output frames among `answers`.
+pub fn outputs(answers: &[DeviceMessage]) -> Vec<OutputFrame> {
+    answers
+        .iter()
+        .filter_map(|a| match a {
+            DeviceMessage::Output(o) => Some(*o),
+            _ => None,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use solver_core::profiles::LevelAcceleration;
+
+    #[test]
+    fn frames_follow_the_profile_every_period() {
+        let path = LevelAcceleration {
+            altitude: 9000.0,
+            initial_speed: 182.0,
+            final_speed: 243.0,
+            start: 2.0,
+            acceleration: 10.0,
+        };
+        let frames = scenario_frames(&path, frame_count(3.0));
+        assert_eq!(frames.len(), 301);
+        assert_eq!(frames[0].seq, 0);
+        assert_eq!(frames[0].time_s, 0.0);
+        assert_eq!(frames[300].time_s, 3.0);
+        assert_eq!(frames[250].seq, 250);
+        assert_eq!(frames[250].time_s, 2.5);
+        assert_eq!(frames[250].position_ned_m[2], -9000.0);
+        assert_eq!(frames[250].acceleration_ned_mps2, [10.0, 0.0, 0.0]);
+        assert_eq!(frames[250].velocity_ned_mps[0], 187.0);
+        assert_eq!(frames[100].velocity_ned_mps[0], 182.0);
+        assert_eq!(frames[100].attitude_wxyz, [1.0, 0.0, 0.0, 0.0]);
+        let messages = scenario_messages(&frames);
+        assert_eq!(messages.len(), 302);
+        assert_eq!(messages[0], HostMessage::Command(Command::ResetToTrim));
+        assert_eq!(messages[1], HostMessage::State(frames[0]));
+    }
+
+    #[test]
+    fn frame_count_reaches_the_end() {
+        assert_eq!(frame_count(10.0), 1000);
+        assert_eq!(frame_count(0.015), 2);
+        assert_eq!(frame_count(0.0), 1);
+    }
+
+    /// The harness against the host controller on the other end of a real TCP
+    /// link: lock-step exchanges give exactly the answers of a replay.
+    #[test]
+    fn an_emulated_device_answers_as_the_replay() {
+        let config = SystemConfig::builtin().unwrap();
+        let path = LevelAcceleration {
+            altitude: 9000.0,
+            initial_speed: 182.0,
+            final_speed: 243.0,
+            start: 0.2,
+            acceleration: 10.0,
+        };
+        let messages = scenario_messages(&scenario_frames(&path, 50));
+        let mut session = Session::emulated(
+            host_controller::<f32>(&config).unwrap(),
+            crate::qemu::Board::M4,
+        )
+        .unwrap();
+        assert_eq!(session.hello.precision_bits, 32);
+        assert_eq!(usize::from(session.hello.capacity), CONTROLLER_CAPACITY);
+        let flown = fly(&mut session, &messages, |_| {}).unwrap();
+        let replayed = replay(&mut host_controller::<f32>(&config).unwrap(), &messages);
+        assert_eq!(flown.answers(), replayed);
+        let (agreement, mismatches) = compare(&flown.answers(), &replayed);
+        assert!(mismatches.is_empty());
+        assert_eq!(agreement.outputs, 51);
+        assert_eq!(agreement.identical, 51);
+        assert!(session.device_running());
+        assert!(session.finish().was_running);
+
+        let mut f64_host = host_controller::<f64>(&config).unwrap();
+        let (close, _) = compare(&flown.answers(), &replay(&mut f64_host, &messages));
+        assert!(close.max_relative_tension < 1e-2, "{close:?}");
+        assert!(close.max_relative_tension > 0.0);
+    }
+
+    #[test]
+    fn angle_differences_wrap() {
+        assert!((wrap_pi(2.0 * core::f32::consts::PI - 0.1) + 0.1).abs() < 1e-5);
+        assert_eq!(wrap_pi(0.25), 0.25);
+    }
+}

@@ -1,0 +1,553 @@
+//! `decoy hil`: a scenario flown by the firmware under QEMU, frame by frame over
+//! the link, beside the host's replay of the same frames, written as `decoy
+//! simulate` writes its runs (`timeseries.csv`, `summary.json`, plots; see
+//! `docs/outputs.md`).
+
+use std::fmt;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use decoy_config::SystemConfig;
+use decoy_link::{AircraftStateFrame, DeviceMessage, HostMessage, OutputFrame};
+use decoy_sim::{
+    RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary, format_time, format_value,
+    summarize, write_comparison_plots,
+};
+use serde::Serialize;
+
+use crate::firmware::{self, BuildError};
+use crate::flight::{self, HostSetupError, InstructionStats};
+use crate::link::{LinkError, Session};
+use crate::qemu::Board;
+use crate::reference::{Reference, ReferenceError};
+
+/// Time limit of a firmware build.
+pub const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
+
+/// The RK4 step the controller takes at most (`decoy_link`'s stepping rule).
+pub const MAX_STEP_S: f64 = decoy_link::MAX_STEP_S;
+
+/// The header of `decoy hil`'s `timeseries.csv` (see `docs/outputs.md`).
+pub const HIL_TIMESERIES_HEADER: &str = "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N";
+
+/// What `decoy hil` runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HilOptions {
+    /// The board (and firmware build).
+    pub board: Board,
+    /// Cable segments; `None`: the configuration's `solver.segments_embedded`
+    /// (another count builds a firmware variant).
+    pub segments: Option<usize>,
+    /// Simulated time, s (default: the scenario's).
+    pub t_end: Option<f64>,
+    /// Flight-path rotation rate of a pull-up or turn, rad/s.
+    pub rate: Option<f64>,
+    /// Output directory (default `out/hil-<scenario>`).
+    pub out_dir: Option<PathBuf>,
+    /// Draw the plots.
+    pub plots: bool,
+}
+
+impl Default for HilOptions {
+    fn default() -> Self {
+        HilOptions {
+            board: Board::M4,
+            segments: None,
+            t_end: None,
+            rate: None,
+            out_dir: None,
+            plots: true,
+        }
+    }
+}
+
+/// `decoy hil`'s `summary.json`: `decoy simulate`'s summary of the firmware's run
+/// plus the keys of the run in the loop.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HilSummary {
+    /// The firmware run's summary, as `decoy simulate` defines it.
+    #[serde(flatten)]
+    pub run: Summary,
+    /// `m4` or `m7`.
+    pub board: String,
+    /// The firmware's floating-point precision, bits.
+    pub precision_bits: u8,
+    /// Most instructions one 10 ms control step took (SysTick under `-icount`).
+    pub instructions_per_step_max: u32,
+    /// Mean instructions per 10 ms control step.
+    pub instructions_per_step_mean: f64,
+    /// Messages sent to the firmware (the `ResetToTrim` command and the frames).
+    pub frames_sent: usize,
+    /// Of those, answered by an output frame.
+    pub frames_answered: usize,
+    /// Largest difference of either tension from the host's f64 solution, N.
+    #[serde(rename = "max_tension_diff_vs_host_N")]
+    pub max_tension_diff_vs_host_n: f64,
+    /// Largest difference of either tension from the host reference in the
+    /// firmware's own precision with the target's maths (`hil-reference`; f32 on
+    /// the M4), N: 0 when they agree bit for bit.
+    #[serde(rename = "max_tension_diff_vs_host_same_precision_N")]
+    pub max_tension_diff_vs_host_same_precision_n: f64,
+    /// Of the output frames, those equal to the host's same-precision ones in every
+    /// field but `instructions`.
+    pub frames_identical_to_host_same_precision: usize,
+    /// Static RAM of the ELF (`.data` + `.bss`), bytes.
+    pub ram_bytes: u64,
+    /// Flash of the ELF (`.text` + `.data`), bytes.
+    pub flash_bytes: u64,
+    /// Round trips per second over the link (wall clock).
+    pub link_frames_per_s: f64,
+    /// The ELF that ran.
+    pub elf: String,
+}
+
+/// A finished `decoy hil` run.
+#[derive(Clone, Debug)]
+pub struct HilRun {
+    /// `summary.json`'s contents.
+    pub summary: HilSummary,
+    /// The output directory.
+    pub out_dir: PathBuf,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// The decoded firmware log.
+    pub log: String,
+}
+
+/// Why `decoy hil` failed.
+#[derive(Debug)]
+pub enum HilError {
+    /// The scenario or an option is unusable (exit code 2).
+    Usage(String),
+    /// The scenario could not be planned.
+    Scenario(SimError),
+    /// The firmware could not be built.
+    Build(BuildError),
+    /// The host reference could not be built.
+    Host(HostSetupError),
+    /// The host reference with the target's maths (`hil-reference`) failed.
+    Reference(ReferenceError),
+    /// QEMU or the link failed.
+    Link(LinkError),
+    /// The firmware rejected a frame of the scenario (the outputs up to then are
+    /// written).
+    Stopped {
+        /// Time of the last accepted frame, s.
+        t_s: f64,
+        /// The rejection.
+        reason: String,
+        /// Where the outputs are.
+        out_dir: PathBuf,
+    },
+    /// Writing an output failed.
+    Output(String),
+}
+
+impl HilError {
+    /// Whether the input must change (exit code 2) rather than the run failing (1).
+    pub fn is_usage(&self) -> bool {
+        match self {
+            HilError::Usage(_) => true,
+            HilError::Scenario(e) => e.is_usage(),
+            _ => false,
+        }
+    }
+}
+
+impl fmt::Display for HilError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            HilError::Usage(m) | HilError::Output(m) => f.write_str(m),
+            HilError::Scenario(e) => write!(f, "{e}"),
+            HilError::Build(e) => write!(f, "{e}"),
+            HilError::Host(e) => write!(f, "{e}"),
+            HilError::Reference(e) => write!(f, "{e}"),
+            HilError::Link(e) => write!(f, "{e}"),
+            HilError::Stopped {
+                t_s,
+                reason,
+                out_dir,
+            } => write!(
+                f,
+                "the firmware stopped accepting the scenario after t = {} s: {reason}; the outputs up to then are in {}",
+                format_time(*t_s),
+                out_dir.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for HilError {}
+
+/// Builds the firmware `decoy hil` needs: the configured one, or a variant with
+/// `segments` segments; returns its ELF.
+pub fn build_firmware(
+    board: Board,
+    segments: usize,
+    configured: usize,
+) -> Result<PathBuf, HilError> {
+    check_segments(segments)?;
+    let elf = if segments == configured {
+        firmware::build_board(board, BUILD_TIMEOUT)
+    } else {
+        firmware::build_board_with_segments(board, segments, BUILD_TIMEOUT)
+    };
+    elf.map_err(HilError::Build)
+}
+
+/// `--segments` must fit the firmware's solver.
+fn check_segments(segments: usize) -> Result<(), HilError> {
+    if (1..=firmware::MAX_SEGMENTS).contains(&segments) {
+        Ok(())
+    } else {
+        Err(HilError::Usage(format!(
+            "--segments must be between 1 and {} (the firmware's capacity), got {segments}",
+            firmware::MAX_SEGMENTS
+        )))
+    }
+}
+
+/// Flies `scenario` on the firmware in QEMU (`options.board`) and on the host, and
+/// writes `timeseries.csv`, `summary.json` and (with `options.plots`) the plots.
+/// `progress` gets the fraction of frames done.
+pub fn run_hil(
+    config: &SystemConfig,
+    scenario: &Scenario,
+    options: &HilOptions,
+    progress: impl FnMut(f64),
+) -> Result<HilRun, HilError> {
+    let configured = config.solver.segments_embedded;
+    let segments = options.segments.unwrap_or(configured);
+    check_segments(segments)?;
+    if scenario.kind == ScenarioKind::Recorded && options.rate.is_some() {
+        return Err(HilError::Usage(
+            "--rate does not apply to a recorded flight".to_owned(),
+        ));
+    }
+    let mut config = config.clone();
+    config.solver.segments_embedded = segments;
+    let plan = scenario
+        .plan(
+            &config,
+            &RunOptions {
+                segments: Some(segments),
+                grading: Some(config.solver.grading_ratio_embedded),
+                dt: Some(MAX_STEP_S),
+                t_end: options.t_end,
+                rate: options.rate,
+                plots: false,
+                ..RunOptions::default()
+            },
+        )
+        .map_err(HilError::Scenario)?;
+    let elf = build_firmware(options.board, segments, configured)?;
+    let memory = firmware::memory_usage(&elf).map_err(HilError::Output)?;
+
+    let wall = Instant::now();
+    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(plan.t_end));
+    let messages = flight::scenario_messages(&frames);
+    let mut session = Session::start(&elf, options.board).map_err(HilError::Link)?;
+    let hello = session.hello;
+    let flown = fly_until_rejected(&mut session, &messages, progress);
+    let log = session.finish();
+    let (exchanges, stop, fps) = match flown {
+        Ok(run) => run,
+        Err(e) => return Err(HilError::Link(e)),
+    };
+    let sent: Vec<HostMessage> = exchanges.iter().map(|(m, _)| *m).collect();
+    let answers: Vec<DeviceMessage> = exchanges.into_iter().map(|(_, a)| a).collect();
+
+    let host64 = {
+        let mut c = flight::host_controller::<f64>(&config).map_err(HilError::Host)?;
+        flight::replay(&mut c, &sent)
+    };
+    // The firmware's precision with the target's maths: bit for bit.
+    let reference = crate::reference::build(BUILD_TIMEOUT).map_err(HilError::Reference)?;
+    let same_precision = Reference::start(&reference, hello.precision_bits, segments)
+        .and_then(|mut r| r.replay(&sent))
+        .map_err(HilError::Reference)?;
+    let (vs64, _) = flight::compare(&answers, &host64);
+    let (vs_same, _) = flight::compare(&answers, &same_precision);
+    let stats: InstructionStats = flight::instruction_stats(&answers);
+
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("hil-{}", plan.name)));
+    fs::create_dir_all(&out_dir)
+        .map_err(|e| HilError::Output(format!("cannot create {}: {e}", out_dir.display())))?;
+    let rows = paired_rows(&frames, &answers, &host64);
+    let firmware_samples: Vec<Sample> = rows
+        .iter()
+        .map(|(frame, fw, _)| sample(fw, frame, plan.lateral_sign))
+        .collect();
+    let host_samples: Vec<Sample> = rows
+        .iter()
+        .map(|(frame, _, host)| sample(host, frame, plan.lateral_sign))
+        .collect();
+    let timeseries = out_dir.join("timeseries.csv");
+    write_timeseries(&timeseries, &rows, &firmware_samples, &host_samples)?;
+
+    let run = summarize(
+        &plan.name,
+        segments,
+        MAX_STEP_S,
+        plan.t_end,
+        plan.profile.manoeuvre_start(),
+        &firmware_samples,
+        wall.elapsed().as_secs_f64(),
+        stop.as_ref().map(|(_, reason)| reason.clone()),
+    );
+    let summary = HilSummary {
+        run,
+        board: options.board.name().to_owned(),
+        precision_bits: hello.precision_bits,
+        instructions_per_step_max: stats.max,
+        instructions_per_step_mean: stats.mean,
+        frames_sent: sent.len(),
+        frames_answered: answers
+            .iter()
+            .filter(|a| matches!(a, DeviceMessage::Output(_)))
+            .count(),
+        max_tension_diff_vs_host_n: vs64.max_tension_diff_n,
+        max_tension_diff_vs_host_same_precision_n: vs_same.max_tension_diff_n,
+        frames_identical_to_host_same_precision: vs_same.identical,
+        ram_bytes: memory.ram(),
+        flash_bytes: memory.flash(),
+        link_frames_per_s: fps,
+        elf: elf.display().to_string(),
+    };
+    let summary_path = out_dir.join("summary.json");
+    let mut json = serde_json::to_string_pretty(&summary)
+        .map_err(|e| HilError::Output(format!("cannot write the summary: {e}")))?;
+    json.push('\n');
+    fs::write(&summary_path, json)
+        .map_err(|e| HilError::Output(format!("cannot write {}: {e}", summary_path.display())))?;
+    let log_path = out_dir.join("firmware.log");
+    fs::write(&log_path, &log.log)
+        .map_err(|e| HilError::Output(format!("cannot write {}: {e}", log_path.display())))?;
+    let mut files = vec![timeseries, summary_path, log_path];
+    if options.plots {
+        let plotted = write_comparison_plots(
+            &format!("{} (HIL, {})", plan.name, options.board),
+            &[
+                ("firmware", &firmware_samples[..]),
+                ("host f64", &host_samples[..]),
+            ],
+            &out_dir,
+        )
+        .map_err(|e| HilError::Output(e.to_string()))?;
+        files.extend(plotted);
+        files.extend(instructions_plot(
+            &plan.name,
+            options.board,
+            &rows,
+            &out_dir,
+        )?);
+    }
+    if let Some((t_s, reason)) = stop {
+        return Err(HilError::Stopped {
+            t_s,
+            reason,
+            out_dir,
+        });
+    }
+    Ok(HilRun {
+        summary,
+        out_dir,
+        files,
+        log: log.log,
+    })
+}
+
+/// The exchanges up to and including the first rejected frame, why it was rejected
+/// (and the time of the last accepted frame), and the round trips per second.
+type Flight = (
+    Vec<(HostMessage, DeviceMessage)>,
+    Option<(f64, String)>,
+    f64,
+);
+
+fn fly_until_rejected(
+    session: &mut Session,
+    messages: &[HostMessage],
+    mut progress: impl FnMut(f64),
+) -> Result<Flight, LinkError> {
+    let started = Instant::now();
+    let mut exchanges = Vec::with_capacity(messages.len());
+    let mut last_time = 0.0;
+    let every = (messages.len() / 500).max(1);
+    for (i, message) in messages.iter().enumerate() {
+        let answer = session.link.request(message)?;
+        let rejected = match (&answer, message) {
+            (DeviceMessage::Rejected(r), HostMessage::State(frame)) => Some(format!(
+                "frame {} (t = {} s) rejected: {:?} ({} so far)",
+                frame.seq,
+                format_time(frame.time_s),
+                r.reason,
+                r.count
+            )),
+            (DeviceMessage::Output(o), _) => {
+                last_time = o.time_s;
+                None
+            }
+            _ => None,
+        };
+        exchanges.push((*message, answer));
+        if let Some(reason) = rejected {
+            let fps = exchanges.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
+            return Ok((exchanges, Some((last_time, reason)), fps));
+        }
+        if i % every == 0 {
+            progress(i as f64 / messages.len() as f64);
+        }
+    }
+    progress(1.0);
+    let fps = exchanges.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
+    Ok((exchanges, None, fps))
+}
+
+/// The frames answered by an output on both sides, with both outputs, matched by
+/// `seq`.
+fn paired_rows(
+    frames: &[AircraftStateFrame],
+    firmware: &[DeviceMessage],
+    host: &[DeviceMessage],
+) -> Vec<(AircraftStateFrame, OutputFrame, OutputFrame)> {
+    let host_outputs = flight::outputs(host);
+    flight::outputs(firmware)
+        .into_iter()
+        .filter_map(|fw| {
+            let frame = frames.iter().find(|f| f.seq == fw.seq)?;
+            let host = host_outputs.iter().find(|h| h.seq == fw.seq)?;
+            Some((*frame, fw, *host))
+        })
+        .collect()
+}
+
+/// The file stem of the instruction-count plot.
+pub const INSTRUCTIONS_PLOT: &str = "instructions";
+
+/// Draws the instructions of every control step against time (the trim frame
+/// left out), with the target for comparison.
+fn instructions_plot(
+    name: &str,
+    board: Board,
+    rows: &[(AircraftStateFrame, OutputFrame, OutputFrame)],
+    dir: &Path,
+) -> Result<Vec<PathBuf>, HilError> {
+    let steps: Vec<&OutputFrame> = rows
+        .iter()
+        .map(|(_, o, _)| o)
+        .filter(|o| o.steps > 0)
+        .collect();
+    let t: Vec<f64> = steps.iter().map(|o| o.time_s).collect();
+    let mut series = vec![decoy_plots::Series {
+        label: format!("firmware ({board})"),
+        x: t.clone(),
+        y: steps.iter().map(|o| f64::from(o.instructions)).collect(),
+    }];
+    if let (Some(first), Some(last)) = (t.first(), t.last()) {
+        series.push(decoy_plots::Series {
+            label: format!("target {INSTRUCTIONS_TARGET}"),
+            x: vec![*first, *last],
+            y: vec![f64::from(INSTRUCTIONS_TARGET); 2],
+        });
+    }
+    let plot = decoy_plots::Plot {
+        title: format!("{name} (HIL, {board}): instructions per 10 ms control step"),
+        x_label: "t [s]".to_owned(),
+        y_label: "instructions".to_owned(),
+        series,
+        aspect: decoy_plots::Aspect::Free,
+        invert_y: false,
+    };
+    decoy_plots::write_plot(&plot, &dir.join(INSTRUCTIONS_PLOT))
+        .map(Vec::from)
+        .map_err(|e| HilError::Output(format!("the {INSTRUCTIONS_PLOT} plot: {e}")))
+}
+
+/// The target of instructions per 10 ms control step, drawn for comparison.
+pub const INSTRUCTIONS_TARGET: u32 = 100_000;
+
+/// One output as a `decoy simulate` sample (flight-path frame, degrees; angles
+/// relative to the flight-path frame; the closest point's position along the
+/// cable is not reported by the controller: NaN).
+pub fn sample(out: &OutputFrame, frame: &AircraftStateFrame, lateral_sign: f64) -> Sample {
+    let p = out.decoy_position_fp_m.map(f64::from);
+    let e = out.decoy_euler_rel_rad.map(|a| f64::from(a).to_degrees());
+    let v = frame.velocity_ned_mps.map(f64::from);
+    Sample {
+        t: out.time_s,
+        tension_connection: f64::from(out.connection_tension_n),
+        tension_tow: f64::from(out.tow_tension_n),
+        // `0.0 - x`, not `-x`: no negative zero in the files.
+        cg: [0.0 - p[0], (0.0 - p[1]) * lateral_sign + 0.0, p[2]],
+        euler_deg: e,
+        aoa_deg: f64::from(out.angle_of_attack_rad).to_degrees(),
+        exhaust_clearance: f64::from(out.cable_clearance_exhaust_m),
+        exhaust_along: f64::NAN,
+        decoy_clearance: f64::from(out.decoy_clearance_aircraft_m),
+        speed: (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt(),
+        altitude: -frame.position_ned_m[2],
+    }
+}
+
+fn write_timeseries(
+    path: &Path,
+    rows: &[(AircraftStateFrame, OutputFrame, OutputFrame)],
+    firmware: &[Sample],
+    host: &[Sample],
+) -> Result<(), HilError> {
+    let mut text = String::with_capacity(rows.len() * 256);
+    text.push_str(HIL_TIMESERIES_HEADER);
+    text.push('\n');
+    for (((_, fw, _), s), h) in rows.iter().zip(firmware).zip(host) {
+        text.push_str(&format_time(s.t));
+        text.push_str(&format!(",{}", fw.seq));
+        for v in [
+            s.tension_connection,
+            s.tension_tow,
+            s.cg[0],
+            s.cg[1],
+            s.cg[2],
+            s.euler_deg[0],
+            s.euler_deg[1],
+            s.euler_deg[2],
+            s.aoa_deg,
+            s.exhaust_clearance,
+            s.decoy_clearance,
+            s.speed,
+            s.altitude,
+        ] {
+            text.push(',');
+            text.push_str(&format_value(v));
+        }
+        text.push_str(&format!(",{},{},{}", fw.flags, fw.steps, fw.instructions));
+        for v in [
+            h.tension_connection,
+            h.tension_tow,
+            h.euler_deg[1],
+            h.aoa_deg,
+            s.tension_connection - h.tension_connection,
+            s.tension_tow - h.tension_tow,
+        ] {
+            text.push(',');
+            text.push_str(&format_value(v));
+        }
+        text.push('\n');
+    }
+    fs::write(path, text)
+        .map_err(|e| HilError::Output(format!("cannot write {}: {e}", path.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_header_has_a_column_per_value() {
+        assert_eq!(HIL_TIMESERIES_HEADER.split(',').count(), 2 + 13 + 3 + 6);
+    }
+}

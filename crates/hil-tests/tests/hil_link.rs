@@ -1,0 +1,758 @@
+//! The firmware in the loop over the real link: the decoy controller firmware boots
+//! on QEMU's Cortex-M4F (`mps2-an386`, `-icount shift=0`), its UART on a TCP port,
+//! and the host drives it frame by frame at the 10 ms control period with the
+//! aircraft states of the paper's scenarios (the profiles `decoy simulate` flies).
+//!
+//! What is asserted:
+//!
+//! - **Same answers as the host.** The host replays the very messages sent through
+//!   `decoy_link::Controller` (same configuration, same `FramePath`, same stepping
+//!   rule) built with the target's maths (`crates/hil-reference`: nalgebra's
+//!   `libm-force`). In f32 (the firmware's precision) every answer must be equal:
+//!   outputs in every field but `instructions`, bit for bit
+//!   ([`F32_RELATIVE_TOLERANCE`] = 0), rejections and status frames exactly; the M7
+//!   profile (f64) likewise against the f64 reference. Against the host's f64
+//!   solution the connection tension must agree within
+//!   [`F64_CONNECTION_TOLERANCE`] (0.5 %) and the towing-point tension (about a
+//!   fifth of it) within [`F64_TOW_TOLERANCE`] (1.5 %).
+//! - **Instruction budget.** Instructions per 10 ms control step (the `instructions`
+//!   field: SysTick under `-icount`, exact to one tick of 40 instructions) at most
+//!   [`CONTROL_STEP_BUDGET`]; the issue's target is [`CONTROL_STEP_TARGET`]
+//!   (goal [`CONTROL_STEP_GOAL`]). Max and mean are printed.
+//! - **Determinism.** Two runs receive byte-identical streams (for now: identical
+//!   but for instruction counts within one SysTick tick, a known firmware issue;
+//!   see the test).
+//! - **Robustness.** Corrupted, truncated, garbage, oversize frames; non-finite and
+//!   out-of-range values; a bad quaternion; time going backwards or jumping; link
+//!   silence. Each gets its typed answer with the right counter (the same answers a
+//!   host controller gives to the same bytes), QEMU keeps running, and the next
+//!   valid frame is answered exactly as in an undisturbed run.
+//!
+//! Scenario lengths (test time): the acceleration is flown for 10 s (its whole
+//! ramp, Mach 0.6 to 0.8 from t = 2 s to about 8 s). The 5 ms RK4 step of the
+//! stepping rule (decoy_link::MAX_STEP_S) diverges, on the host in f64 as on the
+//! target, in the turn at 0.20 rad/s at t = 0.91 s, in the pull-up at 0.20 rad/s at
+//! 2.85 s and at 0.05 / 0.10 rad/s at 8.87 / 8.71 s (the cable snap after the
+//! rotation): those are flown up to just before (0.80 s, 2.50 s, 8.00 s), the turn
+//! at 0.20 rad/s also past it (the SolverFailure rejections must match the host's
+//! and the firmware must keep answering), and the turn at 0.10 rad/s for 10 s.
+//!
+//! A missing QEMU, target or `defmt-print` fails with a message saying to run
+//! `cargo xtask setup`: nothing is skipped. When a test fails, the firmware's
+//! defmt log (decoded with `defmt-print`) and QEMU's stderr are printed with it.
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use decoy_config::SystemConfig;
+use decoy_link::{
+    AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, RejectReason, StatusFlags,
+};
+use decoy_sim::{RunOptions, Scenario};
+use hil_tests::flight::{self, Exchange};
+use hil_tests::link::Session;
+use hil_tests::qemu::Board;
+use hil_tests::reference::{self, Reference};
+use hil_tests::{defmt, firmware};
+
+/// Time limit of the firmware build (a cold build takes about a minute).
+const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
+
+/// Largest relative tension difference from the host controller in f32: none, the
+/// same code in the same precision gives the same bits.
+const F32_RELATIVE_TOLERANCE: f64 = 0.0;
+/// Largest relative difference of the connection tension from the host
+/// controller in f64.
+const F64_CONNECTION_TOLERANCE: f64 = 5e-3;
+/// Largest relative difference of the towing-point tension (about 50 N, a fifth of
+/// the connection tension, so f32 round-off weighs more) from the host in f64.
+const F64_TOW_TOLERANCE: f64 = 1.5e-2;
+
+/// Instructions one 10 ms control step (two RK4 steps of 5 ms, the frame's
+/// validation, flight path and outputs) may execute: a guard just above the
+/// measurement, so that a regression fails; lower it as the solver gets faster.
+///
+/// Measured (16 segments, capacity 64, f32 on the M4): max 191,360, mean 188,800 to
+/// 190,700 depending on the scenario, of which the two RK4 steps are about 134,000.
+/// The issue's target is [`CONTROL_STEP_TARGET`] (goal [`CONTROL_STEP_GOAL`]): not
+/// met yet (the solver is being optimised).
+const CONTROL_STEP_BUDGET: u32 = 195_000;
+/// Instructions per SysTick tick under `-icount shift=0` (25 MHz core clock, 1 ns
+/// per instruction): the resolution of the firmware's counts.
+const INSTRUCTIONS_PER_TICK: u32 = 40;
+/// The same guard for the M7 profile (f64 in hardware): measured max 204,960.
+const CONTROL_STEP_BUDGET_M7: u32 = 210_000;
+/// The issue's target per control step.
+const CONTROL_STEP_TARGET: u32 = 100_000;
+/// The issue's goal per control step.
+const CONTROL_STEP_GOAL: u32 = 40_000;
+
+/// The firmware ELF, built once per test binary. Checks `defmt-print` first.
+fn elf() -> &'static PathBuf {
+    static ELF: OnceLock<PathBuf> = OnceLock::new();
+    ELF.get_or_init(|| {
+        defmt::require().unwrap_or_else(|e| panic!("{e}"));
+        let started = Instant::now();
+        let elf = firmware::build_board(Board::M4, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
+        let memory = firmware::memory_usage(&elf).unwrap_or_else(|e| panic!("{e}"));
+        println!(
+            "firmware built in {:.1} s: {}; {memory}",
+            started.elapsed().as_secs_f64(),
+            elf.display()
+        );
+        elf
+    })
+}
+
+/// A fresh firmware session on the M4.
+fn session() -> Session {
+    Session::start(elf(), Board::M4).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn config() -> &'static SystemConfig {
+    static CONFIG: OnceLock<SystemConfig> = OnceLock::new();
+    CONFIG.get_or_init(|| SystemConfig::builtin().expect("the built-in configuration"))
+}
+
+/// The host reference program (`hil-reference`), built once.
+fn reference_program() -> &'static PathBuf {
+    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
+    PROGRAM.get_or_init(|| reference::build(BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// The host reference in f32 with the target's maths.
+fn host32() -> Reference {
+    Reference::start(reference_program(), 32, config().solver.segments_embedded)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The frames of a shipped scenario (optionally at another rate) for `t_end` s, as
+/// `decoy simulate` would fly it with the embedded layout.
+fn frames(name: &str, rate: Option<f64>, t_end: f64) -> Vec<AircraftStateFrame> {
+    let config = config();
+    let plan = Scenario::builtin(name)
+        .and_then(|s| {
+            s.plan(
+                config,
+                &RunOptions {
+                    segments: Some(config.solver.segments_embedded),
+                    grading: Some(config.solver.grading_ratio_embedded),
+                    rate,
+                    t_end: Some(t_end),
+                    plots: false,
+                    ..RunOptions::default()
+                },
+            )
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+    flight::scenario_frames(&plan.profile, flight::frame_count(t_end))
+}
+
+/// Flies `frames` (after ResetToTrim) on a fresh session; returns the exchanges,
+/// the bytes received after Hello, and the round trips per second.
+fn fly(frames: &[AircraftStateFrame]) -> (Vec<Exchange>, Vec<u8>, f64) {
+    let mut s = session();
+    let boot_bytes = s.link.received().len();
+    let flown = flight::fly(&mut s, &flight::scenario_messages(frames), |_| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.device_running(), "QEMU exited during the run");
+    let received = s.link.received()[boot_bytes..].to_vec();
+    let fps = flown.frames_per_second();
+    let log = s.finish();
+    assert!(log.was_running, "QEMU exited during the run");
+    (flown.exchanges, received, fps)
+}
+
+/// Flies a scenario and checks it against the host in f32 and f64 and the
+/// instruction budget. `outputs_at_least`: outputs the run must give (the frames
+/// before the step rule diverges).
+fn check_scenario(label: &str, frames: &[AircraftStateFrame], outputs_at_least: usize) {
+    let (exchanges, _, fps) = fly(frames);
+    let sent: Vec<HostMessage> = exchanges.iter().map(|e| e.sent).collect();
+    let answers: Vec<DeviceMessage> = exchanges.iter().map(|e| e.answer).collect();
+    assert!(
+        matches!(answers[0], DeviceMessage::Status(_)),
+        "{label}: ResetToTrim answered by {:?}",
+        answers[0]
+    );
+
+    let host32 = host32().replay(&sent).unwrap_or_else(|e| panic!("{e}"));
+    let (agreement, mismatches) = flight::compare(&answers, &host32);
+    assert!(
+        mismatches.is_empty(),
+        "{label}: {} answers differ from the host controller's (f32); first: {:#?}",
+        mismatches.len(),
+        mismatches[0]
+    );
+    assert!(
+        agreement.outputs >= outputs_at_least,
+        "{label}: {} outputs, expected at least {outputs_at_least}",
+        agreement.outputs
+    );
+    assert!(
+        agreement.max_relative_tension <= F32_RELATIVE_TOLERANCE,
+        "{label}: tensions differ from the host's f32 by up to {:.3e} relative ({} of {} outputs identical)",
+        agreement.max_relative_tension,
+        agreement.identical,
+        agreement.outputs
+    );
+    assert_eq!(
+        agreement.identical, agreement.outputs,
+        "{label}: outputs not bit-identical to the host's f32 ones: {agreement:?}"
+    );
+
+    let mut controller64 =
+        flight::host_controller::<f64>(config()).unwrap_or_else(|e| panic!("{e}"));
+    let host64 = flight::replay(&mut controller64, &sent);
+    let firmware_outputs = flight::outputs(&answers);
+    let host_outputs = flight::outputs(&host64);
+    // Worst relative difference (and its absolute value, seq) of the connection
+    // and of the towing-point tension.
+    let mut worst64 = [(0.0f64, 0.0f64, 0u32); 2];
+    for out in &firmware_outputs {
+        let Some(h) = host_outputs.iter().find(|h| h.seq == out.seq) else {
+            continue;
+        };
+        for (worst, (a, b)) in worst64.iter_mut().zip([
+            (out.connection_tension_n, h.connection_tension_n),
+            (out.tow_tension_n, h.tow_tension_n),
+        ]) {
+            let diff = (f64::from(a) - f64::from(b)).abs();
+            let relative = diff / f64::from(b).abs();
+            if relative > worst.0 {
+                *worst = (relative, diff, out.seq);
+            }
+        }
+    }
+    for ((relative, diff, seq), (what, tolerance)) in worst64.iter().zip([
+        ("connection", F64_CONNECTION_TOLERANCE),
+        ("towing-point", F64_TOW_TOLERANCE),
+    ]) {
+        assert!(
+            *relative <= tolerance,
+            "{label}: the {what} tension differs from the host's f64 by {:.3} % ({diff:.3} N at seq {seq})",
+            relative * 100.0,
+        );
+    }
+    let stats = flight::instruction_stats(&answers);
+    println!(
+        "{label}: {} frames at {fps:.0} frames/s; {} outputs bit-identical to the host f32; \
+         vs host f64: connection tension max {:.3} % ({:.3} N), towing point {:.3} % ({:.3} N); instructions per control step max {} \
+         (seq {}), mean {:.0}; budget {CONTROL_STEP_BUDGET}, target {CONTROL_STEP_TARGET}, \
+         goal {CONTROL_STEP_GOAL}",
+        exchanges.len(),
+        agreement.identical,
+        worst64[0].0 * 100.0,
+        worst64[0].1,
+        worst64[1].0 * 100.0,
+        worst64[1].1,
+        stats.max,
+        stats.max_seq,
+        stats.mean
+    );
+    assert!(
+        stats.max <= CONTROL_STEP_BUDGET,
+        "{label}: a control step took {} instructions (seq {}), over the budget of {CONTROL_STEP_BUDGET}",
+        stats.max,
+        stats.max_seq
+    );
+}
+
+#[test]
+fn acceleration_matches_the_host_and_fits_the_budget() {
+    check_scenario(
+        "acceleration (10 s)",
+        &frames("acceleration", None, 10.0),
+        1001,
+    );
+}
+
+#[test]
+fn pull_ups_match_the_host_and_fit_the_budget() {
+    for (rate, t_end) in [(0.05, 8.0), (0.10, 8.0), (0.20, 2.5)] {
+        let frames = frames("pull-up", Some(rate), t_end);
+        let count = frames.len();
+        check_scenario(&format!("pull-up {rate} rad/s ({t_end} s)"), &frames, count);
+    }
+}
+
+#[test]
+fn turns_match_the_host_and_fit_the_budget() {
+    let frames010 = frames("turn", Some(0.10), 10.0);
+    let count = frames010.len();
+    check_scenario("turn 0.10 rad/s (10 s)", &frames010, count);
+    check_scenario(
+        "turn 0.20 rad/s (0.8 s)",
+        &frames("turn", Some(0.20), 0.8),
+        81,
+    );
+    // Past the divergence of the 5 ms step (t = 0.91 s): SolverFailure, then the
+    // firmware keeps answering every frame as the host does.
+    check_scenario(
+        "turn 0.20 rad/s (1.2 s, past the step's divergence)",
+        &frames("turn", Some(0.20), 1.2),
+        91,
+    );
+}
+
+/// The M7 profile (Cortex-M7, f64 in hardware, `mps2-an500`): the same answers as
+/// the host reference in f64 with the target's maths, bit for bit.
+#[test]
+fn m7_profile_matches_the_host_in_f64() {
+    defmt::require().unwrap_or_else(|e| panic!("{e}"));
+    let elf = firmware::build_board(Board::M7, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
+    let mut s = Session::start(&elf, Board::M7).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.hello.board, decoy_link::Board::M7);
+    assert_eq!(s.hello.precision_bits, 64);
+    let messages = flight::scenario_messages(&frames("acceleration", None, 3.0));
+    let flown = flight::fly(&mut s, &messages, |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.device_running());
+    let answers = flown.answers();
+    let mut reference =
+        Reference::start(reference_program(), 64, config().solver.segments_embedded)
+            .unwrap_or_else(|e| panic!("{e}"));
+    let host = reference
+        .replay(&messages)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (agreement, mismatches) = flight::compare(&answers, &host);
+    assert!(mismatches.is_empty(), "{:#?}", mismatches[0]);
+    assert_eq!(agreement.outputs, messages.len() - 1);
+    assert_eq!(
+        agreement.identical, agreement.outputs,
+        "M7 outputs not bit-identical to the host's f64 ones: {agreement:?}"
+    );
+    let stats = flight::instruction_stats(&answers);
+    println!(
+        "M7 (f64) acceleration 3 s: {} outputs bit-identical to the host f64 reference; \
+         instructions per control step max {}, mean {:.0}; {:.0} frames/s",
+        agreement.identical,
+        stats.max,
+        stats.mean,
+        flown.frames_per_second()
+    );
+    assert!(
+        stats.max <= CONTROL_STEP_BUDGET_M7,
+        "M7: a control step took {} instructions, over {CONTROL_STEP_BUDGET_M7}",
+        stats.max
+    );
+}
+
+#[test]
+fn two_runs_receive_identical_bytes() {
+    let frames = frames("acceleration", None, 3.0);
+    let (first, bytes_a, _) = fly(&frames);
+    let (second, bytes_b, _) = fly(&frames);
+    assert_eq!(first.len(), frames.len() + 1);
+    assert!(!bytes_a.is_empty());
+    if bytes_a == bytes_b {
+        println!(
+            "two runs: {} bytes received each, byte-identical",
+            bytes_a.len()
+        );
+        return;
+    }
+    // KNOWN LIMITATION (reported on the link notes, open): the firmware counts
+    // instructions in SysTick ticks of 40 and the phase of its first reading depends
+    // on when the frame's last byte arrived in virtual time (wall-clock dependent),
+    // so a count may differ by one tick between runs. Everything else must be
+    // identical; make this strict once the firmware's count is phase-independent.
+    let mut worst = 0u32;
+    for (a, b) in first.iter().zip(&second) {
+        match (a.answer, b.answer) {
+            (DeviceMessage::Output(x), DeviceMessage::Output(y)) => {
+                worst = worst.max(x.instructions.abs_diff(y.instructions));
+                let (mut x, mut y) = (x, y);
+                x.instructions = 0;
+                y.instructions = 0;
+                assert_eq!(x, y, "the two runs answered differently");
+            }
+            (x, y) => assert_eq!(x, y, "the two runs answered differently"),
+        }
+    }
+    assert_eq!(
+        first.len(),
+        second.len(),
+        "the two runs got different numbers of answers"
+    );
+    assert!(
+        worst <= INSTRUCTIONS_PER_TICK,
+        "instruction counts differ by {worst} between runs, more than one SysTick tick"
+    );
+    println!(
+        "two runs: {} bytes each, identical but for instruction counts within one SysTick \
+         tick ({worst} instructions; known firmware issue)",
+        bytes_a.len()
+    );
+}
+
+/// A firmware session with two host controllers beside it: `mirror` gets every
+/// byte the firmware gets (and must answer alike), `undisturbed` only the valid
+/// frames (the firmware's outputs must equal its outputs: state kept).
+struct Probe {
+    session: Session,
+    mirror: Reference,
+    undisturbed: Reference,
+    frames: Vec<AircraftStateFrame>,
+    next: usize,
+}
+
+impl Probe {
+    /// A session trimmed on the acceleration scenario and flown `warm_up` frames.
+    fn new(warm_up: usize) -> Self {
+        let mut probe = Probe {
+            session: session(),
+            mirror: host32(),
+            undisturbed: host32(),
+            frames: frames("acceleration", None, 4.0),
+            next: 0,
+        };
+        let reset = HostMessage::Command(Command::ResetToTrim);
+        let answers = probe.raw(&encode(&reset));
+        assert!(
+            matches!(answers[..], [DeviceMessage::Status(_)]),
+            "{answers:?}"
+        );
+        probe.undisturbed(&reset);
+        probe.valid(warm_up);
+        probe
+    }
+
+    /// Sends raw bytes; returns the firmware's answers, which must equal the
+    /// mirror's for the same bytes (but for `instructions`).
+    fn raw(&mut self, bytes: &[u8]) -> Vec<DeviceMessage> {
+        let expected = self.mirror.feed(bytes).unwrap_or_else(|e| panic!("{e}"));
+        self.session
+            .link
+            .send_raw(bytes)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let got: Vec<DeviceMessage> = expected
+            .iter()
+            .map(|_| self.session.link.recv().unwrap_or_else(|e| panic!("{e}")))
+            .collect();
+        assert!(
+            !self
+                .session
+                .link
+                .poll(Duration::from_millis(20))
+                .unwrap_or_else(|e| panic!("{e}")),
+            "the firmware answered more than the host controller"
+        );
+        for (g, e) in got.iter().zip(&expected) {
+            assert_eq!(
+                &without_instructions(*g),
+                &without_instructions(*e),
+                "the firmware's answer differs from the host controller's"
+            );
+        }
+        got
+    }
+
+    /// Sends the next `n` valid frames; each must be answered by an Output equal
+    /// to the undisturbed run's (but for RECOVERED and `instructions`).
+    fn valid(&mut self, n: usize) -> Vec<OutputFrame> {
+        (0..n)
+            .map(|_| {
+                let frame = self.frames[self.next];
+                self.next += 1;
+                let message = HostMessage::State(frame);
+                let answers = self.raw(&encode(&message));
+                let undisturbed = self.undisturbed(&message);
+                let [DeviceMessage::Output(out)] = answers[..] else {
+                    panic!("frame {} answered by {answers:?}", frame.seq);
+                };
+                let DeviceMessage::Output(reference) = undisturbed else {
+                    panic!(
+                        "the undisturbed host run rejected frame {}: {undisturbed:?}",
+                        frame.seq
+                    );
+                };
+                let mut masked = out;
+                masked.instructions = 0;
+                masked.flags &= !StatusFlags::RECOVERED;
+                assert_eq!(
+                    masked, reference,
+                    "frame {}: the output differs from an undisturbed run's",
+                    frame.seq
+                );
+                out
+            })
+            .collect()
+    }
+
+    /// The next valid frame, changed by `change`, which must be rejected with
+    /// `reason` as the `count`-th such rejection.
+    fn invalid(
+        &mut self,
+        reason: RejectReason,
+        count: u32,
+        change: impl FnOnce(&mut AircraftStateFrame),
+    ) {
+        let mut frame = self.frames[self.next];
+        change(&mut frame);
+        let answers = self.raw(&encode(&HostMessage::State(frame)));
+        match answers[..] {
+            [DeviceMessage::Rejected(r)] => {
+                assert_eq!(r.reason, reason, "{frame:?}");
+                assert_eq!(r.count, count, "{reason:?} counter");
+                assert_eq!(r.seq, Some(frame.seq));
+            }
+            _ => panic!("{reason:?} expected, got {answers:?} for {frame:?}"),
+        }
+    }
+
+    /// Bytes that must be rejected as undecodable with `reason`, the
+    /// `count`-th time.
+    fn malformed(&mut self, bytes: &[u8], reason: RejectReason, count: u32) {
+        let answers = self.raw(bytes);
+        match answers[..] {
+            [DeviceMessage::Rejected(r)] => {
+                assert_eq!((r.seq, r.reason, r.count), (None, reason, count));
+            }
+            _ => panic!("{reason:?} expected, got {answers:?}"),
+        }
+    }
+
+    /// The firmware's status now (which the mirror must give too).
+    fn status(&mut self) -> decoy_link::StatusFrame {
+        let answers = self.raw(&encode(&HostMessage::Command(Command::GetStatus)));
+        match answers[..] {
+            [DeviceMessage::Status(s)] => s,
+            _ => panic!("Status expected, got {answers:?}"),
+        }
+    }
+
+    /// The undisturbed run's answer to `message`.
+    fn undisturbed(&mut self, message: &HostMessage) -> DeviceMessage {
+        self.undisturbed
+            .handle(message)
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Checks QEMU runs, then ends the session.
+    fn finish(mut self) {
+        assert!(self.session.device_running(), "QEMU is not running");
+        let log = self.session.finish();
+        assert!(log.was_running, "QEMU exited");
+    }
+}
+
+fn encode(message: &HostMessage) -> Vec<u8> {
+    hil_tests::link::encode(message).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The index of a COBS data byte (not a code byte, not a delimiter) in the middle
+/// of a wire frame.
+fn cobs_data_byte(wire: &[u8]) -> usize {
+    let mut codes = Vec::new();
+    let mut at = 1;
+    while at < wire.len() - 1 {
+        codes.push(at);
+        at += usize::from(wire[at]);
+    }
+    (wire.len() / 2..wire.len() - 1)
+        .find(|i| !codes.contains(i))
+        .unwrap_or_else(|| panic!("no data byte in {wire:?}"))
+}
+
+fn without_instructions(mut m: DeviceMessage) -> DeviceMessage {
+    if let DeviceMessage::Output(o) = &mut m {
+        o.instructions = 0;
+    }
+    m
+}
+
+#[test]
+fn malformed_frames_are_rejected_and_the_state_is_kept() {
+    let mut p = Probe::new(20);
+    let next = HostMessage::State(p.frames[p.next]);
+    let good = encode(&next);
+
+    // A corrupted CRC: one data byte changed, the COBS structure intact.
+    let mut corrupted = good.clone();
+    let i = cobs_data_byte(&corrupted);
+    corrupted[i] = if corrupted[i] == 1 {
+        2
+    } else {
+        corrupted[i] ^ 1
+    };
+    p.malformed(&corrupted, RejectReason::Crc, 1);
+    p.valid(1);
+
+    // Shorter than the CRC: one COBS group of two bytes.
+    p.malformed(&[0x00, 0x03, 0x01, 0x02, 0x00], RejectReason::Truncated, 1);
+    p.valid(1);
+
+    // A frame cut short: its first half, ended by a 0x00 (normally the next
+    // frame's leading one).
+    let mut cut = encode(&HostMessage::State(p.frames[p.next]))[..good.len() / 2].to_vec();
+    cut.push(0x00);
+    let answers = p.raw(&cut);
+    assert!(
+        matches!(answers[..], [DeviceMessage::Rejected(r)] if r.seq.is_none()
+            && matches!(r.reason, RejectReason::Cobs | RejectReason::Crc | RejectReason::Truncated)),
+        "{answers:?}"
+    );
+    p.valid(1);
+    let counters = p.status().counters;
+    assert_eq!(
+        counters.crc + counters.cobs + counters.truncated,
+        3,
+        "the cut frame counts once: {counters:?}"
+    );
+
+    // Garbage between frames (no 0x00 in it): one undecodable chunk, then the
+    // frame is decoded as usual.
+    let garbage: Vec<u8> = (1..=40u8).map(|b| b.wrapping_mul(37) | 1).collect();
+    let before = p.status().counters;
+    let answers = p.raw(&garbage);
+    assert!(answers.is_empty());
+    let next = HostMessage::State(p.frames[p.next]);
+    let answers = p.raw(&encode(&next));
+    assert!(
+        matches!(answers[..], [DeviceMessage::Rejected(r), DeviceMessage::Output(_)] if r.seq.is_none()),
+        "{answers:?}"
+    );
+    p.next += 1;
+    p.undisturbed(&next);
+    let after = p.status().counters;
+    assert_eq!(
+        (after.cobs + after.crc + after.truncated + after.decode)
+            - (before.cobs + before.crc + before.truncated + before.decode),
+        1
+    );
+    p.valid(2);
+
+    // Oversize: 300 bytes without a delimiter.
+    let mut oversize = vec![0x00];
+    oversize.extend(std::iter::repeat_n(0x42, 300));
+    oversize.push(0x00);
+    p.malformed(&oversize, RejectReason::Oversize, 1);
+    p.valid(1);
+
+    // A well-formed frame of something that is not a host message.
+    let not_a_message =
+        decoy_link::encode_vec(&(7u8, 1.5f64, [3u32; 9])).unwrap_or_else(|e| panic!("{e}"));
+    p.malformed(&not_a_message, RejectReason::Decode, 1);
+    p.valid(5);
+    let status = p.status();
+    assert_eq!(status.counters.oversize, 1);
+    assert_eq!(status.counters.decode, 1);
+    p.finish();
+}
+
+#[test]
+fn invalid_values_are_rejected_with_their_reason() {
+    let mut p = Probe::new(10);
+    p.invalid(RejectReason::NonFinite, 1, |f| {
+        f.velocity_ned_mps[0] = f32::NAN
+    });
+    p.valid(1);
+    p.invalid(RejectReason::NonFinite, 2, |f| {
+        f.position_ned_m[2] = f64::INFINITY
+    });
+    p.invalid(RejectReason::NonFinite, 3, |f| f.time_s = f64::NAN);
+    p.invalid(RejectReason::NonFinite, 4, |f| {
+        f.body_angular_acceleration_radps2[1] = f32::NEG_INFINITY
+    });
+    p.valid(1);
+    // Mach above 2 at 9 km (speed of sound about 303 m/s).
+    p.invalid(RejectReason::OutOfRange, 1, |f| {
+        f.velocity_ned_mps = [700.0, 0.0, 0.0]
+    });
+    // Above and below the atmosphere model (-500 m to 20 km).
+    p.invalid(RejectReason::OutOfRange, 2, |f| {
+        f.position_ned_m[2] = -25_000.0
+    });
+    p.invalid(RejectReason::OutOfRange, 3, |f| {
+        f.position_ned_m[2] = 1_000.0
+    });
+    // No airspeed: zero dynamic pressure.
+    p.invalid(RejectReason::OutOfRange, 4, |f| {
+        f.velocity_ned_mps = [0.0; 3]
+    });
+    p.valid(1);
+    p.invalid(RejectReason::BadQuaternion, 1, |f| {
+        f.attitude_wxyz = [1.1, 0.0, 0.0, 0.0]
+    });
+    p.invalid(RejectReason::BadQuaternion, 2, |f| {
+        f.attitude_wxyz = [0.0; 4]
+    });
+    p.valid(3);
+    let status = p.status();
+    assert_eq!(status.counters.non_finite, 4);
+    assert_eq!(status.counters.out_of_range, 4);
+    assert_eq!(status.counters.bad_quaternion, 2);
+    assert_ne!(status.flags & StatusFlags::TRIMMED, 0);
+    p.finish();
+}
+
+#[test]
+fn time_going_backwards_or_jumping_is_rejected() {
+    let mut p = Probe::new(10);
+    let last = p.frames[p.next - 1];
+    p.invalid(RejectReason::TimeNotIncreasing, 1, |f| {
+        f.time_s = last.time_s
+    });
+    p.invalid(RejectReason::TimeNotIncreasing, 2, |f| {
+        f.time_s = last.time_s - 0.05
+    });
+    p.valid(1);
+    p.invalid(RejectReason::TimeJump, 1, |f| f.time_s += 0.5);
+    p.invalid(RejectReason::TimeJump, 2, |f| f.time_s += 1e6);
+    p.valid(2);
+    let status = p.status();
+    assert_eq!(status.counters.time_not_increasing, 2);
+    assert_eq!(status.counters.time_jump, 2);
+    p.finish();
+}
+
+#[test]
+fn link_silence_degrades_and_recovers() {
+    let mut p = Probe::new(10);
+    // Silence: SILENCE_MS = 200 ms of virtual time, about 1 s of wall-clock time
+    // under -icount; the firmware sends one Status frame with DEGRADED.
+    let silent = Instant::now();
+    let status = p
+        .session
+        .link
+        .recv_within(Duration::from_secs(20), "the silence Status")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let waited = silent.elapsed();
+    let DeviceMessage::Status(status) = status else {
+        panic!("Status expected after the silence, got {status:?}");
+    };
+    assert_ne!(status.flags & StatusFlags::DEGRADED, 0, "{status:?}");
+    assert_eq!(status.counters.silences, 1);
+    // Only one Status however long the silence lasts.
+    assert!(
+        !p.session
+            .link
+            .poll(Duration::from_secs(2))
+            .unwrap_or_else(|e| panic!("{e}")),
+        "more than one Status for one silence"
+    );
+    // The host mirror sees the same silence (its clock is polled by hand).
+    let mut poll = |ms| p.mirror.poll_silence(ms).unwrap_or_else(|e| panic!("{e}"));
+    assert!(poll(0).is_none());
+    let mirrored = poll(decoy_link::SILENCE_MS);
+    assert_eq!(mirrored, Some(DeviceMessage::Status(status)));
+
+    // Resume: the next frame is answered as in an undisturbed run, with RECOVERED.
+    let outputs = p.valid(3);
+    assert_ne!(
+        outputs[0].flags & StatusFlags::RECOVERED,
+        0,
+        "{:?}",
+        outputs[0]
+    );
+    assert_eq!(outputs[1].flags & StatusFlags::RECOVERED, 0);
+    let status = p.status();
+    assert_eq!(status.flags & StatusFlags::DEGRADED, 0);
+    assert_eq!(status.counters.silences, 1);
+    println!(
+        "silence: the DEGRADED status came {:.2} s (wall clock) after the last frame",
+        waited.as_secs_f64()
+    );
+    p.finish();
+}
