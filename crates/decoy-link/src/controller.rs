@@ -18,8 +18,16 @@ use crate::path::{FramePath, TypedFramePath};
 use crate::validate::{is_finite, validate_streamed};
 
 /// The longest RK4 step, s: a frame interval dt is integrated in
-/// n = ceil(dt / MAX_STEP_S - 1e-9) steps of dt / n.
+/// n = ceil(dt / MAX_STEP_S - 1e-9) steps of dt / n, or more where the
+/// wave-speed limit asks ([`WAVE_STEP_FACTOR`]).
 pub const MAX_STEP_S: f64 = 0.005;
+/// Safety factor of the wave-speed step limit: every RK4 step is at most
+/// `WAVE_STEP_FACTOR` l_i / c_i for every segment i, c_i = sqrt(T_i / mu) the
+/// transverse wave speed at its larger end tension: a thin rod pulled at both
+/// ends swings at sqrt(12) c/l, and RK4 is stable to about 2.8 rad per step.
+pub const WAVE_STEP_FACTOR: f64 = 0.8;
+/// Most RK4 steps one frame may take (a floor of 0.5 ms on a 10 ms frame).
+pub const MAX_STEPS_PER_FRAME: f64 = 20.0;
 /// The longest accepted interval between two State frames, s.
 pub const MAX_TIME_JUMP_S: f64 = 0.1;
 /// Rounding allowance of the time-jump check, s: an interval of exactly
@@ -412,7 +420,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         let integration = counter.now();
         let result = match self.run {
             None => self.start_run(frame),
-            Some(run) => self.advance(&run, frame),
+            Some(run) => self.advance(&run, frame, &saved),
         };
         let step_instructions = counter.elapsed(integration);
         match result {
@@ -539,31 +547,103 @@ impl<T: Real, const N: usize> Controller<T, N> {
         &mut self,
         run: &Run,
         frame: &AircraftStateFrame,
+        saved: &State<T, N>,
     ) -> Result<Advanced<T>, RejectReason> {
         let dt = frame.time_s - run.last.time_s;
-        let steps = libm::ceil(dt / MAX_STEP_S - 1e-9).max(1.0);
+        let steps = self.step_count(dt);
         let next = Run {
             last: *frame,
             ..*run
         };
         let failure = |_: SolveError| RejectReason::SolverFailure;
-        let streamed = match self.builtin {
+        let (streamed, steps) = match self.builtin {
             Some(path) => {
                 let (t0, t1) = (
                     run.last.time_s - run.start_time_s,
                     frame.time_s - run.start_time_s,
                 );
-                self.integrate(&path, t0, t1, steps).map_err(failure)?;
-                None
+                let steps = self
+                    .integrate_checked(saved, &path, t0, t1, steps)
+                    .map_err(failure)?;
+                (None, steps)
             }
             None => {
                 let path = FramePath::new(&run.last, frame, run.origin).in_precision::<T>();
-                self.integrate(&path, run.last.time_s, frame.time_s, steps)
+                let steps = self
+                    .integrate_checked(saved, &path, run.last.time_s, frame.time_s, steps)
                     .map_err(failure)?;
-                Some(path)
+                (Some(path), steps)
             }
         };
         Ok((next, steps as u16, streamed))
+    }
+
+    /// The RK4 steps for a frame `dt` seconds after the last one: enough for steps of
+    /// at most [`MAX_STEP_S`] and, with the tensions of the last evaluation (the
+    /// previous frame's outputs), at most [`WAVE_STEP_FACTOR`] l_i / c_i on every
+    /// segment; at most [`MAX_STEPS_PER_FRAME`]. In steady flight the first limit
+    /// decides (two steps per 10 ms frame for the reference system); a snatch load
+    /// (the cable jerked taut after a pull-up) raises the tension, and with it the
+    /// wave speed, tenfold for a moment, and the step shrinks with it.
+    fn step_count(&self, dt: f64) -> f64 {
+        let by_period = libm::ceil(dt / MAX_STEP_S - 1e-9).max(1.0);
+        let by_wave = self.wave_steps(dt);
+        let steps = if by_wave > by_period {
+            by_wave
+        } else {
+            by_period
+        };
+        steps.min(MAX_STEPS_PER_FRAME)
+    }
+
+    /// The steps of `dt` the wave-speed limit asks for with the tensions of the
+    /// last evaluation (0 if they are not finite).
+    fn wave_steps(&self, dt: f64) -> f64 {
+        let model = self.solver.model();
+        let out = self.solver.last_outputs();
+        // max_i T_i^2 / l_i^4 from the squared joint forces (two roots in all):
+        // then max_i c_i / l_i = sqrt(sqrt(max) / mu).
+        let mut worst = T::zero();
+        let mut upstream = out.joint_force(0).norm_squared();
+        for (i, l) in model.lengths().iter().enumerate() {
+            let downstream = out.joint_force(i + 1).norm_squared();
+            let l2 = *l * *l;
+            worst = worst.max(upstream.max(downstream) / (l2 * l2));
+            upstream = downstream;
+        }
+        let rate = (worst.square_root() / model.params().cable.linear_density).square_root();
+        let steps = libm::ceil(dt * rate.to_f64() / WAVE_STEP_FACTOR - 1e-9);
+        if steps.is_finite() { steps } else { 0.0 }
+    }
+
+    /// [`Controller::integrate`] with `steps` steps, again with more when a step
+    /// fails or when the tensions at the end of the frame ask for more steps than
+    /// were taken (they rose within the frame), doubling each time up to
+    /// [`MAX_STEPS_PER_FRAME`]; each attempt starts from the frame's initial state.
+    /// Returns the steps of the attempt that stood. Deterministic: the same state
+    /// and frames take the same attempts.
+    fn integrate_checked<P: FlightPath<T>>(
+        &mut self,
+        start: &State<T, N>,
+        path: &P,
+        t0: f64,
+        t1: f64,
+        mut steps: f64,
+    ) -> Result<f64, SolveError> {
+        loop {
+            let attempt = self.integrate(path, t0, t1, steps);
+            let wanted = match attempt {
+                Ok(()) => self.wave_steps(t1 - t0),
+                Err(_) => 2.0 * steps,
+            };
+            if wanted <= steps || steps >= MAX_STEPS_PER_FRAME {
+                return attempt.map(|()| steps);
+            }
+            // `start` was the solver's own state: finite and accepted.
+            let _ = self.solver.set_state(*start);
+            let doubled = 2.0 * steps;
+            steps = (if wanted > doubled { wanted } else { doubled }).min(MAX_STEPS_PER_FRAME);
+        }
     }
 
     /// `steps` RK4 steps of (t1 - t0) / steps, ending exactly at t1.

@@ -445,3 +445,81 @@ fn f64_controllers_agree_with_f32_ones() {
         })
     );
 }
+
+/// Flies a built-in profile for `seconds` with 10 ms clock frames; returns the
+/// peak connection tension and the most RK4 steps a frame took.
+fn fly_builtin<T: solver_core::Real>(profile: Profile, seconds: f64) -> (f32, u16) {
+    let mut c: Controller<T, 64> = Controller::new(common::config()).unwrap();
+    let status = c.handle(
+        HostMessage::Command(Command::SelectProfile(profile)),
+        &mut NoCounter,
+    );
+    assert!(StatusFlags(status_flags(status)).contains(StatusFlags::PROFILE_BUILTIN));
+    output(send(&mut c, frame(0, 0.0)));
+    let (mut peak, mut most_steps) = (0.0f32, 0u16);
+    let mut hist = std::collections::BTreeMap::new();
+    let frames = (seconds * 100.0).round() as u32;
+    for k in 1..=frames {
+        let answer = send(&mut c, frame(k, 0.01 * f64::from(k)));
+        let DeviceMessage::Output(o) = answer else {
+            panic!(
+                "{profile:?}: frame {k} (t = {} s) answered {answer:?}",
+                0.01 * f64::from(k)
+            );
+        };
+        peak = peak.max(o.connection_tension_n);
+        most_steps = most_steps.max(o.steps);
+        *hist.entry(o.steps).or_insert(0u32) += 1;
+    }
+    println!("{profile:?}: frames by RK4 steps {hist:?}");
+    (peak, most_steps)
+}
+
+#[test]
+fn the_paper_manoeuvres_fly_through_with_the_wave_step_limit() {
+    // The snatch load after the pull-up (the cable jerked taut at about 8.6 s)
+    // diverges with a fixed 5 ms step; the wave-speed limit shortens the step for
+    // those frames only. Steady flight keeps two steps per 10 ms frame.
+    let cases = [
+        (Profile::Steady, 5.0),
+        (Profile::Acceleration, 25.0),
+        (
+            Profile::PullUp {
+                rate_milli_radps: 50,
+            },
+            15.0,
+        ),
+        (
+            Profile::PullUp {
+                rate_milli_radps: 100,
+            },
+            15.0,
+        ),
+        (
+            Profile::PullUp {
+                rate_milli_radps: 200,
+            },
+            15.0,
+        ),
+        (
+            Profile::Turn {
+                rate_milli_radps: 200,
+            },
+            15.0,
+        ),
+    ];
+    for (profile, seconds) in cases {
+        let (peak32, steps32) = fly_builtin::<f32>(profile, seconds);
+        let (peak64, steps64) = fly_builtin::<f64>(profile, seconds);
+        println!(
+            "{profile:?}: peak {peak32} N (f64 {peak64} N), at most {steps32} steps (f64 {steps64})"
+        );
+        if profile == Profile::Steady {
+            assert_eq!(steps32, 2);
+        }
+        assert!(
+            ((peak32 - peak64) / peak64).abs() < 0.05,
+            "{profile:?}: f32 peak {peak32} N, f64 {peak64} N"
+        );
+    }
+}

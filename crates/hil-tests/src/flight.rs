@@ -198,6 +198,7 @@ pub fn compare(firmware: &[DeviceMessage], host: &[DeviceMessage]) -> (Agreement
                 agreement.outputs += 1;
                 let mut a_masked = *a;
                 a_masked.instructions = b.instructions;
+                a_masked.step_instructions = b.step_instructions;
                 if a_masked == *b {
                     agreement.identical += 1;
                 }
@@ -268,13 +269,26 @@ fn wrap_pi(d: f32) -> f32 {
 pub struct InstructionStats {
     /// Control steps counted (outputs that integrated at least one RK4 step).
     pub steps: usize,
-    /// Most instructions in one control step.
+    /// Most instructions in one control step (the whole frame: validation, RK4
+    /// steps, outputs).
     pub max: u32,
-    /// Mean instructions per control step.
+    /// Mean instructions per control step (whole frames).
     pub mean: f64,
     /// The `seq` of the costliest step.
     pub max_seq: u32,
+    /// Control steps that took the nominal two RK4 steps of 5 ms.
+    pub nominal_steps: usize,
+    /// Most solver instructions (`step_instructions`: the RK4 steps) in a nominal
+    /// control step.
+    pub nominal_solver_max: u32,
+    /// Most solver instructions per RK4 step in any control step.
+    pub per_rk4_step_max: u32,
+    /// Most RK4 steps one control step took (the wave-speed limit, docs/protocol.md §5).
+    pub most_rk4_steps: u16,
 }
+
+/// RK4 steps of a nominal 10 ms control step (two of `decoy_link::MAX_STEP_S`).
+pub const NOMINAL_RK4_STEPS: u16 = 2;
 
 /// The instruction statistics of the outputs among `answers` that integrated
 /// (the trim frame, with no RK4 step, is left out).
@@ -291,6 +305,14 @@ pub fn instruction_stats(answers: &[DeviceMessage]) -> InstructionStats {
                 stats.max = out.instructions;
                 stats.max_seq = out.seq;
             }
+            if out.steps == NOMINAL_RK4_STEPS {
+                stats.nominal_steps += 1;
+                stats.nominal_solver_max = stats.nominal_solver_max.max(out.step_instructions);
+            }
+            stats.per_rk4_step_max = stats
+                .per_rk4_step_max
+                .max(out.step_instructions / u32::from(out.steps));
+            stats.most_rk4_steps = stats.most_rk4_steps.max(out.steps);
         }
     }
     if stats.steps > 0 {

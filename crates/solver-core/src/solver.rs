@@ -211,6 +211,19 @@ impl<T: Real, const N: usize> Solver<T, N> {
         })
     }
 
+    /// The outputs of the most recent evaluation (the last RK4 stage of a step, or
+    /// the last [`Solver::outputs`] call), without evaluating again. After
+    /// [`Solver::outputs`] they belong to the current state; after a step, to its
+    /// last stage. Before any evaluation the forces are zero.
+    pub fn last_outputs(&self) -> Outputs<'_, T, N> {
+        Outputs {
+            model: &self.model,
+            state: &self.state,
+            ws: &self.ws,
+            derivative: &self.slope,
+        }
+    }
+
     /// The state derivative at the current state (for tests and references).
     pub fn derivative<P: FlightPath<T> + ?Sized>(
         &mut self,
