@@ -208,7 +208,11 @@ impl<T: Real, const N: usize> Passes<T, N> {
                 let (force, moment, ..) = decoy_aero(
                     params,
                     derived,
-                    &self.state.decoy_rotation(),
+                    &self
+                        .state
+                        .decoy_rotation()
+                        .to_rotation_matrix()
+                        .into_inner(),
                     &self.state.decoy_rate,
                     &input.cg_velocity,
                     &self.model.params().environment.wind,
