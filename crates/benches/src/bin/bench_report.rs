@@ -12,7 +12,8 @@ use std::process::{Command, ExitCode};
 use std::time::Duration;
 
 use benches::report::{
-    self, FIRMWARE_SEGMENTS, FirmwareRow, Inputs, Machine, read_criterion, read_gungraun,
+    self, FIRMWARE_SEGMENTS, FirmwareCounts, FirmwareRow, Inputs, Machine, read_criterion,
+    read_gungraun,
 };
 use hil_tests::firmware;
 use hil_tests::flight;
@@ -61,10 +62,19 @@ fn run() -> Result<(), String> {
         .map_err(|e| format!("{e} (run `{}` first)", report::GUNGRAUN_COMMAND))?;
     println!("gungraun: {} results", instructions.len());
 
-    let firmware = if firmware_runs {
-        FIRMWARE_SEGMENTS.iter().map(|&n| firmware_row(n)).collect()
+    let (firmware, firmware_m7) = if firmware_runs {
+        (
+            FIRMWARE_SEGMENTS
+                .iter()
+                .map(|&n| firmware_row(Board::M4, n))
+                .collect(),
+            FIRMWARE_SEGMENTS
+                .iter()
+                .map(|&n| firmware_row(Board::M7, n))
+                .collect(),
+        )
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
     };
     let pinocchio = match &pinocchio_file {
         None => Err(
@@ -84,9 +94,7 @@ fn run() -> Result<(), String> {
         wall,
         instructions,
         firmware,
-        // The Cortex-M7 (f64) firmware measurement is not wired up yet: rendered as
-        // "not measured".
-        firmware_m7: Vec::new(),
+        firmware_m7,
         pinocchio,
     };
     let docs = root.join("docs");
@@ -104,24 +112,33 @@ fn run() -> Result<(), String> {
     Ok(())
 }
 
-/// Builds the firmware with `segments` segments and runs it once under QEMU.
-fn firmware_row(segments: usize) -> FirmwareRow {
-    println!("firmware: {segments} segments: building and running under QEMU");
-    let outcome = firmware_counts(segments);
+/// Builds the firmware for `board` with `segments` segments and runs it once under
+/// QEMU.
+fn firmware_row(board: Board, segments: usize) -> FirmwareRow {
+    println!("firmware: {board:?}, {segments} segments: building and running under QEMU");
+    let outcome = firmware_counts(board, segments);
     match &outcome {
-        Ok((max, mean)) => println!(
-            "firmware: {segments} segments: {max} max, {mean} mean instructions per control step"
+        Ok(c) => println!(
+            "firmware: {board:?}, {segments} segments: control step {} max, {} mean; \
+             solver {} max, {} mean per RK4 step; {} to {} RK4 steps per control step",
+            c.frame_max,
+            c.frame_mean,
+            c.rk4_step_max,
+            c.rk4_step_mean,
+            c.rk4_steps.0,
+            c.rk4_steps.1
         ),
-        Err(e) => println!("firmware: {segments} segments: {e}"),
+        Err(e) => println!("firmware: {board:?}, {segments} segments: {e}"),
     }
     FirmwareRow { segments, outcome }
 }
 
-/// Builds the firmware with `segments` segments, boots it under QEMU and flies
-/// 3 s of the acceleration scenario over the decoy link (frames every 10 ms);
-/// returns the max and mean instructions per control step.
-fn firmware_counts(segments: usize) -> Result<(u64, u64), String> {
-    let elf = firmware::build_with_segments(segments, BUILD_TIMEOUT).map_err(|e| e.to_string())?;
+/// Builds the firmware for `board` with `segments` segments, boots it under QEMU
+/// and flies 3 s of the acceleration scenario over the decoy link (frames every
+/// 10 ms); returns its instruction counts.
+fn firmware_counts(board: Board, segments: usize) -> Result<FirmwareCounts, String> {
+    let elf = firmware::build_board_with_segments(board, segments, BUILD_TIMEOUT)
+        .map_err(|e| e.to_string())?;
     let mut config = decoy_config::SystemConfig::builtin().map_err(|e| e.to_string())?;
     config.solver.segments_embedded = segments;
     let plan = decoy_sim::Scenario::builtin("acceleration")
@@ -140,7 +157,7 @@ fn firmware_counts(segments: usize) -> Result<(u64, u64), String> {
         .map_err(|e| e.to_string())?;
     let frames = flight::scenario_frames(&plan.profile, flight::frame_count(FIRMWARE_RUN_S));
     let messages = flight::scenario_messages(&frames);
-    let mut session = Session::start(&elf, Board::M4).map_err(|e| e.to_string())?;
+    let mut session = Session::start(&elf, board).map_err(|e| e.to_string())?;
     let flown = flight::fly(&mut session, &messages, |_| {}).map_err(|e| e.to_string())?;
     let answers = flown.answers();
     if let Some(rejected) = answers.iter().find_map(|a| match a {
@@ -148,13 +165,31 @@ fn firmware_counts(segments: usize) -> Result<(u64, u64), String> {
         _ => None,
     }) {
         return Err(format!(
-            "pending firmware issue: the firmware rejects frame {:?} ({:?}): the link's \
-             5 ms RK4 step is unstable with this many segments",
+            "the firmware rejected frame {:?} ({:?})",
             rejected.seq, rejected.reason
         ));
     }
     let stats = flight::instruction_stats(&answers);
-    Ok((u64::from(stats.max), stats.mean.round() as u64))
+    let outputs: Vec<_> = flight::outputs(&answers)
+        .into_iter()
+        .filter(|o| o.steps > 0)
+        .collect();
+    let fewest = outputs.iter().map(|o| o.steps).min().unwrap_or(0);
+    let most = outputs.iter().map(|o| o.steps).max().unwrap_or(0);
+    let per_step: Vec<u64> = outputs
+        .iter()
+        .filter(|o| o.steps == fewest)
+        .map(|o| u64::from(o.step_instructions / u32::from(o.steps)))
+        .collect();
+    let rk4_step_max = per_step.iter().copied().max().unwrap_or(0);
+    let rk4_step_mean = per_step.iter().sum::<u64>() / per_step.len().max(1) as u64;
+    Ok(FirmwareCounts {
+        frame_max: u64::from(stats.max),
+        frame_mean: stats.mean.round() as u64,
+        rk4_steps: (fewest, most),
+        rk4_step_max,
+        rk4_step_mean,
+    })
 }
 
 /// First line of a command's stdout, or `unknown`.
