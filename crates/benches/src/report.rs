@@ -182,6 +182,8 @@ pub struct Machine {
 pub struct FirmwareRow {
     /// Graded segments of the model.
     pub segments: usize,
+    /// Their grading ratio (segment length ratio, short at the decoy).
+    pub grading: f64,
     /// The counts, or why there are none.
     pub outcome: Result<FirmwareCounts, String>,
 }
@@ -634,7 +636,9 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         s,
         "- Firmware: `hil_tests::firmware::build_with_segments` builds the unchanged \
          firmware against a copy of `config/` whose `segments_embedded` is 8, 16, 32 or \
-         64 (`target/firmware-variants/`; for the M7, f64, `-C target-cpu=cortex-m7`), \
+         64 (graded as configured, or less where that would make the shortest segment \
+         shorter than the configured model's, so that the rows compare the cost of an \
+         RK4 step, not the number of steps; `target/firmware-variants/`; for the M7, f64, `-C target-cpu=cortex-m7`), \
          boots it on QEMU's Cortex-M4F or Cortex-M7 with `-icount shift=0` and flies 3 s \
          of the acceleration case over the decoy link (capacity 64)."
     )?;
@@ -1251,7 +1255,7 @@ fn one_line(text: &str) -> String {
 fn render_firmware_table(s: &mut String, rows: &[FirmwareRow], empty: &str) -> std::fmt::Result {
     writeln!(
         s,
-        "| segments | control step, max | control step, mean | RK4 steps per control step | solver per RK4 step, max | mean | per RK4 step and segment |"
+        "| segments, grading | control step, max | control step, mean | RK4 steps per control step | solver per RK4 step, max | mean | per RK4 step and segment |"
     )?;
     writeln!(s, "|---:|---:|---:|---:|---:|---:|---:|")?;
     if rows.is_empty() {
@@ -1261,8 +1265,9 @@ fn render_firmware_table(s: &mut String, rows: &[FirmwareRow], empty: &str) -> s
         match &row.outcome {
             Ok(c) => writeln!(
                 s,
-                "| {} | {} | {} | {} to {} | {} | {} | {} |",
+                "| {}, {} | {} | {} | {} to {} | {} | {} | {} |",
                 row.segments,
+                row.grading,
                 thousands(c.frame_max),
                 thousands(c.frame_mean),
                 c.rk4_steps.0,
@@ -1273,8 +1278,9 @@ fn render_firmware_table(s: &mut String, rows: &[FirmwareRow], empty: &str) -> s
             )?,
             Err(why) => writeln!(
                 s,
-                "| {} | not measured: {} | | | | | |",
+                "| {}, {} | not measured: {} | | | | | |",
                 row.segments,
+                row.grading,
                 one_line(why)
             )?,
         }
@@ -1499,6 +1505,7 @@ mod tests {
         inputs.wall.insert(wall_tension("two_sweep", 300), 1e4);
         inputs.firmware.push(FirmwareRow {
             segments: 16,
+            grading: 1.3,
             outcome: Ok(FirmwareCounts {
                 frame_max: 90_000,
                 frame_mean: 80_000,
@@ -1560,6 +1567,7 @@ mod tests {
         let inputs = Inputs {
             firmware_m7: vec![FirmwareRow {
                 segments: 16,
+                grading: 1.3,
                 outcome: Ok(FirmwareCounts {
                     frame_max: 20_000,
                     frame_mean: 18_000,
@@ -1573,7 +1581,7 @@ mod tests {
         let md = render(&inputs);
         let m7 = &md[md.find("## Firmware: Cortex-M7").unwrap()..];
         assert!(
-            m7.contains("| 16 | 20,000 | 18,000 | 10,000 | 625 |"),
+            m7.contains("| 16, 1.3 | 20,000 | 18,000 | 2 to 3 | 9,000 | 8,000 | 562 |"),
             "{md}"
         );
     }

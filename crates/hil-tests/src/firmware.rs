@@ -230,7 +230,7 @@ pub fn build_board_with_segments(
         Board::M7 => {
             let variants = variants_dir();
             let root = variants.join(format!("segments-{segments}"));
-            prepare_variant(&root, segments).map_err(|e| {
+            prepare_variant(&root, segments, None).map_err(|e| {
                 BuildError::Variant(format!(
                     "preparing the sources for the {segments}-segment firmware: {e}"
                 ))
@@ -250,6 +250,52 @@ pub fn build_board_with_segments(
             Ok(elf)
         }
     }
+}
+
+/// [`build_board_with_segments`] with the grading ratio replaced too (for the
+/// benchmark report, which keeps the shortest segment of larger models as long as
+/// the configured model's). The variant lives in
+/// `target/firmware-variants/segments-<n>-graded-<ratio>/`.
+pub fn build_board_with_layout(
+    board: Board,
+    segments: usize,
+    grading: f64,
+    timeout: Duration,
+) -> Result<PathBuf, BuildError> {
+    if !((1..=MAX_SEGMENTS).contains(&segments) && grading.is_finite() && grading >= 1.0) {
+        return Err(BuildError::Variant(format!(
+            "the firmware's solver holds 1 to {MAX_SEGMENTS} segments graded by a ratio of \
+             at least 1, not {segments} graded {grading}"
+        )));
+    }
+    let variants = variants_dir();
+    let name = format!("segments-{segments}-graded-{grading:?}");
+    let root = variants.join(&name);
+    prepare_variant(&root, segments, Some(grading))
+        .map_err(|e| BuildError::Variant(format!("preparing the sources of {name}: {e}")))?;
+    let (target_dir, mut cmd) = match board {
+        Board::M4 => {
+            let target_dir = variants.join("target");
+            (target_dir, build_command_in(&root.join("firmware")))
+        }
+        Board::M7 => {
+            let target_dir = variants.join("target-m7");
+            (
+                target_dir,
+                build_command_with(&root.join("firmware"), M7_ARGS),
+            )
+        }
+    };
+    cmd.arg("--target-dir").arg(&target_dir);
+    let built = run_build(
+        &mut cmd,
+        timeout,
+        target_dir.join(TARGET).join("release").join(BINARY),
+    )?;
+    let elf = variants.join(format!("{BINARY}-{board:?}-{name}"));
+    fs::copy(&built, &elf)
+        .map_err(|e| BuildError::Variant(format!("copying the ELF of {name}: {e}")))?;
+    Ok(elf)
 }
 
 /// The segment counts [`build_with_segments`] accepts: the firmware's solver has
@@ -287,7 +333,7 @@ pub fn build_with_segments(segments: usize, timeout: Duration) -> Result<PathBuf
     let io = |what: &str, e: std::io::Error| {
         BuildError::Variant(format!("{what} for the {segments}-segment firmware: {e}"))
     };
-    prepare_variant(&root, segments).map_err(|e| io("preparing the sources", e))?;
+    prepare_variant(&root, segments, None).map_err(|e| io("preparing the sources", e))?;
 
     let target_dir = variants.join("target");
     let mut cmd = build_command_in(&root.join("firmware"));
@@ -312,7 +358,7 @@ pub fn build_with_segments(segments: usize, timeout: Duration) -> Result<PathBuf
 
 /// Lays out `root/{firmware,config,crates}` for [`build_with_segments`]. Files are
 /// rewritten only when their content changes, so repeated builds stay incremental.
-fn prepare_variant(root: &Path, segments: usize) -> std::io::Result<()> {
+fn prepare_variant(root: &Path, segments: usize, grading: Option<f64>) -> std::io::Result<()> {
     let workspace = workspace_root();
     copy_tree(
         &firmware_dir(),
@@ -336,9 +382,17 @@ fn prepare_variant(root: &Path, segments: usize) -> std::io::Result<()> {
     copy_tree(&config, &root.join("config"), &[])?;
     let toml_path = root.join("config").join("reference-system.toml");
     let text = fs::read_to_string(config.join("reference-system.toml"))?;
-    let replaced = with_segments(&text, segments).ok_or_else(|| {
+    let mut replaced = with_segments(&text, segments).ok_or_else(|| {
         std::io::Error::other("config/reference-system.toml has no `segments_embedded =` line")
     })?;
+    if let Some(ratio) = grading {
+        replaced = with_value(&replaced, "grading_ratio_embedded", &format!("{ratio:?}"))
+            .ok_or_else(|| {
+                std::io::Error::other(
+                    "config/reference-system.toml has no `grading_ratio_embedded =` line",
+                )
+            })?;
+    }
     write_if_changed(&toml_path, replaced.as_bytes())?;
     let link = root.join("crates");
     if fs::read_link(&link).ok().as_deref() != Some(workspace.join("crates").as_path()) {
@@ -353,17 +407,23 @@ fn prepare_variant(root: &Path, segments: usize) -> std::io::Result<()> {
 /// `text` (the reference-system TOML) with its `segments_embedded` value replaced
 /// by `segments`, its comment kept; `None` if there is no such line.
 pub fn with_segments(text: &str, segments: usize) -> Option<String> {
+    with_value(text, "segments_embedded", &segments.to_string())
+}
+
+/// `text` (the reference-system TOML) with the value of its first `key = ...` line
+/// replaced by `value`, its comment kept; `None` if there is no such line.
+pub fn with_value(text: &str, key_wanted: &str, value: &str) -> Option<String> {
     let mut found = false;
     let lines: Vec<String> = text
         .lines()
         .map(|line| {
             let trimmed = line.trim_start();
             let key = trimmed.split('=').next().unwrap_or("").trim();
-            if key == "segments_embedded" && !found {
+            if key == key_wanted && !found {
                 found = true;
                 let comment = line.find('#').map(|i| &line[i..]).unwrap_or("");
                 let indent = &line[..line.len() - trimmed.len()];
-                format!("{indent}segments_embedded = {segments} {comment}")
+                format!("{indent}{key_wanted} = {value} {comment}")
                     .trim_end()
                     .to_owned()
             } else {
