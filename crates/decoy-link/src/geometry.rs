@@ -204,25 +204,40 @@ pub fn cable_plume_clearance<T: Real>(
     joints: impl IntoIterator<Item = Vec3<T>>,
 ) -> (T, usize) {
     // NED to body, formed once for all the points.
-    let to_body = aircraft
-        .rotation()
-        .to_rotation_matrix()
-        .into_inner()
-        .transpose();
+    let rotation = aircraft.rotation().to_rotation_matrix().into_inner();
+    let to_body = rotation.transpose();
     let clearance = |p: &Vec3<T>| plume.clearance(&(to_body * (p - aircraft.position)));
+    // The plume lies inside the sphere about the middle of its axis through its
+    // farthest rim, so a point farther than `best + radius` from that centre is
+    // farther than `best` from the plume: it cannot be the nearest and is skipped
+    // (with a margin far above rounding, so the result is the same as checking
+    // every point).
+    let half = T::lit(0.5);
+    let half_length = plume.length * half;
+    let rim = (plume.nozzle_radius + plume.length * plume.tan_half_angle).max(plume.nozzle_radius);
+    let radius = (half_length * half_length + rim * rim).sqrt();
+    let centre = aircraft.position + rotation * (plume.nozzle + plume.axis * half_length);
+    let margin = T::lit(1.001);
     let mut best = (T::lit(f64::INFINITY), 0);
-    let mut consider = |c: T, index: usize| {
+    let mut consider = |p: &Vec3<T>, index: usize| {
+        let reach = best.0 + radius;
+        if reach.finite()
+            && reach > T::zero()
+            && (p - centre).norm_squared() > reach * reach * margin
+        {
+            return;
+        }
+        let c = clearance(p);
         if c < best.0 {
             best = (c, index);
         }
     };
     let mut previous: Option<Vec3<T>> = None;
-    let half = T::lit(0.5);
     for (j, p) in joints.into_iter().enumerate() {
         if let Some(q) = previous {
-            consider(clearance(&((q + p) * half)), 2 * j - 1);
+            consider(&((q + p) * half), 2 * j - 1);
         }
-        consider(clearance(&p), 2 * j);
+        consider(&p, 2 * j);
         previous = Some(p);
     }
     best
@@ -335,5 +350,81 @@ mod tests {
         let (c, at) = cable_plume_clearance(&p, &aircraft, joints);
         assert!(c < 0.0);
         assert_eq!(at, 1);
+    }
+    /// Every point checked, for comparison with the pruned search.
+    fn brute_force<T: Real>(
+        plume: &ExhaustPlume<T>,
+        aircraft: &AircraftState<T>,
+        joints: &[Vec3<T>],
+    ) -> (T, usize) {
+        // The same NED-to-body transform as `cable_plume_clearance`.
+        let to_body = aircraft
+            .rotation()
+            .to_rotation_matrix()
+            .into_inner()
+            .transpose();
+        let mut best = (T::lit(f64::INFINITY), 0);
+        let mut consider = |p: Vec3<T>, k: usize| {
+            let c = plume.clearance(&(to_body * (p - aircraft.position)));
+            if c < best.0 {
+                best = (c, k);
+            }
+        };
+        for (j, p) in joints.iter().enumerate() {
+            if j > 0 {
+                consider((joints[j - 1] + p) * T::lit(0.5), 2 * j - 1);
+            }
+            consider(*p, 2 * j);
+        }
+        best
+    }
+
+    fn pruning_changes_nothing<T: Real>() {
+        let plume = plume::<T>();
+        let mut seed = 12345u64;
+        let mut random = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..300 {
+            let mut aircraft = AircraftState::<T>::level(T::lit(9000.0), T::lit(240.0));
+            aircraft.position = lit3([1000.0 * random(), 50.0 * random(), -9000.0]);
+            let (yaw, pitch) = (random() - 0.5, 0.3 * (random() - 0.5));
+            let (cy, sy, cp, sp) = (
+                (yaw / 2.0).cos(),
+                (yaw / 2.0).sin(),
+                (pitch / 2.0).cos(),
+                (pitch / 2.0).sin(),
+            );
+            aircraft.attitude = [cy * cp, -sy * sp, cy * sp, sy * cp].map(T::lit);
+            // A cable trailing behind, below and to the side, some points near
+            // or inside the plume.
+            let mut joints = [aircraft.position + lit3::<T>([-4.0, 0.0, 1.0]); 17];
+            let (dz, dy) = (0.2 * (random() - 0.3), 0.1 * (random() - 0.5));
+            for j in 1..joints.len() {
+                let step = 2.0 + 10.0 * random();
+                joints[j] = joints[j - 1] + lit3::<T>([-step, step * dy, step * dz]);
+            }
+            let pruned = cable_plume_clearance(&plume, &aircraft, joints.iter().copied());
+            let all = brute_force(&plume, &aircraft, &joints);
+            assert!(
+                pruned.0 == all.0 && pruned.1 == all.1,
+                "case {case}: {:?} against {:?}",
+                (pruned.0.to_f64(), pruned.1),
+                (all.0.to_f64(), all.1)
+            );
+        }
+    }
+
+    #[test]
+    fn pruning_changes_nothing_f32() {
+        pruning_changes_nothing::<f32>();
+    }
+
+    #[test]
+    fn pruning_changes_nothing_f64() {
+        pruning_changes_nothing::<f64>();
     }
 }
