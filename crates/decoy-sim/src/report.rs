@@ -312,6 +312,24 @@ fn monotone(values: &[f64], rising: bool) -> bool {
         .all(|w| if rising { w[1] >= w[0] } else { w[1] <= w[0] })
 }
 
+/// The decoy pitch and depth over a sweep, in words ("pitch a to b deg, depth c
+/// to d m (both growing)"), and whether both grow (`rising`) or both fall.
+fn pitch_and_depth_trend(points: &[crate::sweep::TrimPoint], rising: bool) -> (String, bool) {
+    let pitch: Vec<f64> = points.iter().map(|p| p.decoy_pitch_deg).collect();
+    let depth: Vec<f64> = points.iter().map(|p| p.decoy_cg_below_m).collect();
+    let ok = monotone(&pitch, rising) && monotone(&depth, rising);
+    let word = if rising { "growing" } else { "falling" };
+    let measured = format!(
+        "pitch {:.2} to {:.2} deg, depth {:.2} to {:.2} m ({}both {word})",
+        pitch[0],
+        pitch[pitch.len() - 1],
+        depth[0],
+        depth[depth.len() - 1],
+        if ok { "" } else { "not " }
+    );
+    (measured, ok)
+}
+
 /// (max - min) / mean.
 fn spread(values: &[f64]) -> f64 {
     let (lo, hi) = values
@@ -581,45 +599,19 @@ fn claims(data: &Data) -> Vec<Claim> {
         "changes far less than the connection tension, but the reference decoy's zero-lift drag (CD0 = 0.45 on its cross-section) grows with the dynamic pressure",
     );
 
-    let pitch_speed: Vec<f64> = sp.iter().map(|p| p.decoy_pitch_deg).collect();
-    let depth_speed: Vec<f64> = sp.iter().map(|p| p.decoy_cg_below_m).collect();
-    let ok = monotone(&pitch_speed, false) && monotone(&depth_speed, false);
+    let (measured, ok) = pitch_and_depth_trend(sp, false);
     push(
         "Decoy pitch and depth fall with speed (Fig. 17)",
         "yes",
-        format!(
-            "pitch {:.2} to {:.2} deg, depth {:.2} to {:.2} m ({})",
-            pitch_speed[0],
-            pitch_speed[pitch_speed.len() - 1],
-            depth_speed[0],
-            depth_speed[depth_speed.len() - 1],
-            if ok {
-                "both falling"
-            } else {
-                "not both falling"
-            }
-        ),
+        measured,
         Verdict::of(ok),
         "",
     );
-    let pitch_alt: Vec<f64> = al.iter().map(|p| p.decoy_pitch_deg).collect();
-    let depth_alt: Vec<f64> = al.iter().map(|p| p.decoy_cg_below_m).collect();
-    let ok = monotone(&pitch_alt, true) && monotone(&depth_alt, true);
+    let (measured, ok) = pitch_and_depth_trend(al, true);
     push(
         "Decoy pitch and depth grow with altitude (Fig. 21)",
         "yes",
-        format!(
-            "pitch {:.2} to {:.2} deg, depth {:.2} to {:.2} m ({})",
-            pitch_alt[0],
-            pitch_alt[pitch_alt.len() - 1],
-            depth_alt[0],
-            depth_alt[depth_alt.len() - 1],
-            if ok {
-                "both growing"
-            } else {
-                "not both growing"
-            }
-        ),
+        measured,
         Verdict::of(ok),
         "",
     );
