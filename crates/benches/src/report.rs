@@ -770,8 +770,10 @@ fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         Some(Ok(c)) => writeln!(
             s,
             "| firmware, 16 graded segments, f32, Cortex-M4: ≤ 40,000 instructions per RK4 \
-             step | {} max, {} mean (the solver's `step_instructions` per RK4 step; a whole \
-             10 ms control step is {} max, {} mean) | {} |",
+             step | {} max, {} mean (the solver's `step_instructions` per RK4 step of the \
+             frames with the fewest steps, whose first stage reuses the previous frame's \
+             output evaluation: firmware/README.md; a whole 10 ms control step is {} max, \
+             {} mean) | {} |",
             thousands(c.rk4_step_max),
             thousands(c.rk4_step_mean),
             thousands(c.frame_max),
@@ -1303,7 +1305,10 @@ fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
          the solver's share (`step_instructions`: the RK4 steps along the flight path). A \
          frame takes at least 2 RK4 steps of 5 ms, more where the wave-speed limit asks \
          (more segments are shorter ones: docs/protocol.md §5); the solver per RK4 step \
-         is `step_instructions / steps` over the frames with the fewest steps."
+         is `step_instructions / steps` over the frames with the fewest steps. The first \
+         stage of a frame's first step is the previous frame's output evaluation, reused \
+         (the same state and aircraft bits: `Solver::step`), so a frame of two steps \
+         evaluates the dynamics seven times, not eight."
     )?;
     writeln!(s)?;
     render_firmware_table(s, &inputs.firmware, "not run")?;

@@ -82,9 +82,10 @@ impl<T: Real, const N: usize> ReferenceStepper<T, N> {
         let n = self.model.segment_count();
         let t0 = self.state.time;
         let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
-        let half = T::lit(0.5 * dt);
-        let sixth = T::lit(dt / 6.0);
+        // The stage factors as `Solver::step` forms them.
         let full = T::lit(dt);
+        let half = full * T::lit(0.5);
+        let sixth = full * T::lit(1.0 / 6.0);
         let two = T::lit(2.0);
         let mut first_error = None;
         let mut note = |result: Result<(), SolveError>| {

@@ -14,7 +14,7 @@ use crate::messages::{
     AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
     PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
-use crate::path::{FramePath, TypedFramePath};
+use crate::path::FramePath;
 use crate::validate::{is_finite, validate_streamed};
 
 /// The longest RK4 step, s: a frame interval dt is integrated in
@@ -113,7 +113,7 @@ impl core::error::Error for ControllerError {}
 
 /// A run after a State frame: the run, the RK4 steps taken, and the streamed
 /// path they followed (None for a built-in profile).
-type Advanced<T> = (Run, u16, Option<TypedFramePath<T>>);
+type Advanced<T> = (Run, u16, Option<FramePath<T>>);
 
 /// What the controller integrates after a trim.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -519,7 +519,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         let (aircraft, time, streamed): (AircraftState<T>, f64, _) = match self.builtin {
             Some(path) => (path.state_at(0.0), 0.0, None),
             None => {
-                let path = FramePath::single(frame, run.origin).in_precision::<T>();
+                let path = FramePath::<T>::single(frame, run.origin);
                 (path.state_at(frame.time_s), frame.time_s, Some(path))
             }
         };
@@ -568,7 +568,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
                 (None, steps)
             }
             None => {
-                let path = FramePath::new(&run.last, frame, run.origin).in_precision::<T>();
+                let path = FramePath::<T>::new(&run.last, frame, run.origin);
                 let steps = self
                     .integrate_checked(saved, &path, run.last.time_s, frame.time_s, steps)
                     .map_err(failure)?;
@@ -603,17 +603,21 @@ impl<T: Real, const N: usize> Controller<T, N> {
         let out = self.solver.last_outputs();
         // max_i T_i^2 / l_i^4 from the squared joint forces (two roots in all):
         // then max_i c_i / l_i = sqrt(sqrt(max) / mu).
+        // (Compare-and-select rather than `max`, which is a libm call on the M4F.)
+        let larger = |a: T, b: T| if b > a { b } else { a };
         let mut worst = T::zero();
         let mut upstream = out.joint_force(0).norm_squared();
         for (i, l) in model.lengths().iter().enumerate() {
             let downstream = out.joint_force(i + 1).norm_squared();
             let l2 = *l * *l;
-            worst = worst.max(upstream.max(downstream) / (l2 * l2));
+            worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
             upstream = downstream;
         }
         let rate = (worst.square_root() / model.params().cable.linear_density).square_root();
-        let steps = libm::ceil(dt * rate.to_f64() / WAVE_STEP_FACTOR - 1e-9);
-        if steps.is_finite() { steps } else { 0.0 }
+        // In T (f64 is emulated on the M4F); an exact integer here is a tie of no
+        // consequence either way.
+        let steps = (T::lit(dt) * rate * T::lit(1.0 / WAVE_STEP_FACTOR)).ceil();
+        if steps.finite() { steps.to_f64() } else { 0.0 }
     }
 
     /// [`Controller::integrate`] with `steps` steps, again with more when a step
@@ -669,7 +673,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         &mut self,
         frame: &AircraftStateFrame,
         steps: u16,
-        streamed: Option<&TypedFramePath<T>>,
+        streamed: Option<&FramePath<T>>,
     ) -> Result<OutputFrame, SolveError> {
         let t = self.solver.state().time;
         let builtin = self.builtin;

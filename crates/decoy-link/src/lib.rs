@@ -56,4 +56,4 @@ pub use messages::{
     AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
     PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
-pub use path::{FramePath, TypedFramePath};
+pub use path::FramePath;

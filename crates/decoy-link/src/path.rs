@@ -5,53 +5,77 @@ use solver_core::{AircraftState, FlightPath, Real, Vec3};
 
 use crate::messages::AircraftStateFrame;
 
-/// One frame's kinematics in f64, position relative to the run's origin.
+/// One frame's kinematics in the solver's precision, position relative to the
+/// run's origin: what the path returns at that frame's time.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Sample {
-    time: f64,
-    position: [f64; 3],
-    velocity: [f64; 3],
-    acceleration: [f64; 3],
-    attitude: [f64; 4],
-    rate: [f64; 3],
-    angular_acceleration: [f64; 3],
+struct Sample<T: Real> {
+    position: Vec3<T>,
+    velocity: Vec3<T>,
+    acceleration: Vec3<T>,
+    /// Normalised in `T`.
+    attitude: [T; 4],
+    rate: Vec3<T>,
+    angular_acceleration: Vec3<T>,
 }
 
-impl Sample {
+impl<T: Real> Sample<T> {
+    /// The frame's kinematics; the position is taken relative to `origin` in f64
+    /// (the one quantity the wire carries in f64), the rest converted from the
+    /// wire's f32 (exact for both precisions).
     fn of(frame: &AircraftStateFrame, origin: &[f64; 3]) -> Self {
-        let widen3 = |v: [f32; 3]| v.map(f64::from);
         let p = frame.position_ned_m;
-        let q = frame.attitude_wxyz.map(f64::from);
+        let q = frame.attitude_wxyz.map(wide::<T>);
+        let norm = q
+            .iter()
+            .fold(T::zero(), |sum, c| sum + *c * *c)
+            .square_root();
+        let attitude = if norm > T::zero() {
+            q.map(|c| c / norm)
+        } else {
+            [T::one(), T::zero(), T::zero(), T::zero()]
+        };
         Sample {
-            time: frame.time_s,
-            position: [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]],
-            velocity: widen3(frame.velocity_ned_mps),
-            acceleration: widen3(frame.acceleration_ned_mps2),
-            attitude: normalised(q),
-            rate: widen3(frame.body_rate_radps),
-            angular_acceleration: widen3(frame.body_angular_acceleration_radps2),
+            position: Vec3::new(
+                T::lit(p[0] - origin[0]),
+                T::lit(p[1] - origin[1]),
+                T::lit(p[2] - origin[2]),
+            ),
+            velocity: wide3(frame.velocity_ned_mps),
+            acceleration: wide3(frame.acceleration_ned_mps2),
+            attitude,
+            rate: wide3(frame.body_rate_radps),
+            angular_acceleration: wide3(frame.body_angular_acceleration_radps2),
+        }
+    }
+
+    fn state(&self) -> AircraftState<T> {
+        AircraftState {
+            position: self.position,
+            velocity: self.velocity,
+            acceleration: self.acceleration,
+            attitude: self.attitude,
+            angular_rate: self.rate,
+            angular_acceleration: self.angular_acceleration,
         }
     }
 }
 
-fn normalised(q: [f64; 4]) -> [f64; 4] {
-    let norm = libm::sqrt(q.iter().map(|c| c * c).sum::<f64>());
-    if norm > 0.0 {
-        q.map(|c| c / norm)
-    } else {
-        [1.0, 0.0, 0.0, 0.0]
-    }
+/// A wire f32 in the solver's precision (exact).
+#[inline(always)]
+fn wide<T: Real>(v: f32) -> T {
+    T::lit(f64::from(v))
 }
 
-fn to_t<T: Real>(v: [f64; 3]) -> Vec3<T> {
-    Vec3::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]))
+fn wide3<T: Real>(v: [f32; 3]) -> Vec3<T> {
+    Vec3::new(wide(v[0]), wide(v[1]), wide(v[2]))
 }
 
 /// The flight path over [t0, t1] between the previous accepted State frame (t0)
-/// and the current one (t1). The frames are normalised and the displacement
-/// p1 - p0 taken in f64 once; every sample is then computed in the solver's
-/// precision (f32 on the Cortex-M4F, where f64 is software-emulated), with
-/// s = (t - t0)/h, h = t1 - t0:
+/// and the current one (t1), in the solver's precision `T` (f32 on the
+/// Cortex-M4F, where f64 is software-emulated). Built once per frame: positions
+/// relative to the origin and the displacement p1 - p0 are taken in f64, every
+/// other value comes from the wire's f32; quaternions are normalised in `T`.
+/// With s = (t - t0)/h, h = t1 - t0:
 ///
 /// - position and velocity: the cubic Hermite through both frames' positions and
 ///   velocities, written about p0: p = p0 + h01 (p1 - p0) + h h10 v0 + h h11 v1,
@@ -61,23 +85,36 @@ fn to_t<T: Real>(v: [f64; 3]) -> Vec3<T> {
 /// - attitude: normalised linear interpolation (nlerp) of the normalised
 ///   quaternions along the shorter arc.
 ///
-/// At t1 the position is p0 + (p1 - p0) rounded to the solver's precision (the
-/// controller evaluates its outputs on the constant path of the frame itself).
+/// At t <= t0 (s = 0) the path is exactly the previous frame's sample and at
+/// t >= t1 exactly the current frame's (its position, velocity and the quaternion
+/// as sent, normalised): so the path of the next frame starts with the bits this
+/// one ends with, and the solver evaluates the end of one frame and the start of
+/// the next with the same inputs (and reuses that evaluation, `Solver::step`).
 ///
 /// Positions are relative to `origin` (NED, m), which the controller sets to the
 /// horizontal position of the frame it trimmed at, so that an f32 solver keeps
 /// centimetre resolution however far the aircraft flies (the air depends only on
-/// the altitude, so the shift changes nothing else). Outside [t0, t1] the path is
-/// clamped to the nearer frame. A single frame (or t1 <= t0) gives a constant state.
+/// the altitude, so the shift changes nothing else). A single frame (or t1 <= t0)
+/// gives a constant state.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FramePath {
-    from: Sample,
-    to: Sample,
-    /// `to.position - from.position`, m, in f64.
-    displacement: [f64; 3],
+pub struct FramePath<T: Real> {
+    /// Time of the previous frame, s.
+    t0: f64,
+    /// Time of the current frame, s (not after t0: a constant path at `to`).
+    t1: f64,
+    /// 1 / (t1 - t0), 1/s (zero for a constant path).
+    inverse_span: T,
+    /// t1 - t0, s.
+    span: T,
+    from: Sample<T>,
+    to: Sample<T>,
+    /// `to.attitude`, negated if that is the shorter arc from `from.attitude`.
+    to_attitude_near: [T; 4],
+    /// p1 - p0 taken in f64, then rounded once.
+    delta: Vec3<T>,
 }
 
-impl FramePath {
+impl<T: Real> FramePath<T> {
     /// The path from `previous` to `current`, positions relative to `origin`.
     pub fn new(
         previous: &AircraftStateFrame,
@@ -85,110 +122,55 @@ impl FramePath {
         origin: [f64; 3],
     ) -> Self {
         let from = Sample::of(previous, &origin);
-        let mut to = Sample::of(current, &origin);
+        let to = Sample::of(current, &origin);
         // Shortest arc: q and -q are the same attitude.
-        let dot: f64 = (0..4).map(|i| from.attitude[i] * to.attitude[i]).sum();
-        if dot < 0.0 {
-            to.attitude = to.attitude.map(|c| -c);
-        }
-        let displacement = [0, 1, 2].map(|i| to.position[i] - from.position[i]);
+        let dot = (0..4).fold(T::zero(), |sum, i| sum + from.attitude[i] * to.attitude[i]);
+        let to_attitude_near = if dot < T::zero() {
+            to.attitude.map(|c: T| -c)
+        } else {
+            to.attitude
+        };
+        let (p0, p1) = (previous.position_ned_m, current.position_ned_m);
+        let delta = Vec3::new(
+            T::lit(p1[0] - p0[0]),
+            T::lit(p1[1] - p0[1]),
+            T::lit(p1[2] - p0[2]),
+        );
+        let span = current.time_s - previous.time_s;
+        let (t1, inverse_span, span) = if span > 0.0 {
+            (current.time_s, T::lit(1.0 / span), T::lit(span))
+        } else {
+            (previous.time_s, T::zero(), T::zero())
+        };
         FramePath {
+            t0: previous.time_s,
+            t1,
+            inverse_span,
+            span,
             from,
             to,
-            displacement,
+            to_attitude_near,
+            delta,
         }
     }
 
     /// The constant path at one frame (its state at every time).
     pub fn single(frame: &AircraftStateFrame, origin: [f64; 3]) -> Self {
-        let sample = Sample::of(frame, &origin);
-        FramePath {
-            from: sample,
-            to: sample,
-            displacement: [0.0; 3],
-        }
-    }
-
-    /// The aircraft state at `t` in f64 (the trait gives any precision).
-    pub fn state_f64(&self, t: f64) -> AircraftState<f64> {
-        FlightPath::<f64>::state_at(self, t)
+        FramePath::new(frame, frame, origin)
     }
 }
 
-impl FramePath {
-    /// The same path with every frame value rounded to `T` once, for repeated
-    /// sampling: on the Cortex-M4F each f64-to-f32 conversion is a software call,
-    /// and an RK4 step samples the path three times. Its samples are, by
-    /// construction, those of [`FlightPath::state_at`] on `self` (which delegates to
-    /// it).
-    pub fn in_precision<T: Real>(&self) -> TypedFramePath<T> {
-        let (a, b) = (&self.from, &self.to);
-        TypedFramePath {
-            t0: a.time,
-            h: b.time - a.time,
-            p0: to_t(a.position),
-            p1: to_t(b.position),
-            delta: to_t(self.displacement),
-            v0: to_t(a.velocity),
-            v1: to_t(b.velocity),
-            a0: to_t(a.acceleration),
-            a1: to_t(b.acceleration),
-            q0: a.attitude.map(T::lit),
-            q1: b.attitude.map(T::lit),
-            r0: to_t(a.rate),
-            r1: to_t(b.rate),
-            aa0: to_t(a.angular_acceleration),
-            aa1: to_t(b.angular_acceleration),
-        }
-    }
-}
-
-impl<T: Real> FlightPath<T> for FramePath {
+impl<T: Real> FlightPath<T> for FramePath<T> {
     fn state_at(&self, t: f64) -> AircraftState<T> {
-        self.in_precision::<T>().state_at(t)
-    }
-}
-
-/// A [`FramePath`] with its frame values in the solver's precision `T`
-/// ([`FramePath::in_precision`]); the same samples, fewer conversions.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TypedFramePath<T: Real> {
-    /// Time of the previous frame, s.
-    t0: f64,
-    /// Time from the previous frame to the current one, s (not positive: a
-    /// constant path at the current frame).
-    h: f64,
-    p0: Vec3<T>,
-    p1: Vec3<T>,
-    /// p1 - p0 rounded once from f64.
-    delta: Vec3<T>,
-    v0: Vec3<T>,
-    v1: Vec3<T>,
-    a0: Vec3<T>,
-    a1: Vec3<T>,
-    q0: [T; 4],
-    q1: [T; 4],
-    r0: Vec3<T>,
-    r1: Vec3<T>,
-    aa0: Vec3<T>,
-    aa1: Vec3<T>,
-}
-
-impl<T: Real> FlightPath<T> for TypedFramePath<T> {
-    fn state_at(&self, t: f64) -> AircraftState<T> {
-        let h = self.h;
-        if !(h > 0.0) {
-            return AircraftState {
-                position: self.p1,
-                velocity: self.v1,
-                acceleration: self.a1,
-                attitude: self.q1,
-                angular_rate: self.r1,
-                angular_acceleration: self.aa1,
-            };
+        if !(t < self.t1) {
+            return self.to.state();
         }
-        let s = T::lit(((t - self.t0) / h).clamp(0.0, 1.0));
-        let step = T::lit(h);
+        if !(t > self.t0) {
+            return self.from.state();
+        }
+        let s = T::lit(t - self.t0) * self.inverse_span;
+        let s = if s < T::one() { s } else { T::one() };
+        let step = self.span;
         let lit = T::lit;
         // Hermite basis (h01 = 1 - h00, so p = p0 + h01 (p1 - p0) + ...) and its
         // derivatives per unit s (d00 = -d01).
@@ -199,13 +181,14 @@ impl<T: Real> FlightPath<T> for TypedFramePath<T> {
         let d10 = lit(3.0) * s2 - lit(4.0) * s + T::one();
         let d01 = lit(6.0) * (s - s2);
         let d11 = lit(3.0) * s2 - lit(2.0) * s;
-        let (delta, v0, v1) = (self.delta, self.v0, self.v1);
-        let position = self.p0 + delta * h01 + (v0 * h10 + v1 * h11) * step;
-        let velocity = delta * (d01 / step) + v0 * d10 + v1 * d11;
+        let (a, b) = (&self.from, &self.to);
+        let (delta, v0, v1) = (self.delta, a.velocity, b.velocity);
+        let position = a.position + delta * h01 + (v0 * h10 + v1 * h11) * step;
+        let velocity = delta * (d01 * self.inverse_span) + v0 * d10 + v1 * d11;
         let lerp = |x: &Vec3<T>, y: &Vec3<T>| -> Vec3<T> { x + (y - x) * s };
         let q = [0, 1, 2, 3].map(|i| {
-            let qa = self.q0[i];
-            qa + (self.q1[i] - qa) * s
+            let qa = a.attitude[i];
+            qa + (self.to_attitude_near[i] - qa) * s
         });
         let norm = q
             .iter()
@@ -219,10 +202,10 @@ impl<T: Real> FlightPath<T> for TypedFramePath<T> {
         AircraftState {
             position,
             velocity,
-            acceleration: lerp(&self.a0, &self.a1),
+            acceleration: lerp(&a.acceleration, &b.acceleration),
             attitude,
-            angular_rate: lerp(&self.r0, &self.r1),
-            angular_acceleration: lerp(&self.aa0, &self.aa1),
+            angular_rate: lerp(&a.rate, &b.rate),
+            angular_acceleration: lerp(&a.angular_acceleration, &b.angular_acceleration),
         }
     }
 }
@@ -250,16 +233,16 @@ mod tests {
         // rounding of the frames' velocities).
         let x = |t: f64| 100.0 * t + 0.5 * t * t;
         let (f0, f1) = (frame(1.0, x(1.0), 101.0), frame(1.01, x(1.01), 101.01));
-        let path = FramePath::new(&f0, &f1, [0.0, 10.0, 0.0]);
+        let path = FramePath::<f64>::new(&f0, &f1, [0.0, 10.0, 0.0]);
         for k in 0..=10 {
             let t = 1.0 + 0.001 * k as f64;
-            let s = path.state_f64(t);
+            let s = path.state_at(t);
             assert!((s.position.x - x(t)).abs() < 1e-7, "{t}");
             assert!((s.velocity.x - (100.0 + t)).abs() < 1e-4, "{t}");
             assert_eq!(s.position.y, 0.0);
             assert_eq!(s.position.z, -9000.0);
         }
-        assert_eq!(path.state_f64(1.01).position.x, x(1.01));
+        assert_eq!(path.state_at(1.01).position.x, x(1.01));
     }
 
     #[test]
@@ -268,7 +251,7 @@ mod tests {
         let mut f1 = frame(0.01, 1.0, 100.0);
         f0.attitude_wxyz = [1.0, 0.0, 0.0, 0.0];
         f1.attitude_wxyz = [-1.0, 0.0, 0.0, 0.0];
-        let s = FramePath::new(&f0, &f1, [0.0; 3]).state_f64(0.005);
+        let s = FramePath::<f64>::new(&f0, &f1, [0.0; 3]).state_at(0.005);
         assert!((s.attitude[0].abs() - 1.0).abs() < 1e-12);
     }
 
@@ -277,12 +260,54 @@ mod tests {
         // 50 km from the origin an f32 position has a 4 mm resolution; the
         // velocity must still come out right, from the f64 displacement.
         let (f0, f1) = (frame(10.0, 50_000.0, 240.0), frame(10.01, 50_002.4, 240.0));
-        let path = FramePath::new(&f0, &f1, [0.0; 3]);
+        let path = FramePath::<f32>::new(&f0, &f1, [0.0; 3]);
         for k in 0..=4 {
-            let s: AircraftState<f32> = path.state_at(10.0 + 0.0025 * k as f64);
+            let s = path.state_at(10.0 + 0.0025 * k as f64);
             assert!((s.velocity.x - 240.0).abs() < 1e-3, "{}", s.velocity.x);
             let expected = 50_000.0 + 240.0 * 0.0025 * k as f64;
             assert!((f64::from(s.position.x) - expected).abs() < 5e-3);
+        }
+    }
+
+    #[test]
+    fn consecutive_paths_meet_with_the_same_bits() {
+        // The end of one frame's path is the start of the next, bit for bit (so the
+        // solver can reuse the evaluation there), in both precisions and with the
+        // attitude flipped for the shorter arc.
+        let mut f0 = frame(2.0, 480.123_456_7, 240.0);
+        let mut f1 = frame(2.01, 482.523_456_7, 240.1);
+        let mut f2 = frame(2.02, 484.924_456_7, 240.2);
+        f0.attitude_wxyz = [0.999, 0.01, 0.02, 0.03];
+        f1.attitude_wxyz = [-0.998, -0.011, -0.02, -0.031];
+        f2.attitude_wxyz = [0.997, 0.012, 0.021, 0.032];
+        let origin = [400.0, 10.0, 0.0];
+        for_both(&f0, &f1, &f2, origin);
+        fn for_both(
+            f0: &AircraftStateFrame,
+            f1: &AircraftStateFrame,
+            f2: &AircraftStateFrame,
+            origin: [f64; 3],
+        ) {
+            let (a, b) = (
+                FramePath::<f32>::new(f0, f1, origin),
+                FramePath::<f32>::new(f1, f2, origin),
+            );
+            assert_eq!(a.state_at(f1.time_s), b.state_at(f1.time_s));
+            assert_eq!(
+                a.state_at(f1.time_s),
+                FramePath::<f32>::single(f1, origin).state_at(7.0)
+            );
+            let (a, b) = (
+                FramePath::<f64>::new(f0, f1, origin),
+                FramePath::<f64>::new(f1, f2, origin),
+            );
+            assert_eq!(a.state_at(f1.time_s), b.state_at(f1.time_s));
+            assert_eq!(
+                a.state_at(f1.time_s),
+                FramePath::<f64>::single(f1, origin).state_at(-3.0)
+            );
+            // Inside the span the attitude follows the shorter arc (w stays positive).
+            assert!(a.state_at(f1.time_s - 0.005).attitude[0] > 0.99);
         }
     }
 }

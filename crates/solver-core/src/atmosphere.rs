@@ -183,7 +183,52 @@ pub struct AirColumn<T: Real> {
     pub across_tropopause: Option<AirProperties<T>>,
 }
 
+/// Spacing of the reference altitudes the solver expands the air about, m
+/// ([`AirColumn::about`]). A power of two, so that `altitude / COLUMN_GRID_M` is exact.
+pub const COLUMN_GRID_M: f64 = 16.0;
+
 impl<T: Real> AirColumn<T> {
+    /// The air column the solver uses at a connection-point `altitude` (m, positive
+    /// up): the expansion about the grid altitude nearest to it, a multiple of
+    /// [`COLUMN_GRID_M`] (ties away from zero).
+    ///
+    /// A pure function of the altitude that takes the same value for every altitude
+    /// within the same grid cell, so that a caller can keep the last column and
+    /// reuse it while [`AirColumn::serves`] the next altitude, bit-identically to
+    /// building it again, whatever came before. The reference moves at most 8 m from
+    /// the connection point, within the +-100 m over which the quadratic expansion
+    /// holds to 1e-6 (tested); it spares the ISA evaluation (a `pow`) at every flight
+    /// path sample of a climbing aircraft.
+    ///
+    /// Errors as [`Atmosphere::at`] for `altitude` itself (non-finite or outside
+    /// [`MIN_ALTITUDE_M`, `MAX_ALTITUDE_M`]); every grid altitude of that range is
+    /// inside it (-496 m to 20,000 m).
+    pub fn about(atmosphere: &Atmosphere<T>, altitude: T) -> Result<Self, AtmosphereError> {
+        if !altitude.finite() {
+            return Err(AtmosphereError::NonFinite);
+        }
+        let h = altitude.to_f64();
+        if !(MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&h) {
+            return Err(AtmosphereError::AltitudeOutOfRange { altitude_m: h });
+        }
+        let cell = T::lit(1.0 / COLUMN_GRID_M) * altitude;
+        let reference = cell.round() * T::lit(COLUMN_GRID_M);
+        Self::new(atmosphere, reference)
+    }
+
+    /// True when [`AirColumn::about`] at `altitude` gives this column, for a column
+    /// made by [`AirColumn::about`]: `altitude` within the atmosphere's range and
+    /// less than half a grid spacing from the reference (then `altitude / 16` rounds
+    /// to the reference's cell). False for NaN. A false answer only means "build
+    /// it": a tie exactly half a cell away is built again, to the same column.
+    #[inline]
+    pub fn serves(&self, altitude: T) -> bool {
+        let half = T::lit(0.5 * COLUMN_GRID_M);
+        (altitude - self.reference_altitude).abs() < half
+            && altitude >= T::lit(MIN_ALTITUDE_M)
+            && altitude <= T::lit(MAX_ALTITUDE_M)
+    }
+
     /// The air column about `altitude` (m, positive up).
     pub fn new(atmosphere: &Atmosphere<T>, altitude: T) -> Result<Self, AtmosphereError> {
         let air = atmosphere.at(altitude)?;
@@ -310,6 +355,43 @@ mod tests {
             Err(AtmosphereError::AltitudeOutOfRange { .. })
         ));
         assert_eq!(isa.at(f64::NAN), Err(AtmosphereError::NonFinite));
+    }
+
+    #[test]
+    fn the_grid_column_is_the_same_across_its_cell_and_stays_accurate() {
+        let isa = Atmosphere::<f64>::isa();
+        for &h0 in &[
+            -500.0, 0.0, 8999.0, 9000.0, 9007.9, 10_995.0, 11_004.0, 20_000.0,
+        ] {
+            let column = AirColumn::about(&isa, h0).unwrap();
+            let reference = column.reference_altitude;
+            assert_eq!(reference % COLUMN_GRID_M, 0.0, "{h0}");
+            assert!((h0 - reference).abs() <= 0.5 * COLUMN_GRID_M, "{h0}");
+            assert!((MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&reference));
+            // Reuse is exact: every altitude the column serves builds the same column.
+            for k in -40..=40 {
+                let h = h0 + 0.25 * k as f64;
+                if column.serves(h) {
+                    assert_eq!(AirColumn::about(&isa, h).unwrap(), column, "{h0} {h}");
+                } else if (MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&h) {
+                    assert!((h - reference).abs() >= 0.5 * COLUMN_GRID_M, "{h0} {h}");
+                }
+            }
+            // The cable and decoy hang within 100 m below the connection point.
+            for k in -10..=0 {
+                let h = h0 + 10.0 * k as f64;
+                if h < MIN_ALTITUDE_M {
+                    continue;
+                }
+                let exact = isa.at(h).unwrap().density;
+                let rel = (column.density(h) - exact).abs() / exact;
+                assert!(rel < 1e-6, "h0 {h0} h {h} rel {rel}");
+            }
+        }
+        assert!(AirColumn::about(&isa, 20_000.5).is_err());
+        assert!(AirColumn::about(&isa, f64::NAN).is_err());
+        let top = AirColumn::about(&isa, 20_000.0).unwrap();
+        assert!(!top.serves(20_000.5) && !top.serves(f64::NAN));
     }
 
     #[test]

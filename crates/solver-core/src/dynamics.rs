@@ -142,7 +142,12 @@ pub enum TensionMethod {
 
 /// Cable cross-flow drag on a segment (DESIGN §2): with the air velocity relative to
 /// the segment centre u split into u_t = (u.e)e and u_n = u - u_t,
-/// `F = 0.5 rho d l (C_n |u_n| u_n + pi C_f |u_t| u_t)`.
+/// `F = 0.5 rho d l (C_n |u_n| u_n + pi C_f |u.e| u_t)`.
+///
+/// |u_t| is taken as |u.e|: equal for the unit directions of every state; inside
+/// an RK4 step the stage directions e0 + h k are not renormalised and |e| differs
+/// from 1 by O(h² w²) (below 1e-5 for the product's steps), a change of the same
+/// order as the stage itself. It spares one square root per segment.
 #[inline(always)]
 pub fn cable_drag<T: Real>(
     model_cable: &crate::model::CableParams<T>,
@@ -152,10 +157,11 @@ pub fn cable_drag<T: Real>(
     relative_air: &Vec3<T>,
 ) -> Vec3<T> {
     let k = T::lit(0.5) * density * model_cable.diameter * length;
-    let ut = direction * relative_air.dot(direction);
+    let along = relative_air.dot(direction);
+    let ut = direction * along;
     let un = relative_air - ut;
     un * (k * model_cable.cd_normal * norm(&un))
-        + ut * (k * T::pi() * model_cable.cf_tangential * norm(&ut))
+        + ut * (k * T::pi() * model_cable.cf_tangential * along.abs())
 }
 
 /// Aerodynamic force and moment on the decoy, DESIGN §2.
@@ -244,9 +250,11 @@ fn cable_loads<T: Real, const N: usize>(
             let centre_velocity = v + we * (half * l);
             let density = density_at(centre_altitude);
             let u = env.wind - centre_velocity;
-            let ut = e * u.dot(&e);
+            let along = u.dot(&e);
+            let ut = e * along;
             let un = u - ut;
-            specific += (un * (normal_drag[i] * norm(&un)) + ut * (tangential_drag[i] * norm(&ut)))
+            specific += (un * (normal_drag[i] * norm(&un))
+                + ut * (tangential_drag[i] * along.abs()))
                 * density;
         }
         ws.specific_force[i] = specific;
@@ -543,6 +551,91 @@ pub fn solve_tensions<T: Real, const N: usize>(
 ) -> Result<(), SolveError> {
     let (model, state, ws) = opaque((model, state, ws));
     let last = last_joint(model);
+    let directions = &state.directions;
+    let inverse_masses = model.inverse_masses();
+    let t = forward_sweep(model, state, ws)?;
+    set_joint_force(ws, last, t);
+    let (two, three) = (T::lit(2.0), T::lit(3.0));
+    let mut t = t;
+    let mut probe = t.x + t.y + t.z;
+    for j in (0..last).rev() {
+        let e = directions[j];
+        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
+            * inverse_masses[j];
+        t = ws.reduced_rhs[j] - x_t;
+        probe += t.x + t.y + t.z;
+        set_joint_force(ws, j, t);
+    }
+    finish_tensions(model, ws, probe)
+}
+
+/// Passes 2 and 3 in one: [`solve_tensions`] with the segment accelerations of
+/// [`accelerations`] computed in its back sweep, where each segment's two joint
+/// forces are at hand (the same arithmetic, so the same bits). The product's
+/// evaluation; the separate passes remain for the pass-by-pass benchmarks.
+#[inline(never)]
+pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) -> Result<(), SolveError> {
+    let (model, state, ws, out) = opaque((model, state, ws, out));
+    let last = last_joint(model);
+    let n = model.segment_count();
+    let directions = &state.directions;
+    let rates = &state.rates;
+    let inverse_masses = model.inverse_masses();
+    let gains = model.rate_gains();
+    let mut t = forward_sweep(model, state, ws)?;
+    let (two, three) = (T::lit(2.0), T::lit(3.0));
+    let mut probe = t.x + t.y + t.z;
+    // T_{j+1} while T_j is found; for a free end the last segment's downstream
+    // force T_N is zero.
+    let mut downstream = if last == n {
+        ws.joint_force[n - 1] = t;
+        t
+    } else {
+        let zero = Vec3::zeros();
+        ws.joint_force[n - 1] = zero;
+        if last > 0 {
+            ws.joint_force[last - 1] = t;
+        }
+        let e = directions[n - 1];
+        out.directions[n - 1] = rates[n - 1].cross(&e);
+        out.rates[n - 1] = -e.cross(&(t + zero)) * gains[n - 1];
+        t
+    };
+    // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
+    for j in (0..last).rev() {
+        let e = directions[j];
+        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
+            * inverse_masses[j];
+        t = ws.reduced_rhs[j] - x_t;
+        probe += t.x + t.y + t.z;
+        // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
+        out.directions[j] = rates[j].cross(&e);
+        out.rates[j] = -e.cross(&(t + downstream)) * gains[j];
+        downstream = t;
+        if j > 0 {
+            ws.joint_force[j - 1] = t;
+        }
+    }
+    ws.connection_force = t;
+    let result = finish_tensions(model, ws, probe);
+    decoy_accelerations(model, state, ws, out);
+    result
+}
+
+/// The forward sweep of [`solve_tensions`]: fills the pivots, directions and
+/// reduced right-hand sides, and returns T_last = S_last⁻¹ y_last.
+#[inline(always)]
+fn forward_sweep<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+) -> Result<Vec3<T>, SolveError> {
+    let last = last_joint(model);
     let n = model.segment_count();
     let inverse_masses = model.inverse_masses();
     let directions = &state.directions;
@@ -601,18 +694,7 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let inv = s
         .spd_inverse()
         .ok_or(SolveError::NonPositivePivot { joint: last })?;
-    let mut t = inv.mul(&y);
-    set_joint_force(ws, last, t);
-    let mut probe = t.x + t.y + t.z;
-    for j in (0..last).rev() {
-        let e = directions[j];
-        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
-            * inverse_masses[j];
-        t = ws.reduced_rhs[j] - x_t;
-        probe += t.x + t.y + t.z;
-        set_joint_force(ws, j, t);
-    }
-    finish_tensions(model, ws, probe)
+    Ok(inv.mul(&y))
 }
 
 #[inline(always)]
@@ -749,6 +831,18 @@ pub fn accelerations<T: Real, const N: usize>(
         out.rates[i] = -e.cross(&(upstream + downstream)) * gains[i];
         upstream = downstream;
     }
+    decoy_accelerations(model, state, ws, out);
+}
+
+/// The decoy part of pass 3 (zero for a free end).
+#[inline(always)]
+fn decoy_accelerations<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) {
+    let n = model.segment_count();
     if let Some((decoy, derived)) = model.decoy() {
         let wb = state.decoy_rate;
         let tension_body = ws.decoy.rotation.tr_mul(&ws.joint_force[n - 1]);
@@ -779,9 +873,11 @@ pub fn evaluate<T: Real, const N: usize>(
 ) -> Result<(), SolveError> {
     prepare(model, state, connection, air, ws);
     match method {
-        TensionMethod::TwoSweep => solve_tensions(model, state, ws)?,
-        TensionMethod::Shooting => solve_tensions_shooting(model, state, ws)?,
+        TensionMethod::TwoSweep => solve_tensions_and_accelerations(model, state, ws, out),
+        TensionMethod::Shooting => {
+            solve_tensions_shooting(model, state, ws)?;
+            accelerations(model, state, ws, out);
+            Ok(())
+        }
     }
-    accelerations(model, state, ws, out);
-    Ok(())
 }

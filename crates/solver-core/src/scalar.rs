@@ -22,6 +22,9 @@ pub trait Real: RealField + Copy + Default + core::fmt::Debug + core::fmt::Displ
     /// `sqrtf` costs about 60 instructions per root against about 20. The host uses the
     /// same f32 root, so that host and firmware f32 runs stay bit-identical.
     fn square_root(self) -> Self;
+    /// True when both values have the same bit pattern (unlike `==`, +0 and -0
+    /// differ and a NaN equals itself): "the same input" for a cached result.
+    fn same_bits(self, other: Self) -> bool;
 }
 
 impl Real for f32 {
@@ -45,6 +48,10 @@ impl Real for f32 {
     fn square_root(self) -> Self {
         sqrt_f32_soft(self)
     }
+    #[inline(always)]
+    fn same_bits(self, other: Self) -> bool {
+        self.to_bits() == other.to_bits()
+    }
 }
 
 impl Real for f64 {
@@ -67,6 +74,10 @@ impl Real for f64 {
     #[inline(always)]
     fn square_root(self) -> Self {
         <f64 as nalgebra::ComplexField>::sqrt(self)
+    }
+    #[inline(always)]
+    fn same_bits(self, other: Self) -> bool {
+        self.to_bits() == other.to_bits()
     }
 }
 

@@ -24,6 +24,47 @@ pub struct Solver<T: Real, const N: usize> {
     stage: State<T, N>,
     slope: Derivative<T, N>,
     sum: Derivative<T, N>,
+    /// The last air column built (a cache: [`AirColumn::about`] is a pure function
+    /// of the altitude, so a column reused while it [`AirColumn::serves`] is the one
+    /// that would be built).
+    air: Option<AirColumn<T>>,
+    /// When `ws` and `slope` hold the evaluation at the current state: the
+    /// connection-point kinematics and air reference it was evaluated with. The next
+    /// step's first stage reuses it if its inputs are the same bits (see
+    /// [`Solver::step_observed`]).
+    evaluated: Option<EvaluationKey<T>>,
+}
+
+/// The inputs of an evaluation besides the model and the state: equal bits, equal
+/// results.
+#[derive(Clone, Copy, Debug)]
+struct EvaluationKey<T: Real> {
+    connection: PointKinematics<T>,
+    air_reference: T,
+    method: TensionMethod,
+}
+
+impl<T: Real> EvaluationKey<T> {
+    fn new(connection: &PointKinematics<T>, air: &AirColumn<T>, method: TensionMethod) -> Self {
+        EvaluationKey {
+            connection: *connection,
+            air_reference: air.reference_altitude,
+            method,
+        }
+    }
+
+    /// Bitwise equality (so +0 and -0 differ; NaN never occurs: inputs are validated).
+    fn same(&self, other: &Self) -> bool {
+        let same3 = |a: &Vec3<T>, b: &Vec3<T>| {
+            a.x.same_bits(b.x) && a.y.same_bits(b.y) && a.z.same_bits(b.z)
+        };
+        let (a, b) = (&self.connection, &other.connection);
+        self.method == other.method
+            && self.air_reference.same_bits(other.air_reference)
+            && same3(&a.position, &b.position)
+            && same3(&a.velocity, &b.velocity)
+            && same3(&a.acceleration, &b.acceleration)
+    }
 }
 
 impl<T: Real, const N: usize> Solver<T, N> {
@@ -39,6 +80,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
             stage: State::default(),
             slope: Derivative::default(),
             sum: Derivative::default(),
+            air: None,
+            evaluated: None,
         };
         solver.set_state(state)?;
         Ok(solver)
@@ -47,6 +90,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// Chooses the tension solver (the shooting form is for reference tests only).
     pub fn set_method(&mut self, method: TensionMethod) {
         self.method = method;
+        self.evaluated = None;
     }
 
     /// The model.
@@ -65,6 +109,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             return Err(SolveError::NonFinite { joint: 0 });
         }
         self.state = state;
+        self.evaluated = None;
         Ok(())
     }
 
@@ -104,32 +149,40 @@ impl<T: Real, const N: usize> Solver<T, N> {
         let n = self.model.segment_count();
         let t0 = self.state.time;
         let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
-        let half = T::lit(0.5 * dt);
-        let sixth = T::lit(dt / 6.0);
+        // The stage factors from dt rounded to T once (on the Cortex-M4F every f64
+        // operation is a library call).
         let full = T::lit(dt);
+        let half = full * T::lit(0.5);
+        let sixth = full * T::lit(1.0 / 6.0);
         let two = T::lit(2.0);
 
-        // The flight path and the air column are sampled once per distinct time:
-        // k2 and k3 both evaluate at t0 + dt/2.
-        let (start, start_air) = connection_and_air(&self.model, &path.state_at(t0))?;
-        // k1 at the current state, straight into the weighted sum (sum = k1).
-        dynamics::evaluate(
-            &self.model,
-            &self.state,
-            &start,
-            &start_air,
-            self.method,
-            &mut self.ws,
-            &mut self.sum,
-        )?;
+        // The flight path is sampled once per distinct time: k2 and k3 both evaluate
+        // at t0 + dt/2.
+        let (start, start_air) = self.inputs_at(&path.state_at(t0))?;
+        // k1 at the current state, straight into the weighted sum (sum = k1); or, when
+        // the last evaluation was at this state with the same inputs (the outputs a
+        // caller read after the previous step, on a path that continues through
+        // them), a copy of it: the same bits without evaluating again.
+        let key = EvaluationKey::new(&start, &start_air, self.method);
+        match self.evaluated.take() {
+            Some(last) if last.same(&key) => self.sum.copy_used(&self.slope, n),
+            _ => dynamics::evaluate(
+                &self.model,
+                &self.state,
+                &start,
+                &start_air,
+                self.method,
+                &mut self.ws,
+                &mut self.sum,
+            )?,
+        }
         observe(&Outputs {
             model: &self.model,
             state: &self.state,
             ws: &self.ws,
             derivative: &self.sum,
         });
-        let (middle, middle_air) =
-            connection_and_air_reusing(&self.model, &path.state_at(t_half), &start_air)?;
+        let (middle, middle_air) = self.inputs_at(&path.state_at(t_half))?;
         // k2 at y + dt/2 k1.
         self.stage.set_stage(&self.state, &self.sum, half, n);
         dynamics::evaluate(
@@ -154,8 +207,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.slope,
         )?;
         // k4 at y + dt k3 (sum += 2 k3).
-        let (end, end_air) =
-            connection_and_air_reusing(&self.model, &path.state_at(t_end), &middle_air)?;
+        let (end, end_air) = self.inputs_at(&path.state_at(t_end))?;
         self.stage
             .set_stage_accumulating(&self.state, &self.slope, full, &mut self.sum, two, n);
         dynamics::evaluate(
@@ -194,15 +246,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         &mut self,
         path: &P,
     ) -> Result<Outputs<'_, T, N>, SolveError> {
-        evaluate_at(
-            &self.model,
-            &self.state,
-            path,
-            self.state.time,
-            self.method,
-            &mut self.ws,
-            &mut self.slope,
-        )?;
+        self.evaluate_here(path)?;
         Ok(Outputs {
             model: &self.model,
             state: &self.state,
@@ -229,63 +273,60 @@ impl<T: Real, const N: usize> Solver<T, N> {
         &mut self,
         path: &P,
     ) -> Result<Derivative<T, N>, SolveError> {
-        evaluate_at(
+        self.evaluate_here(path)?;
+        Ok(self.slope)
+    }
+
+    /// Evaluates the dynamics at the current state and time into `ws` and `slope`,
+    /// and remembers the inputs for the next step's first stage.
+    fn evaluate_here<P: FlightPath<T> + ?Sized>(&mut self, path: &P) -> Result<(), SolveError> {
+        self.evaluated = None;
+        let (connection, air) = self.inputs_at(&path.state_at(self.state.time))?;
+        dynamics::evaluate(
             &self.model,
             &self.state,
-            path,
-            self.state.time,
+            &connection,
+            &air,
             self.method,
             &mut self.ws,
             &mut self.slope,
         )?;
-        Ok(self.slope)
+        self.evaluated = Some(EvaluationKey::new(&connection, &air, self.method));
+        Ok(())
+    }
+
+    /// [`connection_and_air`] with the solver's air column cache (the same result).
+    fn inputs_at(
+        &mut self,
+        aircraft: &AircraftState<T>,
+    ) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
+        aircraft.validate()?;
+        let connection = aircraft.point(&self.model.params().connection_point);
+        let altitude = -connection.position.z;
+        let air = match self.air {
+            Some(air) if air.serves(altitude) => air,
+            _ => {
+                let air = AirColumn::about(&self.model.params().environment.atmosphere, altitude)?;
+                self.air = Some(air);
+                air
+            }
+        };
+        Ok((connection, air))
     }
 }
 
-/// Samples the flight path at `t`, checks it, and evaluates the dynamics.
-pub(crate) fn evaluate_at<T: Real, const N: usize, P: FlightPath<T> + ?Sized>(
-    model: &Model<T, N>,
-    state: &State<T, N>,
-    path: &P,
-    t: f64,
-    method: TensionMethod,
-    ws: &mut Workspace<T, N>,
-    out: &mut Derivative<T, N>,
-) -> Result<(), SolveError> {
-    let (connection, air) = connection_and_air(model, &path.state_at(t))?;
-    dynamics::evaluate(model, state, &connection, &air, method, ws, out)
-}
-
-/// Validates an aircraft state and derives the connection-point kinematics and the air column about it.
+/// Validates an aircraft state and derives the connection-point kinematics and the
+/// air column the solver uses there ([`AirColumn::about`]).
 pub fn connection_and_air<T: Real, const N: usize>(
     model: &Model<T, N>,
     aircraft: &AircraftState<T>,
 ) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
     aircraft.validate()?;
     let connection = aircraft.point(&model.params().connection_point);
-    let air = AirColumn::new(
+    let air = AirColumn::about(
         &model.params().environment.atmosphere,
         -connection.position.z,
     )?;
-    Ok((connection, air))
-}
-
-/// [`connection_and_air`], reusing `previous` when the connection point is at its
-/// reference altitude (level flight): the column is a function of that altitude
-/// alone, so the result is the same, without another ISA evaluation.
-fn connection_and_air_reusing<T: Real, const N: usize>(
-    model: &Model<T, N>,
-    aircraft: &AircraftState<T>,
-    previous: &AirColumn<T>,
-) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
-    aircraft.validate()?;
-    let connection = aircraft.point(&model.params().connection_point);
-    let altitude = -connection.position.z;
-    let air = if altitude == previous.reference_altitude {
-        *previous
-    } else {
-        AirColumn::new(&model.params().environment.atmosphere, altitude)?
-    };
     Ok((connection, air))
 }
 

@@ -85,3 +85,47 @@ fn towed_system_two_sweep_matches_dense() {
         }
     }
 }
+
+/// The product's fused pass (tensions and accelerations in one back sweep) gives
+/// the bits of the separate passes, with a decoy and with a free end.
+fn fused_matches_separate<T: Real, const N: usize>(model: Model<T, N>, state: State<T, N>) {
+    use solver_core::dynamics::{
+        accelerations, prepare, solve_tensions, solve_tensions_and_accelerations,
+    };
+    let aircraft = AircraftState::<T>::level(T::lit(9000.0), T::lit(180.0));
+    let (connection, air) = connection_and_air(&model, &aircraft).unwrap();
+    let mut separate_ws = Box::new(Workspace::<T, N>::default());
+    let mut fused_ws = separate_ws.clone();
+    let (mut separate, mut fused) = (Derivative::<T, N>::default(), Derivative::<T, N>::default());
+    prepare(&model, &state, &connection, &air, &mut separate_ws);
+    solve_tensions(&model, &state, &mut separate_ws).unwrap();
+    accelerations(&model, &state, &separate_ws, &mut separate);
+    prepare(&model, &state, &connection, &air, &mut fused_ws);
+    solve_tensions_and_accelerations(&model, &state, &mut fused_ws, &mut fused).unwrap();
+    assert_eq!(format!("{fused:?}"), format!("{separate:?}"));
+    let forces = |ws: &Workspace<T, N>| format!("{ws:?}");
+    assert_eq!(forces(&fused_ws), forces(&separate_ws));
+}
+
+#[test]
+fn the_fused_back_sweep_is_the_separate_passes() {
+    let mut rng = Rng(7);
+    for &count in &[1usize, 2, 5, 16] {
+        let towed = Model::<f32, 16>::new(reference_params(SegmentLayout::Graded {
+            count,
+            ratio: 1.3,
+        }))
+        .unwrap();
+        fused_matches_separate(towed, random_state(&mut rng, count, 0.5));
+        let towed = Model::<f64, 16>::new(reference_params(SegmentLayout::Graded {
+            count,
+            ratio: 1.3,
+        }))
+        .unwrap();
+        fused_matches_separate(towed, random_state(&mut rng, count, 0.5));
+        let pendulum = reference_pendulum::<f64, 16>(count).unwrap();
+        fused_matches_separate(pendulum, random_state(&mut rng, count, 0.5));
+        let pendulum = reference_pendulum::<f32, 16>(count).unwrap();
+        fused_matches_separate(pendulum, random_state(&mut rng, count, 0.5));
+    }
+}
