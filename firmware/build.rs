@@ -38,6 +38,9 @@ fn main() -> Result<()> {
     println!("cargo:rerun-if-changed={MEMORY_MAP}");
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    // The same for the measurement examples (examples/step_cost.rs).
+    println!("cargo:rustc-link-arg-examples=-Tlink.x");
+    println!("cargo:rustc-link-arg-examples=-Tdefmt.x");
     // The M7 profile's f64 runs in hardware only with the Cortex-M7's FPv5-D16.
     if env::var_os("CARGO_FEATURE_M7").is_some() {
         let flags = env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();

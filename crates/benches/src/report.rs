@@ -218,6 +218,11 @@ pub struct Inputs {
     /// Firmware runs on the Cortex-M7 (QEMU mps2-an500), f64, by segment count
     /// (empty: rendered as not measured).
     pub firmware_m7: Vec<FirmwareRow>,
+    /// One RK4 step on the Cortex-M4F, f32, 16 graded segments
+    /// (`firmware/examples/step_cost.rs`), or why it was not measured.
+    pub step_cost: Result<hil_tests::step_cost::StepCost, String>,
+    /// The same on the Cortex-M7, f64.
+    pub step_cost_m7: Result<hil_tests::step_cost::StepCost, String>,
     /// The Pinocchio reference: its result line, or why there is none.
     pub pinocchio: Result<String, String>,
 }
@@ -231,6 +236,8 @@ impl Default for Inputs {
             instructions: Instructions::new(),
             firmware: Vec::new(),
             firmware_m7: Vec::new(),
+            step_cost: Err("not run".into()),
+            step_cost_m7: Err("not run".into()),
             pinocchio: Err("not run".into()),
         }
     }
@@ -766,29 +773,35 @@ fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     }
 
     let sixteen = inputs.firmware.iter().find(|r| r.segments == 16);
-    match sixteen.map(|r| &r.outcome) {
-        Some(Ok(c)) => writeln!(
-            s,
-            "| firmware, 16 graded segments, f32, Cortex-M4: ≤ 40,000 instructions per RK4 \
-             step | {} max, {} mean (the solver's `step_instructions` per RK4 step of the \
-             frames with the fewest steps, whose first stage reuses the previous frame's \
-             output evaluation: firmware/README.md; a whole 10 ms control step is {} max, \
-             {} mean) | {} |",
+    let in_frames = match sixteen.map(|r| &r.outcome) {
+        Some(Ok(c)) => format!(
+            "in the link's 10 ms frames {} max, {} mean per RK4 step (`step_instructions / \
+             steps` of the frames with the fewest steps, whose first stage reuses the previous \
+             frame's output evaluation; a whole control step is {} max, {} mean)",
             thousands(c.rk4_step_max),
             thousands(c.rk4_step_mean),
             thousands(c.frame_max),
-            thousands(c.frame_mean),
-            pass(c.rk4_step_max <= FIRMWARE_STEP_TARGET)
-        )?,
-        Some(Err(why)) => writeln!(
+            thousands(c.frame_mean)
+        ),
+        Some(Err(why)) => format!("over the link: not measured: {}", one_line(why)),
+        None => "over the link: not run".to_owned(),
+    };
+    match &inputs.step_cost {
+        Ok(c) => writeln!(
             s,
-            "| firmware, 16 graded segments ≤ 40,000 instructions per RK4 step | not \
-             measured: {} | - |",
+            "| firmware, 16 graded segments, f32, Cortex-M4: ≤ 40,000 instructions per RK4 \
+             step | {} max for an RK4 step evaluating all four stages (`firmware/examples/\
+             step_cost.rs`; {} when its first stage reuses the output evaluation); {in_frames} \
+             | {} |",
+            thousands(u64::from(c.four_stages)),
+            thousands(u64::from(c.first_stage_reused)),
+            pass(u64::from(c.four_stages) <= FIRMWARE_STEP_TARGET)
+        )?,
+        Err(why) => writeln!(
+            s,
+            "| firmware, 16 graded segments ≤ 40,000 instructions per RK4 step | RK4 step not \
+             measured: {}; {in_frames} | - |",
             one_line(why)
-        )?,
-        None => writeln!(
-            s,
-            "| firmware, 16 graded segments ≤ 40,000 instructions per RK4 step | not run | - |"
         )?,
     }
     writeln!(s)?;
@@ -1312,6 +1325,7 @@ fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     )?;
     writeln!(s)?;
     render_firmware_table(s, &inputs.firmware, "not run")?;
+    render_step_cost(s, &inputs.step_cost)?;
     writeln!(s, "## Firmware: Cortex-M7 (mps2-an500), f64")?;
     writeln!(s)?;
     writeln!(
@@ -1321,7 +1335,36 @@ fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     )?;
     writeln!(s)?;
     render_firmware_table(s, &inputs.firmware_m7, "not measured")?;
+    render_step_cost(s, &inputs.step_cost_m7)?;
     Ok(())
+}
+
+/// The paragraph on one RK4 step of `firmware/examples/step_cost.rs`.
+fn render_step_cost(
+    s: &mut String,
+    cost: &Result<hil_tests::step_cost::StepCost, String>,
+) -> std::fmt::Result {
+    match cost {
+        Ok(c) => writeln!(
+            s,
+            "One RK4 step of the 16 graded segments on its own (`firmware/examples/step_cost.rs`: \
+             the solver stepped along the flight path of 10 ms frames of a turning \
+             acceleration, as the controller steps it, without the link; 20 frames): {} \
+             instructions at most for a step that evaluates all four stages, {} for a frame's \
+             first step, whose first stage is the previous frame's output evaluation reused; \
+             the output evaluation {}, the frame's flight path {}.",
+            thousands(u64::from(c.four_stages)),
+            thousands(u64::from(c.first_stage_reused)),
+            thousands(u64::from(c.outputs)),
+            thousands(u64::from(c.path)),
+        )?,
+        Err(why) => writeln!(
+            s,
+            "One RK4 step on its own (`firmware/examples/step_cost.rs`): not measured ({}).",
+            one_line(why)
+        )?,
+    }
+    writeln!(s)
 }
 
 /// Points `(log10 N, log10 µs)` of the wall-clock costs `(N, ns)`.
@@ -1528,6 +1571,34 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("45,000 max"), "{md}");
+        // Without the RK4 step measurement the target has no verdict.
+        let row = |md: &str| {
+            md.lines()
+                .find(|l| l.starts_with("| firmware, 16 graded segments"))
+                .map(str::to_owned)
+                .unwrap_or_default()
+        };
+        assert!(row(&md).ends_with("| - |"), "{}", row(&md));
+        let mut cost = hil_tests::step_cost::StepCost {
+            four_stages: 38_640,
+            first_stage_reused: 30_800,
+            outputs: 8_640,
+            path: 880,
+            four_stages_min: 38_240,
+        };
+        inputs.step_cost = Ok(cost);
+        let md = render(&inputs);
+        assert!(row(&md).contains("38,640 max for an RK4 step evaluating all four stages"));
+        assert!(
+            row(&md).contains("45,000 max, 40,000 mean per RK4 step"),
+            "{}",
+            row(&md)
+        );
+        assert!(row(&md).ends_with("| **pass** |"), "{}", row(&md));
+        assert!(md.contains("the output evaluation 8,640, the frame's flight path 880."));
+        cost.four_stages = 40_040;
+        inputs.step_cost = Ok(cost);
+        assert!(row(&render(&inputs)).ends_with("| **FAIL** |"));
         assert!(md.contains("O(N), towed system: wall-clock"), "{md}");
         // A wall-clock failure with flat instruction counts points at the machine.
         let mut loaded = Inputs::default();

@@ -194,6 +194,37 @@ pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildErro
     }
 }
 
+/// Builds the firmware's example `name` (`firmware/examples/<name>.rs`) for
+/// `board` within `timeout` and returns its ELF (M4: the default build's target
+/// directory; M7: the M7 profile's).
+pub fn build_example(board: Board, name: &str, timeout: Duration) -> Result<PathBuf, BuildError> {
+    match board {
+        Board::M4 => {
+            let mut cmd = build_command_with(&firmware_dir(), &["--example", name]);
+            let elf = firmware_dir()
+                .join("target")
+                .join(TARGET)
+                .join("release")
+                .join("examples")
+                .join(name);
+            run_build(&mut cmd, timeout, elf)
+        }
+        Board::M7 => {
+            let target_dir = firmware_dir().join("target").join("m7");
+            let mut cmd = build_command_with(&firmware_dir(), M7_ARGS);
+            cmd.args(["--example", name])
+                .arg("--target-dir")
+                .arg(&target_dir);
+            let elf = target_dir
+                .join(TARGET)
+                .join("release")
+                .join("examples")
+                .join(name);
+            run_build(&mut cmd, timeout, elf)
+        }
+    }
+}
+
 /// Runs a firmware build and checks that it produced `elf`.
 fn run_build(cmd: &mut Command, timeout: Duration, elf: PathBuf) -> Result<PathBuf, BuildError> {
     let out = run_with_timeout(

@@ -20,6 +20,8 @@
 //! - [`host`], [`reference`]: the host controller's configuration, and
 //!   `hil-reference`, the host controller with the target's maths (bit for bit).
 //! - [`hil_run`]: `decoy hil`.
+//! - [`step_cost`]: the firmware's `examples/step_cost.rs`, the instructions of one
+//!   RK4 step on the target.
 #![deny(missing_docs)]
 
 pub mod defmt;
@@ -31,3 +33,4 @@ pub mod link;
 pub mod qemu;
 pub mod reference;
 pub mod serial;
+pub mod step_cost;

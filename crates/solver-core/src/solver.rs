@@ -18,10 +18,14 @@ use crate::state::{Derivative, State};
 #[derive(Clone, Debug)]
 pub struct Solver<T: Real, const N: usize> {
     model: Model<T, N>,
-    state: State<T, N>,
+    /// The state (`states[current]`) and the RK4 stage buffer (the other one): a
+    /// step writes its result into the stage buffer and swaps the two, rather
+    /// than copying it. Their unused entries (beyond the model's segments) are
+    /// always equal, so the swap changes none of them.
+    states: [State<T, N>; 2],
+    current: usize,
     method: TensionMethod,
     ws: Workspace<T, N>,
-    stage: State<T, N>,
     slope: Derivative<T, N>,
     sum: Derivative<T, N>,
     /// The last air column built (a cache: [`AirColumn::about`] is a pure function
@@ -74,10 +78,10 @@ impl<T: Real, const N: usize> Solver<T, N> {
     pub fn new(model: Model<T, N>, state: State<T, N>) -> Result<Self, SolveError> {
         let mut solver = Solver {
             model,
-            state: State::default(),
+            states: [State::default(); 2],
+            current: 0,
             method: TensionMethod::TwoSweep,
             ws: Workspace::default(),
-            stage: State::default(),
             slope: Derivative::default(),
             sum: Derivative::default(),
             air: None,
@@ -100,7 +104,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
 
     /// The current state (copy it to save; restore with [`Solver::set_state`]).
     pub fn state(&self) -> &State<T, N> {
-        &self.state
+        &self.states[self.current]
     }
 
     /// Replaces the state after checking it is finite; on error the old state stays.
@@ -108,7 +112,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         if !state.is_finite(self.model.segment_count()) {
             return Err(SolveError::NonFinite { joint: 0 });
         }
-        self.state = state;
+        self.states = [state; 2];
         self.evaluated = None;
         Ok(())
     }
@@ -118,7 +122,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// can land an ulp away from t1. A non-finite `time` is ignored.
     pub fn set_time(&mut self, time: f64) {
         if time.is_finite() {
-            self.state.time = time;
+            self.states[self.current].time = time;
         }
     }
 
@@ -147,7 +151,13 @@ impl<T: Real, const N: usize> Solver<T, N> {
             return Err(InputError::BadTimeStep.into());
         }
         let n = self.model.segment_count();
-        let t0 = self.state.time;
+        let model = &self.model;
+        let method = self.method;
+        let ws = &mut self.ws;
+        let (sum, slope) = (&mut self.sum, &mut self.slope);
+        let air = &mut self.air;
+        let (state, stage) = halves(&mut self.states, self.current);
+        let t0 = state.time;
         let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
         // The stage factors from dt rounded to T once (on the Cortex-M4F every f64
         // operation is a library call).
@@ -158,85 +168,49 @@ impl<T: Real, const N: usize> Solver<T, N> {
 
         // The flight path is sampled once per distinct time: k2 and k3 both evaluate
         // at t0 + dt/2.
-        let (start, start_air) = self.inputs_at(&path.state_at(t0))?;
+        let (start, start_air) = inputs_at(model, air, &path.state_at(t0))?;
         // k1 at the current state, straight into the weighted sum (sum = k1); or, when
         // the last evaluation was at this state with the same inputs (the outputs a
         // caller read after the previous step, on a path that continues through
         // them), a copy of it: the same bits without evaluating again.
-        let key = EvaluationKey::new(&start, &start_air, self.method);
+        let key = EvaluationKey::new(&start, &start_air, method);
         match self.evaluated.take() {
-            Some(last) if last.same(&key) => self.sum.copy_used(&self.slope, n),
-            _ => dynamics::evaluate(
-                &self.model,
-                &self.state,
-                &start,
-                &start_air,
-                self.method,
-                &mut self.ws,
-                &mut self.sum,
-            )?,
+            Some(last) if last.same(&key) => sum.copy_used(slope, n),
+            _ => dynamics::evaluate(model, state, &start, &start_air, method, ws, sum)?,
         }
         observe(&Outputs {
-            model: &self.model,
-            state: &self.state,
-            ws: &self.ws,
-            derivative: &self.sum,
+            model,
+            state,
+            ws,
+            derivative: sum,
         });
-        let (middle, middle_air) = self.inputs_at(&path.state_at(t_half))?;
+        let (middle, middle_air) = inputs_at(model, air, &path.state_at(t_half))?;
         // k2 at y + dt/2 k1.
-        self.stage.set_stage(&self.state, &self.sum, half, n);
-        dynamics::evaluate(
-            &self.model,
-            &self.stage,
-            &middle,
-            &middle_air,
-            self.method,
-            &mut self.ws,
-            &mut self.slope,
-        )?;
+        stage.set_stage(state, sum, half, n);
+        dynamics::evaluate(model, stage, &middle, &middle_air, method, ws, slope)?;
         // k3 at y + dt/2 k2 (sum += 2 k2).
-        self.stage
-            .set_stage_accumulating(&self.state, &self.slope, half, &mut self.sum, two, n);
-        dynamics::evaluate(
-            &self.model,
-            &self.stage,
-            &middle,
-            &middle_air,
-            self.method,
-            &mut self.ws,
-            &mut self.slope,
-        )?;
+        stage.set_stage_accumulating(state, slope, half, sum, two, n);
+        dynamics::evaluate(model, stage, &middle, &middle_air, method, ws, slope)?;
         // k4 at y + dt k3 (sum += 2 k3).
-        let (end, end_air) = self.inputs_at(&path.state_at(t_end))?;
-        self.stage
-            .set_stage_accumulating(&self.state, &self.slope, full, &mut self.sum, two, n);
-        dynamics::evaluate(
-            &self.model,
-            &self.stage,
-            &end,
-            &end_air,
-            self.method,
-            &mut self.ws,
-            &mut self.slope,
-        )?;
+        let (end, end_air) = inputs_at(model, air, &path.state_at(t_end))?;
+        stage.set_stage_accumulating(state, slope, full, sum, two, n);
+        dynamics::evaluate(model, stage, &end, &end_air, method, ws, slope)?;
         // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
-        let probe = self
-            .stage
-            .set_final(&self.state, &self.sum, &self.slope, sixth, n);
-        self.stage.time = t_end;
+        let probe = stage.set_final(state, sum, slope, sixth, n);
+        stage.time = t_end;
         // The probe is finite only if every value is; the full check runs only when it is not.
         let probe_finite = probe.finite() && t_end.is_finite();
-        if !probe_finite && !self.stage.is_finite(n) {
+        if !probe_finite && !stage.is_finite(n) {
             let joint = (0..n)
                 .find(|&i| {
-                    !(crate::scalar::vec_finite(&self.stage.directions[i])
-                        && crate::scalar::vec_finite(&self.stage.rates[i]))
+                    !(crate::scalar::vec_finite(&stage.directions[i])
+                        && crate::scalar::vec_finite(&stage.rates[i]))
                 })
                 .map_or(n, |i| i + 1);
             return Err(SolveError::NonFinite { joint });
         }
-        // Only the used segments: the arrays hold capacity N, the model uses n of them.
-        self.state.copy_used(&self.stage, n);
+        // The stage buffer holds the new state: swap the roles.
+        self.current = 1 - self.current;
         Ok(())
     }
 
@@ -249,7 +223,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         self.evaluate_here(path)?;
         Ok(Outputs {
             model: &self.model,
-            state: &self.state,
+            state: &self.states[self.current],
             ws: &self.ws,
             derivative: &self.slope,
         })
@@ -262,7 +236,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     pub fn last_outputs(&self) -> Outputs<'_, T, N> {
         Outputs {
             model: &self.model,
-            state: &self.state,
+            state: &self.states[self.current],
             ws: &self.ws,
             derivative: &self.slope,
         }
@@ -281,10 +255,11 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// and remembers the inputs for the next step's first stage.
     fn evaluate_here<P: FlightPath<T> + ?Sized>(&mut self, path: &P) -> Result<(), SolveError> {
         self.evaluated = None;
-        let (connection, air) = self.inputs_at(&path.state_at(self.state.time))?;
+        let state = &self.states[self.current];
+        let (connection, air) = inputs_at(&self.model, &mut self.air, &path.state_at(state.time))?;
         dynamics::evaluate(
             &self.model,
-            &self.state,
+            state,
             &connection,
             &air,
             self.method,
@@ -294,25 +269,37 @@ impl<T: Real, const N: usize> Solver<T, N> {
         self.evaluated = Some(EvaluationKey::new(&connection, &air, self.method));
         Ok(())
     }
+}
 
-    /// [`connection_and_air`] with the solver's air column cache (the same result).
-    fn inputs_at(
-        &mut self,
-        aircraft: &AircraftState<T>,
-    ) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
-        aircraft.validate()?;
-        let connection = aircraft.point(&self.model.params().connection_point);
-        let altitude = -connection.position.z;
-        let air = match self.air {
-            Some(air) if air.serves(altitude) => air,
-            _ => {
-                let air = AirColumn::about(&self.model.params().environment.atmosphere, altitude)?;
-                self.air = Some(air);
-                air
-            }
-        };
-        Ok((connection, air))
-    }
+/// The state and the stage buffer of [`Solver::states`], `current` first.
+#[inline(always)]
+fn halves<T: Real, const N: usize>(
+    states: &mut [State<T, N>; 2],
+    current: usize,
+) -> (&State<T, N>, &mut State<T, N>) {
+    let [a, b] = states;
+    if current == 0 { (a, b) } else { (b, a) }
+}
+
+/// [`connection_and_air`] with the solver's air column cache `air` (the same result).
+#[inline(always)]
+fn inputs_at<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    air: &mut Option<AirColumn<T>>,
+    aircraft: &AircraftState<T>,
+) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
+    aircraft.validate()?;
+    let connection = aircraft.point(&model.params().connection_point);
+    let altitude = -connection.position.z;
+    let column = match *air {
+        Some(column) if column.serves(altitude) => column,
+        _ => {
+            let column = AirColumn::about(&model.params().environment.atmosphere, altitude)?;
+            *air = Some(column);
+            column
+        }
+    };
+    Ok((connection, column))
 }
 
 /// Validates an aircraft state and derives the connection-point kinematics and the

@@ -169,15 +169,6 @@ impl<T: Real, const N: usize> State<T, N> {
         probe + this.renormalise_decoy()
     }
 
-    /// `self = other` over the first `count` segments (entries beyond stay as they are).
-    pub(crate) fn copy_used(&mut self, other: &Self, count: usize) {
-        self.time = other.time;
-        self.directions[..count].copy_from_slice(&other.directions[..count]);
-        self.rates[..count].copy_from_slice(&other.rates[..count]);
-        self.decoy_attitude = other.decoy_attitude;
-        self.decoy_rate = other.decoy_rate;
-    }
-
     /// The decoy part of the renormalisation: q / |q|; returns the sum of the
     /// quaternion and decoy-rate components.
     fn renormalise_decoy(&mut self) -> T {

@@ -19,6 +19,7 @@ use hil_tests::firmware;
 use hil_tests::flight;
 use hil_tests::link::Session;
 use hil_tests::qemu::Board;
+use hil_tests::step_cost::StepCost;
 
 /// Time limit of one firmware build.
 const BUILD_TIMEOUT: Duration = Duration::from_secs(600);
@@ -76,6 +77,25 @@ fn run() -> Result<(), String> {
     } else {
         (Vec::new(), Vec::new())
     };
+    let step_cost = if firmware_runs {
+        [Board::M4, Board::M7].map(|board| {
+            let cost = hil_tests::step_cost::measure(board).map(|f| StepCost::of(&f));
+            match &cost {
+                Ok(c) => println!(
+                    "firmware: {}, one RK4 step (examples/step_cost.rs): four stages {} max, \
+                     first stage reused {} max",
+                    board.name(),
+                    c.four_stages,
+                    c.first_stage_reused
+                ),
+                Err(e) => println!("firmware: {}, step cost not measured: {e}", board.name()),
+            }
+            cost
+        })
+    } else {
+        [Err("not run".to_owned()), Err("not run".to_owned())]
+    };
+    let [step_cost, step_cost_m7] = step_cost;
     let pinocchio = match &pinocchio_file {
         None => Err(
             "no result given (`cargo xtask bench-report` runs it when the Python \
@@ -95,6 +115,8 @@ fn run() -> Result<(), String> {
         instructions,
         firmware,
         firmware_m7,
+        step_cost,
+        step_cost_m7,
         pinocchio,
     };
     let docs = root.join("docs");

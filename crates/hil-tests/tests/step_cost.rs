@@ -1,0 +1,53 @@
+//! The cost of one RK4 step on the target, exact under QEMU `-icount`: the
+//! firmware's `examples/step_cost.rs` steps the embedded model (16 graded
+//! segments, capacity 64) along the flight path of 10 ms State frames as the
+//! controller does, and logs each step's instructions ([`hil_tests::step_cost`]).
+//!
+//! Asserted on the Cortex-M4F (f32): an RK4 step that evaluates all four stages
+//! takes at most [`RK4_STEP_TARGET`] instructions (the benchmark issue's target); a
+//! frame's first step, whose first stage is the previous frame's output evaluation
+//! reused, is cheaper by most of an evaluation; and in the steady turn every frame
+//! costs the same to within a few ticks. The M7 (f64) counts are printed.
+
+use hil_tests::qemu::Board;
+use hil_tests::step_cost::{StepCost, measure};
+
+/// The benchmark issue's target for one RK4 step, M4 f32, 16 graded segments.
+const RK4_STEP_TARGET: u32 = 40_000;
+
+#[test]
+fn an_rk4_step_on_the_m4_is_within_the_target() {
+    let frames = measure(Board::M4).unwrap_or_else(|e| panic!("{e}"));
+    let cost = StepCost::of(&frames);
+    println!(
+        "M4 f32, 16 graded segments: RK4 step with four stages max {} (min {}), first step of \
+         a frame (first stage reused) max {}, output evaluation max {}, flight path of a frame \
+         max {} instructions",
+        cost.four_stages, cost.four_stages_min, cost.first_stage_reused, cost.outputs, cost.path
+    );
+    assert!(
+        cost.four_stages <= RK4_STEP_TARGET,
+        "an RK4 step took {} instructions, over {RK4_STEP_TARGET}: {frames:#?}",
+        cost.four_stages
+    );
+    assert!(
+        cost.first_stage_reused + cost.outputs / 2 < cost.four_stages,
+        "the first step does not reuse the output evaluation: {cost:?}"
+    );
+    assert!(
+        cost.four_stages - cost.four_stages_min <= 400,
+        "the steady turn's steps differ by more than 10 ticks: {frames:#?}"
+    );
+}
+
+#[test]
+fn the_m7_step_cost_is_measured() {
+    let frames = measure(Board::M7).unwrap_or_else(|e| panic!("{e}"));
+    let cost = StepCost::of(&frames);
+    println!(
+        "M7 f64, 16 graded segments: RK4 step with four stages max {}, first step of a frame \
+         (first stage reused) max {}, output evaluation max {} instructions",
+        cost.four_stages, cost.first_stage_reused, cost.outputs
+    );
+    assert!(cost.first_stage_reused < cost.four_stages, "{cost:?}");
+}
