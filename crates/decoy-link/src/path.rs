@@ -24,16 +24,7 @@ impl<T: Real> Sample<T> {
     /// wire's f32 (exact for both precisions).
     fn of(frame: &AircraftStateFrame, origin: &[f64; 3]) -> Self {
         let p = frame.position_ned_m;
-        let q = frame.attitude_wxyz.map(wide::<T>);
-        let norm = q
-            .iter()
-            .fold(T::zero(), |sum, c| sum + *c * *c)
-            .square_root();
-        let attitude = if norm > T::zero() {
-            q.map(|c| c / norm)
-        } else {
-            [T::one(), T::zero(), T::zero(), T::zero()]
-        };
+        let attitude = normalised(frame.attitude_wxyz.map(wide::<T>));
         Sample {
             position: Vec3::new(
                 T::lit(p[0] - origin[0]),
@@ -57,6 +48,20 @@ impl<T: Real> Sample<T> {
             angular_rate: self.rate,
             angular_acceleration: self.angular_acceleration,
         }
+    }
+}
+
+/// q / |q| (the identity for a zero quaternion).
+#[inline(always)]
+fn normalised<T: Real>(q: [T; 4]) -> [T; 4] {
+    let norm = q
+        .iter()
+        .fold(T::zero(), |sum, c| sum + *c * *c)
+        .square_root();
+    if norm > T::zero() {
+        q.map(|c| c / norm)
+    } else {
+        [T::one(), T::zero(), T::zero(), T::zero()]
     }
 }
 
@@ -192,19 +197,10 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
         let position = a.position + delta * h01 + (v0 * h10 + v1 * h11) * step;
         let velocity = delta * (d01 * self.inverse_span) + v0 * d10 + v1 * d11;
         let lerp = |x: &Vec3<T>, y: &Vec3<T>| -> Vec3<T> { x + (y - x) * s };
-        let q = [0, 1, 2, 3].map(|i| {
+        let attitude = normalised([0, 1, 2, 3].map(|i| {
             let qa = a.attitude[i];
             qa + (self.to_attitude_near[i] - qa) * s
-        });
-        let norm = q
-            .iter()
-            .fold(T::zero(), |sum, c| sum + *c * *c)
-            .square_root();
-        let attitude = if norm > T::zero() {
-            q.map(|c| c / norm)
-        } else {
-            [T::one(), T::zero(), T::zero(), T::zero()]
-        };
+        }));
         AircraftState {
             position,
             velocity,
