@@ -685,22 +685,13 @@ fn claims(data: &Data) -> Vec<Claim> {
         .collect();
     let closes = monotone(&clearances, false);
     let steady_clearance = fast.trace.samples[0].exhaust_clearance;
-    let rates = data
-        .pull_ups
-        .iter()
-        .map(|m| trim_number(m.rate, 2))
-        .collect::<Vec<_>>()
-        .join(" / ");
+    let rates = rates_of(&data.pull_ups);
     push(
         "Pull-up: the cable closes on the flight path and the exhaust more as the rate grows (Figs. 28-29)",
         "yes",
         format!(
             "smallest cable-plume clearance {} m at {rates} rad/s ({}; steady flight {:.2} m)",
-            clearances
-                .iter()
-                .map(|c| format!("{c:.2}"))
-                .collect::<Vec<_>>()
-                .join(" / "),
+            slashed(&clearances, 2),
             if closes {
                 "closer the faster"
             } else {
@@ -743,16 +734,8 @@ fn claims(data: &Data) -> Vec<Claim> {
         "yes",
         format!(
             "peak connection tension {} N at {} rad/s (steady {:.1} N)",
-            peaks
-                .iter()
-                .map(|p| format!("{p:.1}"))
-                .collect::<Vec<_>>()
-                .join(" / "),
-            data.pull_ups
-                .iter()
-                .map(|m| trim_number(m.rate, 2))
-                .collect::<Vec<_>>()
-                .join(" / "),
+            slashed(&peaks, 1),
+            rates_of(&data.pull_ups),
             fast.trace.samples[0].tension_connection
         ),
         Verdict::of(
@@ -792,16 +775,8 @@ fn claims(data: &Data) -> Vec<Claim> {
         "yes",
         format!(
             "+{} N at {} rad/s (Mach {})",
-            excesses
-                .iter()
-                .map(|e| format!("{e:.1}"))
-                .collect::<Vec<_>>()
-                .join(" / "),
-            data.turns
-                .iter()
-                .map(|m| trim_number(m.rate, 2))
-                .collect::<Vec<_>>()
-                .join(" / "),
+            slashed(&excesses, 1),
+            rates_of(&data.turns),
             trim_number(data.turn_mach, 2)
         ),
         Verdict::of(monotone(&excesses, true)),
@@ -819,21 +794,9 @@ fn claims(data: &Data) -> Vec<Claim> {
         "yes",
         format!(
             "decoy {} m outside at {} rad/s ({} m per rad/s)",
-            outward
-                .iter()
-                .map(|o| format!("{o:.2}"))
-                .collect::<Vec<_>>()
-                .join(" / "),
-            data.turns
-                .iter()
-                .map(|m| trim_number(m.rate, 2))
-                .collect::<Vec<_>>()
-                .join(" / "),
-            per_rate
-                .iter()
-                .map(|o| format!("{o:.1}"))
-                .collect::<Vec<_>>()
-                .join(" / ")
+            slashed(&outward, 2),
+            rates_of(&data.turns),
+            slashed(&per_rate, 1)
         ),
         if proportional {
             Verdict::Agrees
@@ -1571,6 +1534,24 @@ fn render(config: &SystemConfig, options: &ReportOptions, data: &Data, claims: &
         options.command
     );
     s
+}
+
+/// `values` with `decimals` decimals, separated by " / ".
+fn slashed(values: &[f64], decimals: usize) -> String {
+    values
+        .iter()
+        .map(|v| format!("{v:.decimals$}"))
+        .collect::<Vec<_>>()
+        .join(" / ")
+}
+
+/// The manoeuvres' rates, rad/s (as [`trim_number`] writes them), separated by " / ".
+fn rates_of(manoeuvres: &[Manoeuvre]) -> String {
+    manoeuvres
+        .iter()
+        .map(|m| trim_number(m.rate, 2))
+        .collect::<Vec<_>>()
+        .join(" / ")
 }
 
 #[cfg(test)]
