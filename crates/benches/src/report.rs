@@ -845,48 +845,54 @@ fn render_steps(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
 
     writeln!(s, "### Wall clock (criterion medians)")?;
     writeln!(s)?;
-    writeln!(s, "{}", header())?;
-    writeln!(s, "{rule}")?;
-    for n in union_sizes([&WALL_STEP_SIZES[..], &WALL_DENSE_STEP_SIZES[..]]) {
-        let mut row = format!("| {n} |");
-        for system in System::ALL {
-            for variant in Variant::ALL {
-                let cell = inputs
-                    .wall
-                    .get(&wall_step_key(system, variant, n))
-                    .map_or_else(|| "-".into(), |&ns| duration(ns));
-                let _ = write!(row, " {cell} |");
+    // One row per size, one cell per system and variant ("-": not measured).
+    let table = |s: &mut String,
+                 sizes: Vec<u32>,
+                 cell: &dyn Fn(System, Variant, u32) -> Option<String>|
+     -> std::fmt::Result {
+        writeln!(s, "{}", header())?;
+        writeln!(s, "{rule}")?;
+        for n in sizes {
+            let mut row = format!("| {n} |");
+            for system in System::ALL {
+                for variant in Variant::ALL {
+                    let cell = cell(system, variant, n).unwrap_or_else(|| "-".into());
+                    let _ = write!(row, " {cell} |");
+                }
             }
+            writeln!(s, "{row}")?;
         }
-        writeln!(s, "{row}")?;
-    }
-    writeln!(s)?;
+        writeln!(s)
+    };
+    table(
+        s,
+        union_sizes([&WALL_STEP_SIZES[..], &WALL_DENSE_STEP_SIZES[..]]),
+        &|system, variant, n| {
+            inputs
+                .wall
+                .get(&wall_step_key(system, variant, n))
+                .map(|&ns| duration(ns))
+        },
+    )?;
 
     writeln!(
         s,
         "### Instruction counts (gungraun, x86-64 under callgrind)"
     )?;
     writeln!(s)?;
-    writeln!(s, "{}", header())?;
-    writeln!(s, "{rule}")?;
-    for n in union_sizes([
-        &INSTRUCTION_STEP_SIZES[..],
-        &INSTRUCTION_DENSE_STEP_SIZES[..],
-    ]) {
-        let mut row = format!("| {n} |");
-        for system in System::ALL {
-            for variant in Variant::ALL {
-                let cell = inputs
-                    .instructions
-                    .get(&instr_step_key(system, variant, n))
-                    .map_or_else(|| "-".into(), |&c| thousands(c));
-                let _ = write!(row, " {cell} |");
-            }
-        }
-        writeln!(s, "{row}")?;
-    }
-    writeln!(s)?;
-    Ok(())
+    table(
+        s,
+        union_sizes([
+            &INSTRUCTION_STEP_SIZES[..],
+            &INSTRUCTION_DENSE_STEP_SIZES[..],
+        ]),
+        &|system, variant, n| {
+            inputs
+                .instructions
+                .get(&instr_step_key(system, variant, n))
+                .map(|&c| thousands(c))
+        },
+    )
 }
 
 /// `a / b` as `12.3x`, or `-`.
