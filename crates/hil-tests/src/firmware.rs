@@ -183,13 +183,25 @@ pub fn build_release(timeout: Duration) -> Result<PathBuf, BuildError> {
 /// default build for [`Board::M4`], the M7 profile ([`M7_ARGS`], target directory
 /// `firmware/target/m7`) for [`Board::M7`].
 pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildError> {
+    let (release, mut cmd) = board_build(board, &[]);
+    run_build(&mut cmd, timeout, release.join(BINARY))
+}
+
+/// The release output directory of `board`'s build of the firmware workspace and
+/// the command that builds it with `extra` cargo arguments (M4: the default
+/// target directory; M7: [`M7_ARGS`] and `firmware/target/m7`).
+fn board_build(board: Board, extra: &[&str]) -> (PathBuf, Command) {
     match board {
-        Board::M4 => build_release(timeout),
+        Board::M4 => {
+            let release = firmware_dir().join("target").join(TARGET).join("release");
+            (release, build_command_with(&firmware_dir(), extra))
+        }
         Board::M7 => {
             let target_dir = firmware_dir().join("target").join("m7");
-            let mut cmd = build_command_with(&firmware_dir(), M7_ARGS);
+            let args: Vec<&str> = M7_ARGS.iter().chain(extra).copied().collect();
+            let mut cmd = build_command_with(&firmware_dir(), &args);
             cmd.arg("--target-dir").arg(&target_dir);
-            run_build(&mut cmd, timeout, release_elf_m7())
+            (target_dir.join(TARGET).join("release"), cmd)
         }
     }
 }
@@ -198,31 +210,8 @@ pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildErro
 /// `board` within `timeout` and returns its ELF (M4: the default build's target
 /// directory; M7: the M7 profile's).
 pub fn build_example(board: Board, name: &str, timeout: Duration) -> Result<PathBuf, BuildError> {
-    match board {
-        Board::M4 => {
-            let mut cmd = build_command_with(&firmware_dir(), &["--example", name]);
-            let elf = firmware_dir()
-                .join("target")
-                .join(TARGET)
-                .join("release")
-                .join("examples")
-                .join(name);
-            run_build(&mut cmd, timeout, elf)
-        }
-        Board::M7 => {
-            let target_dir = firmware_dir().join("target").join("m7");
-            let mut cmd = build_command_with(&firmware_dir(), M7_ARGS);
-            cmd.args(["--example", name])
-                .arg("--target-dir")
-                .arg(&target_dir);
-            let elf = target_dir
-                .join(TARGET)
-                .join("release")
-                .join("examples")
-                .join(name);
-            run_build(&mut cmd, timeout, elf)
-        }
-    }
+    let (release, mut cmd) = board_build(board, &["--example", name]);
+    run_build(&mut cmd, timeout, release.join("examples").join(name))
 }
 
 /// Runs a firmware build and checks that it produced `elf`.
