@@ -555,14 +555,10 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let inverse_masses = model.inverse_masses();
     let t = forward_sweep(model, state, ws)?;
     set_joint_force(ws, last, t);
-    let (two, three) = (T::lit(2.0), T::lit(3.0));
     let mut t = t;
     let mut probe = t.x + t.y + t.z;
     for j in (0..last).rev() {
-        let e = directions[j];
-        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
-            * inverse_masses[j];
-        t = ws.reduced_rhs[j] - x_t;
+        t = back_substitute(ws, j, &directions[j], inverse_masses[j], &t);
         probe += t.x + t.y + t.z;
         set_joint_force(ws, j, t);
     }
@@ -588,7 +584,6 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     let inverse_masses = model.inverse_masses();
     let gains = model.rate_gains();
     let mut t = forward_sweep(model, state, ws)?;
-    let (two, three) = (T::lit(2.0), T::lit(3.0));
     let mut probe = t.x + t.y + t.z;
     // T_{j+1} while T_j is found; for a free end the last segment's downstream
     // force T_N is zero.
@@ -609,9 +604,7 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
     for j in (0..last).rev() {
         let e = directions[j];
-        let x_t = (ws.pivot_inverse[j].mul(&t) * two - ws.pivot_direction[j] * (three * e.dot(&t)))
-            * inverse_masses[j];
-        t = ws.reduced_rhs[j] - x_t;
+        t = back_substitute(ws, j, &e, inverse_masses[j], &t);
         probe += t.x + t.y + t.z;
         // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
         out.directions[j] = rates[j].cross(&e);
@@ -625,6 +618,22 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     let result = finish_tensions(model, ws, probe);
     decoy_accelerations(model, state, ws, out);
     result
+}
+
+/// One step of the back sweep: T_j = z_j - X_j T_{j+1}, with
+/// X_j T = (2 S_j⁻¹ T - 3 u_j (e·T))/m (`e`, `inverse_mass`: segment j+1's).
+#[inline(always)]
+fn back_substitute<T: Real, const N: usize>(
+    ws: &Workspace<T, N>,
+    j: usize,
+    e: &Vec3<T>,
+    inverse_mass: T,
+    next: &Vec3<T>,
+) -> Vec3<T> {
+    let (two, three) = (T::lit(2.0), T::lit(3.0));
+    let x_t = (ws.pivot_inverse[j].mul(next) * two - ws.pivot_direction[j] * (three * e.dot(next)))
+        * inverse_mass;
+    ws.reduced_rhs[j] - x_t
 }
 
 /// The forward sweep of [`solve_tensions`]: fills the pivots, directions and
