@@ -1,7 +1,7 @@
 //! The instruction cost of one RK4 step of the embedded model, measured on the
 //! target: the firmware's solver (the reference system's 16 graded segments,
 //! capacity 64; f32 on the Cortex-M4F, f64 with the `m7` feature) stepped along
-//! the flight path of State frames 10 ms apart, exactly as `decoy_link::Controller`
+//! the flight path of State frames 10 ms apart, exactly as `decoy_controller::Controller`
 //! steps it (two RK4 steps of 5 ms per frame, the outputs evaluated at the frame),
 //! but without the link, validation or clearances around it.
 //!
@@ -35,7 +35,8 @@ mod reference;
 
 use cortex_m as _;
 use cortex_m_rt::entry;
-use decoy_link::{AircraftStateFrame, FramePath, InstructionCounter};
+use decoy_controller::{FramePath, InstructionCounter};
+use decoy_link::{AircraftStateFrame};
 use solver_core::{AircraftState, FlightPath, Model, Solver, Vec3, trim};
 use static_cell::StaticCell;
 
@@ -88,7 +89,11 @@ fn main() -> ! {
         board::fail()
     };
     let clock = board.clock;
-    let Ok(params) = reference::model_params::<Scalar>(reference::embedded_layout()) else {
+    let Ok(system) = reference::system() else {
+        defmt::error!("the embedded system parameters do not decode");
+        board::fail()
+    };
+    let Ok(params) = system.model_params::<Scalar>(system.embedded_layout()) else {
         defmt::error!("the aerodynamic table is unusable");
         board::fail()
     };

@@ -302,7 +302,7 @@ impl Clock {
     }
 }
 
-impl decoy_link::InstructionCounter for Clock {
+impl decoy_controller::InstructionCounter for Clock {
     /// Instructions since the clock started, wrapping at 2^32, in multiples of
     /// [`INSTRUCTIONS_PER_TICK`].
     #[inline(always)]

@@ -220,9 +220,9 @@ pub struct Inputs {
     pub firmware_m7: Vec<FirmwareRow>,
     /// One RK4 step on the Cortex-M4F, f32, 16 graded segments
     /// (`firmware/examples/step_cost.rs`), or why it was not measured.
-    pub step_cost: Result<hil_tests::step_cost::StepCost, String>,
+    pub step_cost: Result<decoy_hil::step_cost::StepCost, String>,
     /// The same on the Cortex-M7, f64.
-    pub step_cost_m7: Result<hil_tests::step_cost::StepCost, String>,
+    pub step_cost_m7: Result<decoy_hil::step_cost::StepCost, String>,
     /// The Pinocchio reference: its result line, or why there is none.
     pub pinocchio: Result<String, String>,
 }
@@ -641,7 +641,7 @@ fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     )?;
     writeln!(
         s,
-        "- Firmware: `hil_tests::firmware::build_with_segments` builds the unchanged \
+        "- Firmware: `decoy_hil::firmware::build_with_segments` builds the unchanged \
          firmware against a copy of `config/` whose `segments_embedded` is 8, 16, 32 or \
          64 (graded as configured, or less where that would make the shortest segment \
          shorter than the configured model's, so that the rows compare the cost of an \
@@ -1348,7 +1348,7 @@ fn render_firmware(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
 /// The paragraph on one RK4 step of `firmware/examples/step_cost.rs`.
 fn render_step_cost(
     s: &mut String,
-    cost: &Result<hil_tests::step_cost::StepCost, String>,
+    cost: &Result<decoy_hil::step_cost::StepCost, String>,
 ) -> std::fmt::Result {
     match cost {
         Ok(c) => writeln!(
@@ -1585,7 +1585,7 @@ mod tests {
                 .unwrap_or_default()
         };
         assert!(row(&md).ends_with("| - |"), "{}", row(&md));
-        let mut cost = hil_tests::step_cost::StepCost {
+        let mut cost = decoy_hil::step_cost::StepCost {
             four_stages: 38_640,
             first_stage_reused: 30_800,
             outputs: 8_640,

@@ -15,7 +15,7 @@
 //! - `decoy report`: regenerates `docs/paper-reproduction.md` and its figures.
 //! - `decoy hil`: flies a scenario on the decoy controller firmware under QEMU,
 //!   frame by frame over the decoy link, beside the host's solution
-//!   (`hil_tests::hil_run`).
+//!   (`decoy_hil::hil_run`).
 //!
 //! Human-readable output by default, `--json` for machines. Errors are one line
 //! `error: ...` on stderr; the exit code is 2 for usage and configuration errors and
@@ -32,8 +32,8 @@ mod studies;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
-use hil_tests::hil_run::{HilOptions, HilRun};
-use hil_tests::qemu::Board;
+use decoy_hil::hil_run::{HilOptions, HilRun};
+use decoy_hil::qemu::Board;
 use progress::Progress;
 use serde::Serialize;
 use solver_core::dense::evaluate_dense;
@@ -551,7 +551,7 @@ fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<Stri
         plots: !args.no_plots,
     };
     let mut bar = Progress::new("flying on the firmware", json);
-    let result = hil_tests::hil_run::run_hil(config, &scenario, &options, |f| bar.update(f));
+    let result = decoy_hil::hil_run::run_hil(config, &scenario, &options, |f| bar.update(f));
     bar.finish();
     let run = result.map_err(|e| {
         if e.is_usage() {

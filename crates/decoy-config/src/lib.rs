@@ -26,10 +26,11 @@
 
 use std::path::{Path, PathBuf};
 
+pub use decoy_controller::{AeroRows, ControllerConfig, SystemParams};
 use serde::{Deserialize, Serialize};
 use solver_core::{
-    AeroTable, AeroTableError, Atmosphere, AtmosphereError, CableParams, DecoyParams, EndBody,
-    Environment, Model, ModelParams, Real, SegmentLayout, Vec3,
+    AeroTable, AeroTableError, Atmosphere, AtmosphereError, Model, ModelParams, Real,
+    SegmentLayout, Vec3,
 };
 
 /// The built-in system description (`config/reference-system.toml`).
@@ -380,6 +381,65 @@ impl SystemConfig {
         Ok(())
     }
 
+    /// The system as plain numbers ([`SystemParams`]): what the solver's model,
+    /// the geometry and the onboard controller are built from, on the host and (by
+    /// the firmware's build script) on the target. Fails only if the aerodynamic
+    /// table has more rows than the solver's table holds.
+    pub fn params(&self) -> Result<SystemParams, ConfigError> {
+        let (env, a, c, d, s) = (
+            &self.environment,
+            &self.aircraft,
+            &self.cable,
+            &self.decoy,
+            &self.solver,
+        );
+        let mut aero_rows = AeroRows::new();
+        for row in &self.aero_rows {
+            aero_rows.push(row.to_array()).map_err(|_| {
+                ConfigError::Solver(
+                    AeroTableError::TooManyRows {
+                        rows: self.aero_rows.len(),
+                        capacity: aero_rows.capacity(),
+                    }
+                    .into(),
+                )
+            })?;
+        }
+        Ok(SystemParams {
+            gravity: env.gravity,
+            gas_constant: env.gas_constant,
+            gamma: env.gamma,
+            wind_ned: env.wind_ned,
+            connection_point: a.connection_point,
+            exhaust_nozzle: a.exhaust_nozzle,
+            exhaust_axis: a.exhaust_axis,
+            exhaust_nozzle_radius: a.exhaust_nozzle_radius,
+            exhaust_half_angle_deg: a.exhaust_half_angle_deg,
+            exhaust_length: a.exhaust_length,
+            envelope_fore: a.envelope_fore,
+            envelope_aft: a.envelope_aft,
+            envelope_radius: a.envelope_radius,
+            cable_length: c.length,
+            cable_diameter: c.diameter,
+            cable_linear_density: c.linear_density,
+            cable_cd_normal: c.cd_normal,
+            cable_cf_tangential: c.cf_tangential,
+            allowable_tension: c.allowable_tension,
+            decoy_mass: d.mass,
+            decoy_length: d.length,
+            decoy_diameter: d.diameter,
+            decoy_x_cg: d.x_cg,
+            decoy_x_tow: d.x_tow,
+            decoy_x_mrp: d.x_mrp,
+            decoy_inertia_cg: d.inertia_cg,
+            decoy_cm_q: d.cm_q,
+            decoy_cl_p: d.cl_p,
+            aero_rows,
+            segments_embedded: s.segments_embedded,
+            grading_ratio_embedded: s.grading_ratio_embedded,
+        })
+    }
+
     /// The atmosphere model with the configured constants.
     pub fn atmosphere<T: Real>(&self) -> Atmosphere<T> {
         let env = &self.environment;
@@ -413,43 +473,27 @@ impl SystemConfig {
     }
 
     /// The solver's model parameters for this system with the given segment layout
-    /// (the decoy at the end of the chain, the ISA 1976 atmosphere).
+    /// (the decoy at the end of the chain, the ISA 1976 atmosphere), built by
+    /// [`SystemParams::model_params`]: the one conversion, shared with the firmware.
     pub fn model_params<T: Real>(
         &self,
         layout: SegmentLayout<T>,
     ) -> Result<ModelParams<T>, ConfigError> {
-        let env = &self.environment;
-        let cable = &self.cable;
-        let d = &self.decoy;
-        let t = T::lit;
-        Ok(ModelParams {
-            environment: Environment {
-                gravity: t(env.gravity),
-                wind: vec3(env.wind_ned),
-                atmosphere: self.atmosphere(),
-            },
-            connection_point: vec3(self.aircraft.connection_point),
-            cable: CableParams {
-                length: t(cable.length),
-                diameter: t(cable.diameter),
-                linear_density: t(cable.linear_density),
-                cd_normal: t(cable.cd_normal),
-                cf_tangential: t(cable.cf_tangential),
-            },
-            layout,
-            end: EndBody::Decoy(DecoyParams {
-                mass: t(d.mass),
-                length: t(d.length),
-                diameter: t(d.diameter),
-                x_cg: t(d.x_cg),
-                x_tow: t(d.x_tow),
-                x_mrp: t(d.x_mrp),
-                inertia_cg: vec3(d.inertia_cg),
-                cm_q: t(d.cm_q),
-                cl_p: t(d.cl_p),
-                aero: self.aero_table()?,
-            }),
-        })
+        self.params()?
+            .model_params(layout)
+            .map_err(|e| ConfigError::Solver(e.into()))
+    }
+
+    /// The onboard controller's configuration for this system with `layout` (the
+    /// model, the exhaust plume and collision capsule, the allowable tension), built
+    /// by [`SystemParams::controller_config`] exactly as the firmware builds its own.
+    pub fn controller_config<T: Real>(
+        &self,
+        layout: SegmentLayout<T>,
+    ) -> Result<ControllerConfig<T>, ConfigError> {
+        self.params()?
+            .controller_config(layout)
+            .map_err(|e| ConfigError::Solver(e.into()))
     }
 
     /// Builds and validates the solver model with capacity `N` for `layout`

@@ -1,17 +1,13 @@
-//! # decoy-link: the host <-> decoy-controller link
+//! # decoy-link: the host <-> decoy-controller wire protocol
 //!
-//! The one crate both ends of the link use, so they cannot disagree:
+//! The one crate both ends of the link use, so they cannot disagree. It is the
+//! protocol only and depends on nothing of the solver (the controller that speaks
+//! it is `decoy-controller`):
 //!
 //! - [`framing`]: `0x00, COBS(postcard(message) ++ crc32_le), 0x00` frames
 //!   ([`encode`], [`Decoder`]), typed [`FrameError`]s, never a stall on garbage.
 //! - [`messages`]: [`HostMessage`] (State frames, commands) and [`DeviceMessage`]
 //!   (outputs, rejections, status, pong, hello), [`PROTOCOL_VERSION`].
-//! - [`validate`]: the checks a State frame passes before it reaches the solver.
-//! - [`path`]: [`FramePath`], the flight path between two State frames.
-//! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
-//!   and the aircraft (the host's `decoy simulate` uses the same code).
-//! - [`controller`]: [`Controller`], the pure state machine the firmware runs and
-//!   the host uses as its reference.
 //!
 //! docs/protocol.md is the wire format's reference. `no_std`, no heap, no
 //! `unsafe`; the `std` feature adds `framing::encode_vec` only.
@@ -34,26 +30,15 @@
 // `!(x > 0)` is deliberate: it is true for NaN, which must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod controller;
 pub mod framing;
-pub mod geometry;
 pub mod messages;
-pub mod path;
-pub mod validate;
 
-pub use controller::{
-    CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,
-    DECOY_NEAR_AIRCRAFT_M, InstructionCounter, MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S,
-    MAX_TIME_JUMP_S, NoCounter, SILENCE_MS, TIME_TOLERANCE_S,
-};
 #[cfg(feature = "std")]
 pub use framing::encode_vec;
 pub use framing::{
     Decoder, EncodeError, FrameDecoder, FrameError, MAX_FRAME_BYTES, MAX_WIRE_BYTES, crc32, encode,
 };
-pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
 pub use messages::{
     AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
     PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
-pub use path::FramePath;

@@ -1,76 +1,57 @@
 //! Frames and clearances: the flight-path frame the outputs are expressed in, the
 //! exhaust plume and the aircraft's collision envelope.
 //!
-//! The maths lives in `decoy_link::geometry` (no_std, generic over the scalar), so
+//! The maths lives in `decoy_controller::geometry` (no_std, generic over the scalar), so
 //! that `decoy simulate` and the onboard controller compute the flight-path frame
 //! and the clearances with the same code; this module fixes it to f64 and builds
 //! it from the system configuration.
 
-use decoy_config::{ConfigError, SystemConfig};
-use decoy_link::ControllerConfig;
-use nalgebra::Vector3;
-use solver_core::{Real, SegmentLayout};
+use solver_core::Real;
 
-pub use decoy_link::geometry::cable_plume_clearance;
+pub use decoy_controller::geometry::cable_plume_clearance;
 
 /// The flight-path frame at one instant: x along the aircraft's velocity, y
 /// horizontal and to the right of it, z = x cross y (downward, perpendicular to
-/// the flight path in its vertical plane); see [`decoy_link::FlightPathFrame`].
-pub type FlightPathFrame = decoy_link::FlightPathFrame<f64>;
+/// the flight path in its vertical plane); see [`decoy_controller::FlightPathFrame`].
+pub type FlightPathFrame = decoy_controller::FlightPathFrame<f64>;
 
 /// The hot exhaust plume, a truncated cone in the aircraft body frame; see
-/// [`decoy_link::ExhaustPlume`].
-pub type ExhaustPlume = decoy_link::ExhaustPlume<f64>;
+/// [`decoy_controller::ExhaustPlume`].
+pub type ExhaustPlume = decoy_controller::ExhaustPlume<f64>;
 
-/// The aircraft's collision capsule in the body frame; see [`decoy_link::Envelope`].
-pub type Envelope = decoy_link::Envelope<f64>;
+/// The aircraft's collision capsule in the body frame; see [`decoy_controller::Envelope`].
+pub type Envelope = decoy_controller::Envelope<f64>;
 
-/// The plume of an aircraft configuration, in precision `T`.
+/// The plume of an aircraft configuration, in precision `T` (the constructor the
+/// controller's [`decoy_controller::SystemParams::plume`] uses: axis normalised,
+/// half-angle tangent by libm).
 pub fn plume_from_config<T: Real>(
     aircraft: &decoy_config::AircraftConfig,
-) -> decoy_link::ExhaustPlume<T> {
-    let axis = Vector3::from(aircraft.exhaust_axis).normalize();
-    let t = T::lit;
-    decoy_link::ExhaustPlume {
-        nozzle: decoy_config::vec3(aircraft.exhaust_nozzle),
-        axis: solver_core::Vec3::new(t(axis.x), t(axis.y), t(axis.z)),
-        nozzle_radius: t(aircraft.exhaust_nozzle_radius),
-        tan_half_angle: t(aircraft.exhaust_half_angle_deg.to_radians().tan()),
-        length: t(aircraft.exhaust_length),
-    }
+) -> decoy_controller::ExhaustPlume<T> {
+    decoy_controller::ExhaustPlume::new(
+        aircraft.exhaust_nozzle,
+        aircraft.exhaust_axis,
+        aircraft.exhaust_nozzle_radius,
+        aircraft.exhaust_half_angle_deg,
+        aircraft.exhaust_length,
+    )
 }
 
 /// The collision capsule of an aircraft configuration, in precision `T`.
 pub fn envelope_from_config<T: Real>(
     aircraft: &decoy_config::AircraftConfig,
-) -> decoy_link::Envelope<T> {
-    decoy_link::Envelope {
-        fore: decoy_config::vec3(aircraft.envelope_fore),
-        aft: decoy_config::vec3(aircraft.envelope_aft),
-        radius: T::lit(aircraft.envelope_radius),
-    }
-}
-
-/// The onboard controller's configuration for `config` with `layout`: the model,
-/// the plume and capsule, the allowable tension (what the firmware's build script
-/// generates from the same files).
-pub fn controller_config<T: Real>(
-    config: &SystemConfig,
-    layout: SegmentLayout<T>,
-) -> Result<ControllerConfig<T>, ConfigError> {
-    Ok(ControllerConfig {
-        params: config.model_params(layout)?,
-        geometry: decoy_link::Geometry {
-            plume: plume_from_config(&config.aircraft),
-            envelope: envelope_from_config(&config.aircraft),
-        },
-        allowable_tension_n: T::lit(config.cable.allowable_tension),
-    })
+) -> decoy_controller::Envelope<T> {
+    decoy_controller::Envelope::new(
+        aircraft.envelope_fore,
+        aircraft.envelope_aft,
+        aircraft.envelope_radius,
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Vector3;
     use solver_core::AircraftState;
 
     fn plume() -> ExhaustPlume {

@@ -1024,7 +1024,8 @@ mod tests {
     /// the same tensions, decoy position and clearances for the same trimmed state.
     #[test]
     fn the_controller_and_the_probe_agree() {
-        use decoy_link::{AircraftStateFrame, Controller, DeviceMessage, HostMessage, NoCounter};
+        use decoy_controller::{Controller, NoCounter};
+        use decoy_link::{AircraftStateFrame, DeviceMessage, HostMessage};
         let config = SystemConfig::builtin().unwrap();
         let layout = config.embedded_layout();
         let model = config.model::<f64, 16>(layout).unwrap();
@@ -1037,7 +1038,7 @@ mod tests {
             let sample = probe.sample(&solver.outputs(&path).unwrap(), &aircraft, None);
 
             let mut controller: Controller<f64, 16> =
-                Controller::new(crate::geometry::controller_config(&config, layout).unwrap())
+                Controller::new(config.controller_config(layout).unwrap())
                     .unwrap();
             let frame = AircraftStateFrame {
                 seq: 1,

@@ -6,9 +6,9 @@
 //! What is asserted:
 //!
 //! - **Same answers as the host.** The host replays the very messages sent through
-//!   `decoy_link::Controller` (same configuration, same `FramePath`, same stepping
-//!   rule) built with the target's maths (`crates/hil-reference`: nalgebra's
-//!   `libm-force`). In f32 (the firmware's precision) every answer must be equal:
+//!   `decoy_controller::Controller` (same configuration, same `FramePath`, same stepping
+//!   rule) in this process: every build computes the target's maths (libm), so this
+//!   is an ordinary workspace test. In f32 (the firmware's precision) every answer must be equal:
 //!   outputs in every field but `instructions`, bit for bit
 //!   ([`F32_RELATIVE_TOLERANCE`] = 0), rejections and status frames exactly; the M7
 //!   profile (f64) likewise against the f64 reference. Against the host's f64
@@ -54,11 +54,11 @@ use decoy_link::{
     AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, RejectReason, StatusFlags,
 };
 use decoy_sim::{RunOptions, Scenario};
-use hil_tests::flight::{self, Exchange};
-use hil_tests::link::Session;
-use hil_tests::qemu::Board;
-use hil_tests::reference::{self, Reference};
-use hil_tests::{defmt, firmware};
+use decoy_hil::flight::{self, Exchange};
+use decoy_hil::link::Session;
+use decoy_hil::qemu::Board;
+use decoy_hil::reference::Reference;
+use decoy_hil::{defmt, firmware};
 
 /// Time limit of the firmware build (a cold build takes about a minute).
 const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
@@ -125,16 +125,10 @@ fn config() -> &'static SystemConfig {
     CONFIG.get_or_init(|| SystemConfig::builtin().expect("the built-in configuration"))
 }
 
-/// The host reference program (`hil-reference`), built once.
-fn reference_program() -> &'static PathBuf {
-    static PROGRAM: OnceLock<PathBuf> = OnceLock::new();
-    PROGRAM.get_or_init(|| reference::build(BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}")))
-}
-
-/// The host reference in f32 with the target's maths.
+/// The host reference in f32: the firmware's controller in this process, with the
+/// maths every build uses (libm).
 fn host32() -> Reference {
-    Reference::start(reference_program(), 32, config().solver.segments_embedded)
-        .unwrap_or_else(|e| panic!("{e}"))
+    Reference::for_config(config(), 32).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The frames of a shipped scenario (optionally at another rate) for `t_end` s, as
@@ -381,9 +375,7 @@ fn m7_profile_matches_the_host_in_f64() {
     let flown = flight::fly(&mut s, &messages, |_| {}).unwrap_or_else(|e| panic!("{e}"));
     assert!(s.device_running());
     let answers = flown.answers();
-    let mut reference =
-        Reference::start(reference_program(), 64, config().solver.segments_embedded)
-            .unwrap_or_else(|e| panic!("{e}"));
+    let mut reference = Reference::for_config(config(), 64).unwrap_or_else(|e| panic!("{e}"));
     let host = reference
         .replay(&messages)
         .unwrap_or_else(|e| panic!("{e}"));
@@ -475,7 +467,7 @@ impl Probe {
     /// Sends raw bytes; returns the firmware's answers, which must equal the
     /// mirror's for the same bytes (but for `instructions`).
     fn raw(&mut self, bytes: &[u8]) -> Vec<DeviceMessage> {
-        let expected = self.mirror.feed(bytes).unwrap_or_else(|e| panic!("{e}"));
+        let expected = self.mirror.feed(bytes);
         self.session
             .link
             .send_raw(bytes)
@@ -593,7 +585,7 @@ impl Probe {
 }
 
 fn encode(message: &HostMessage) -> Vec<u8> {
-    hil_tests::link::encode(message).unwrap_or_else(|e| panic!("{e}"))
+    decoy_hil::link::encode(message).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The index of a COBS data byte (not a code byte, not a delimiter) in the middle
@@ -789,9 +781,9 @@ fn link_silence_degrades_and_recovers() {
         "more than one Status for one silence"
     );
     // The host mirror sees the same silence (its clock is polled by hand).
-    let mut poll = |ms| p.mirror.poll_silence(ms).unwrap_or_else(|e| panic!("{e}"));
+    let mut poll = |ms| p.mirror.poll_silence(ms);
     assert!(poll(0).is_none());
-    let mirrored = poll(decoy_link::SILENCE_MS);
+    let mirrored = poll(decoy_controller::SILENCE_MS);
     assert_eq!(mirrored, Some(DeviceMessage::Status(status)));
 
     // Resume: the next frame is answered as in an undisturbed run, with RECOVERED.

@@ -1,7 +1,7 @@
 //! The cost of one RK4 step on the target, exact under QEMU `-icount`: the
 //! firmware's `examples/step_cost.rs` steps the embedded model (16 graded
 //! segments, capacity 64) along the flight path of 10 ms State frames as the
-//! controller does, and logs each step's instructions ([`hil_tests::step_cost`]).
+//! controller does, and logs each step's instructions ([`decoy_hil::step_cost`]).
 //!
 //! Asserted on the Cortex-M4F (f32): an RK4 step that evaluates all four stages
 //! takes at most [`RK4_STEP_TARGET`] instructions (the benchmark issue's target); a
@@ -9,8 +9,8 @@
 //! reused, is cheaper by most of an evaluation; and in the steady turn every frame
 //! costs the same to within a few ticks. The M7 (f64) counts are printed.
 
-use hil_tests::qemu::Board;
-use hil_tests::step_cost::{StepCost, measure};
+use decoy_hil::qemu::Board;
+use decoy_hil::step_cost::{StepCost, measure};
 
 /// The benchmark issue's target for one RK4 step, M4 f32, 16 graded segments.
 const RK4_STEP_TARGET: u32 = 40_000;

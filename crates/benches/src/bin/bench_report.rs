@@ -15,11 +15,11 @@ use benches::report::{
     self, FIRMWARE_SEGMENTS, FirmwareCounts, FirmwareRow, Inputs, Machine, read_criterion,
     read_gungraun,
 };
-use hil_tests::firmware;
-use hil_tests::flight;
-use hil_tests::link::Session;
-use hil_tests::qemu::Board;
-use hil_tests::step_cost::StepCost;
+use decoy_hil::firmware;
+use decoy_hil::flight;
+use decoy_hil::link::Session;
+use decoy_hil::qemu::Board;
+use decoy_hil::step_cost::StepCost;
 
 /// Time limit of one firmware build.
 const BUILD_TIMEOUT: Duration = Duration::from_secs(600);
@@ -79,7 +79,7 @@ fn run() -> Result<(), String> {
     };
     let step_cost = if firmware_runs {
         [Board::M4, Board::M7].map(|board| {
-            let cost = hil_tests::step_cost::measure(board).map(|f| StepCost::of(&f));
+            let cost = decoy_hil::step_cost::measure(board).map(|f| StepCost::of(&f));
             match &cost {
                 Ok(c) => println!(
                     "firmware: {}, one RK4 step (examples/step_cost.rs): four stages {} max, \
@@ -297,6 +297,6 @@ fn machine() -> Machine {
         os,
         rustc: first_line("rustc", &["--version"]),
         valgrind: first_line("valgrind", &["--version"]),
-        qemu: first_line(hil_tests::qemu::QEMU, &["--version"]),
+        qemu: first_line(decoy_hil::qemu::QEMU, &["--version"]),
     }
 }

@@ -8,14 +8,14 @@ use solver_core::{
     Solver, State, Vec3, trim,
 };
 
-use crate::framing::{Decoder, FrameError};
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
-use crate::messages::{
+use crate::path::FramePath;
+use crate::validate::{is_finite, validate_streamed};
+use decoy_link::{
     AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
     PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
-use crate::path::FramePath;
-use crate::validate::{is_finite, validate_streamed};
+use decoy_link::{Decoder, FrameError};
 
 /// The longest RK4 step, s: a frame interval dt is integrated in
 /// n = ceil(dt / MAX_STEP_S - 1e-9) steps of dt / n, or more where the

@@ -3,7 +3,7 @@
 
 use solver_core::{AircraftState, FlightPath, Real, Vec3};
 
-use crate::messages::AircraftStateFrame;
+use decoy_link::AircraftStateFrame;
 
 /// One frame's kinematics in the solver's precision, position relative to the
 /// run's origin: what the path returns at that frame's time.

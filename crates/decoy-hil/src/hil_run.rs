@@ -26,7 +26,7 @@ use crate::reference::{Reference, ReferenceError};
 pub const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
 
 /// The RK4 step the controller takes at most (`decoy_link`'s stepping rule).
-pub const MAX_STEP_S: f64 = decoy_link::MAX_STEP_S;
+pub const MAX_STEP_S: f64 = decoy_controller::MAX_STEP_S;
 
 /// The header of `decoy hil`'s `timeseries.csv` (see `docs/outputs.md`).
 pub const HIL_TIMESERIES_HEADER: &str = "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N";
@@ -77,9 +77,10 @@ pub struct HilSummary {
     pub instructions_per_step_max: u32,
     /// Mean instructions per 10 ms control step.
     pub instructions_per_step_mean: f64,
-    /// Messages sent to the firmware (the `ResetToTrim` command and the frames).
+    /// State frames sent to the firmware (the `ResetToTrim` command before them is
+    /// not counted: like with like with `frames_answered`).
     pub frames_sent: usize,
-    /// Of those, answered by an output frame.
+    /// Of those, answered by an Output frame.
     pub frames_answered: usize,
     /// Largest difference of either tension from the host's f64 solution, N.
     #[serde(rename = "max_tension_diff_vs_host_N")]
@@ -263,8 +264,7 @@ pub fn run_hil(
         flight::replay(&mut c, &sent)
     };
     // The firmware's precision with the target's maths: bit for bit.
-    let reference = crate::reference::build(BUILD_TIMEOUT).map_err(HilError::Reference)?;
-    let same_precision = Reference::start(&reference, hello.precision_bits, segments)
+    let same_precision = Reference::for_config(&config, hello.precision_bits)
         .and_then(|mut r| r.replay(&sent))
         .map_err(HilError::Reference)?;
     let (vs64, _) = flight::compare(&answers, &host64);
@@ -305,7 +305,12 @@ pub fn run_hil(
         precision_bits: hello.precision_bits,
         instructions_per_step_max: stats.max,
         instructions_per_step_mean: stats.mean,
-        frames_sent: sent.len(),
+        // Like with like: the State frames sent and the Outputs answering them (the
+        // ResetToTrim command before them is neither).
+        frames_sent: sent
+            .iter()
+            .filter(|m| matches!(m, HostMessage::State(_)))
+            .count(),
         frames_answered: answers
             .iter()
             .filter(|a| matches!(a, DeviceMessage::Output(_)))

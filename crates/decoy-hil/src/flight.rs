@@ -1,14 +1,13 @@
 //! Flying a scenario over the link: aircraft state frames every control period from
 //! the same flight profiles `decoy simulate` flies, sent in lock step to the
 //! firmware, and the host's replay of the very same messages through
-//! `decoy_link::Controller` (f32 and f64) for comparison.
+//! `decoy_controller::Controller` (f32 and f64) for comparison.
 
 use std::time::{Duration, Instant};
 
 use decoy_config::SystemConfig;
-use decoy_link::{
-    AircraftStateFrame, Command, Controller, DeviceMessage, HostMessage, NoCounter, OutputFrame,
-};
+use decoy_controller::{Controller, NoCounter};
+use decoy_link::{AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame};
 use solver_core::{AircraftState, FlightPath, Real};
 
 use crate::link::{LinkError, Session};
@@ -131,8 +130,9 @@ impl std::error::Error for HostSetupError {}
 pub fn host_controller<T: Real>(
     config: &SystemConfig,
 ) -> Result<Box<Controller<T, CONTROLLER_CAPACITY>>, HostSetupError> {
-    let controller_config =
-        crate::host::controller_config::<T>(config).map_err(|e| HostSetupError(e.to_string()))?;
+    let controller_config = config
+        .controller_config::<T>(config.embedded_layout())
+        .map_err(|e| HostSetupError(e.to_string()))?;
     Controller::new(controller_config)
         .map(Box::new)
         .map_err(|e| HostSetupError(e.to_string()))
@@ -287,7 +287,7 @@ pub struct InstructionStats {
     pub most_rk4_steps: u16,
 }
 
-/// RK4 steps of a nominal 10 ms control step (two of `decoy_link::MAX_STEP_S`).
+/// RK4 steps of a nominal 10 ms control step (two of `decoy_controller::MAX_STEP_S`).
 pub const NOMINAL_RK4_STEPS: u16 = 2;
 
 /// The instruction statistics of the outputs among `answers` that integrated

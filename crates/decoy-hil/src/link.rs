@@ -327,7 +327,7 @@ impl Session {
     /// with a wall-clock millisecond clock. It tests the harness itself without
     /// QEMU; the thread ends when the session's link closes.
     pub fn emulated<T: solver_core::Real + Send + 'static, const N: usize>(
-        mut controller: Box<decoy_link::Controller<T, N>>,
+        mut controller: Box<decoy_controller::Controller<T, N>>,
         board: Board,
     ) -> Result<Self, LinkError> {
         let listener = SerialListener::bind()?;
@@ -367,7 +367,7 @@ impl Session {
                             controller.handle_bytes(
                                 &mut decoder,
                                 &buf[..n],
-                                &mut decoy_link::NoCounter,
+                                &mut decoy_controller::NoCounter,
                                 |a| answers.push(*a),
                             );
                             for a in &answers {

@@ -2,10 +2,8 @@
 #![allow(dead_code)]
 
 use decoy_config::SystemConfig;
-use decoy_link::{
-    AircraftStateFrame, Controller, ControllerConfig, DeviceMessage, Envelope, ExhaustPlume,
-    Geometry, HostMessage, NoCounter, OutputFrame,
-};
+use decoy_controller::{Controller, ControllerConfig, NoCounter};
+use decoy_link::{AircraftStateFrame, DeviceMessage, HostMessage, OutputFrame};
 use solver_core::Real;
 
 /// Capacity of the test controllers (the firmware's).
@@ -18,21 +16,7 @@ pub const ALTITUDE: f64 = 9000.0;
 /// The reference system's controller configuration in `T`, 16 graded segments.
 pub fn config<T: Real>() -> ControllerConfig<T> {
     let system = SystemConfig::builtin().unwrap();
-    let a = &system.aircraft;
-    ControllerConfig {
-        params: system.model_params(system.embedded_layout()).unwrap(),
-        geometry: Geometry {
-            plume: ExhaustPlume::new(
-                a.exhaust_nozzle,
-                a.exhaust_axis,
-                a.exhaust_nozzle_radius,
-                a.exhaust_half_angle_deg,
-                a.exhaust_length,
-            ),
-            envelope: Envelope::new(a.envelope_fore, a.envelope_aft, a.envelope_radius),
-        },
-        allowable_tension_n: T::lit(system.cable.allowable_tension),
-    }
+    system.controller_config(system.embedded_layout()).unwrap()
 }
 
 /// A fresh f32 controller (the firmware's precision).

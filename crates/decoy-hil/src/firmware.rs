@@ -395,7 +395,7 @@ fn prepare_variant(root: &Path, segments: usize, grading: Option<f64>) -> std::i
         .replace("\"../crates/", &format!("\"{}/", crates.display()));
     write_if_changed(
         &root.join("firmware").join("Cargo.toml"),
-        format!("{manifest}\n# Added by hil_tests::firmware::build_with_segments.\n[workspace]\n")
+        format!("{manifest}\n# Added by decoy_hil::firmware::build_with_segments.\n[workspace]\n")
             .as_bytes(),
     )?;
     let config = workspace.join("config");

@@ -2,7 +2,7 @@
 
 use solver_core::{Atmosphere, Real, Vec3};
 
-use crate::messages::{AircraftStateFrame, RejectReason};
+use decoy_link::{AircraftStateFrame, RejectReason};
 
 /// Lowest accepted altitude of the aircraft reference point, m.
 pub const MIN_ALTITUDE_M: f64 = solver_core::atmosphere::MIN_ALTITUDE_M;

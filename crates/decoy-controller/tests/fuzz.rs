@@ -5,9 +5,8 @@
 mod common;
 
 use common::{frame, output, running, send};
-use decoy_link::{
-    AircraftStateFrame, Command, DeviceMessage, FrameDecoder, HostMessage, NoCounter, Profile,
-};
+use decoy_controller::NoCounter;
+use decoy_link::{AircraftStateFrame, Command, DeviceMessage, FrameDecoder, HostMessage, Profile};
 
 /// SplitMix64, so failures reproduce.
 struct Rng(u64);

@@ -28,7 +28,6 @@ pub mod defmt;
 pub mod firmware;
 pub mod flight;
 pub mod hil_run;
-pub mod host;
 pub mod link;
 pub mod qemu;
 pub mod reference;

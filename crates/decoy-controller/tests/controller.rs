@@ -5,10 +5,10 @@
 mod common;
 
 use common::{CAPACITY, controller, frame, output, running, send};
+use decoy_controller::{Controller, InstructionCounter, NoCounter, SILENCE_MS};
 use decoy_link::{
-    Board, Command, Controller, DeviceMessage, FrameDecoder, HostMessage, InstructionCounter,
-    MAX_WIRE_BYTES, NoCounter, PROTOCOL_VERSION, Profile, RejectReason, SILENCE_MS, StatusFlags,
-    encode,
+    Board, Command, DeviceMessage, FrameDecoder, HostMessage, MAX_WIRE_BYTES, PROTOCOL_VERSION,
+    Profile, RejectReason, StatusFlags, encode,
 };
 
 fn rejected(answer: DeviceMessage) -> (Option<u32>, RejectReason, u32) {

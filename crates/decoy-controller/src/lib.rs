@@ -1,0 +1,39 @@
+//! # decoy-controller: the onboard decoy controller
+//!
+//! The program the decoy controller runs, as a library with no hardware in it: the
+//! firmware wraps it with a board (UART, clock), and the host runs the very same
+//! code as its bit-exact reference (`decoy hil`, the HIL tests, the host bridge).
+//!
+//! - [`params`]: [`SystemParams`], the reference system as plain numbers (no_std,
+//!   serde), and the one conversion from it to the solver's model, the geometry
+//!   and the [`ControllerConfig`]. The host fills it from `decoy-config`; the
+//!   firmware's build script does the same at build time and embeds it.
+//! - [`validate`]: the checks a State frame passes before it reaches the solver,
+//!   including the physical envelope of every input.
+//! - [`path`]: [`FramePath`], the flight path between two State frames.
+//! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
+//!   and the aircraft (the host's `decoy simulate` uses the same code).
+//! - [`controller`]: [`Controller`], the pure state machine.
+//!
+//! The wire protocol is `decoy-link` (docs/protocol.md). `no_std`, no heap, no
+//! `unsafe`; every transcendental function goes to `libm` (solver-core's maths), so
+//! the host and the target compute the same bits in the same precision.
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+// `!(x > 0)` is deliberate: it is true for NaN, which must fail the check.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod controller;
+pub mod geometry;
+pub mod params;
+pub mod path;
+pub mod validate;
+
+pub use controller::{
+    CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,
+    DECOY_NEAR_AIRCRAFT_M, InstructionCounter, MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S,
+    MAX_TIME_JUMP_S, NoCounter, SILENCE_MS, TIME_TOLERANCE_S,
+};
+pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
+pub use params::{AeroRows, SystemParams};
+pub use path::FramePath;
