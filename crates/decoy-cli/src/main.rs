@@ -31,9 +31,9 @@ mod studies;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
-use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use decoy_hil::hil_run::{HilOptions, HilRun};
 use decoy_hil::qemu::Board;
+use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use progress::Progress;
 use serde::Serialize;
 use solver_core::dense::evaluate_dense;

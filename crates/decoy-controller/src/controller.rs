@@ -142,6 +142,9 @@ pub struct ControllerSnapshot<T: Real, const N: usize> {
     pub recovered_pending: bool,
     /// Hazard flags of the last Output.
     pub hazard_flags: u16,
+    /// The wave-speed rate max_i c_i / l_i (1/s) of the last accepted frame's
+    /// outputs, which sets the next frame's step count (docs/protocol.md §5).
+    pub wave_rate: T,
 }
 
 /// The decoy controller with a solver of capacity `N` in precision `T`.
@@ -159,6 +162,10 @@ pub struct Controller<T: Real, const N: usize> {
     degraded: bool,
     recovered_pending: bool,
     hazard_flags: u16,
+    /// max_i c_i / l_i (1/s) at the last accepted frame's outputs: the stepping
+    /// rule's input, kept here rather than read from the solver's workspace, which
+    /// a rejected frame's attempts overwrite.
+    wave_rate: T,
     /// A valid frame arrived since the last [`Controller::poll_silence`].
     activity: bool,
     last_activity_ms: Option<u32>,
@@ -194,6 +201,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             degraded: false,
             recovered_pending: false,
             hazard_flags: 0,
+            wave_rate: T::zero(),
             activity: false,
             last_activity_ms: None,
         })
@@ -246,6 +254,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             degraded: self.degraded,
             recovered_pending: self.recovered_pending,
             hazard_flags: self.hazard_flags,
+            wave_rate: self.wave_rate,
         }
     }
 
@@ -427,6 +436,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             Ok((run, steps, path)) => match self.output(frame, steps, path.as_ref()) {
                 Ok(mut output) => {
                     self.run = Some(run);
+                    self.wave_rate = self.last_wave_rate();
                     self.accepted();
                     self.hazard_flags = output.flags
                         & (StatusFlags::OVER_TENSION
@@ -587,7 +597,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
     /// wave speed, tenfold for a moment, and the step shrinks with it.
     fn step_count(&self, dt: f64) -> f64 {
         let by_period = libm::ceil(dt / MAX_STEP_S - 1e-9).max(1.0);
-        let by_wave = self.wave_steps(dt);
+        let by_wave = wave_steps(dt, self.wave_rate);
         let steps = if by_wave > by_period {
             by_wave
         } else {
@@ -596,9 +606,9 @@ impl<T: Real, const N: usize> Controller<T, N> {
         steps.min(MAX_STEPS_PER_FRAME)
     }
 
-    /// The steps of `dt` the wave-speed limit asks for with the tensions of the
-    /// last evaluation (0 if they are not finite).
-    fn wave_steps(&self, dt: f64) -> f64 {
+    /// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
+    /// segment i, with the tensions of the solver's last evaluation.
+    fn last_wave_rate(&self) -> T {
         let model = self.solver.model();
         let out = self.solver.last_outputs();
         // max_i T_i^2 / l_i^4 from the squared joint forces (two roots in all):
@@ -613,11 +623,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
             upstream = downstream;
         }
-        let rate = (worst.square_root() / model.params().cable.linear_density).square_root();
-        // In T (f64 is emulated on the M4F); an exact integer here is a tie of no
-        // consequence either way.
-        let steps = (T::lit(dt) * rate * T::lit(1.0 / WAVE_STEP_FACTOR)).ceil();
-        if steps.finite() { steps.to_f64() } else { 0.0 }
+        (worst.square_root() / model.params().cable.linear_density).square_root()
     }
 
     /// [`Controller::integrate`] with `steps` steps, again with more when a step
@@ -637,7 +643,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         loop {
             let attempt = self.integrate(path, t0, t1, steps);
             let wanted = match attempt {
-                Ok(()) => self.wave_steps(t1 - t0),
+                Ok(()) => wave_steps(t1 - t0, self.last_wave_rate()),
                 Err(_) => 2.0 * steps,
             };
             if wanted <= steps || steps >= MAX_STEPS_PER_FRAME {
@@ -711,6 +717,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
                 T::lit(f64::INFINITY),
             ),
         };
+        let has_decoy = out.decoy().is_some();
         let connection_tension = out.connection_tension();
         let mut flags = StatusFlags::TRIMMED;
         if builtin.is_some() {
@@ -725,7 +732,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         if decoy_clearance < T::lit(DECOY_NEAR_AIRCRAFT_M) {
             flags |= StatusFlags::DECOY_NEAR_AIRCRAFT;
         }
-        Ok(OutputFrame {
+        let output = OutputFrame {
             seq: frame.seq,
             time_s: frame.time_s,
             connection_tension_n: narrow(connection_tension),
@@ -739,8 +746,41 @@ impl<T: Real, const N: usize> Controller<T, N> {
             instructions: 0,
             step_instructions: 0,
             steps,
-        })
+        };
+        // Never a non-finite value in an accepted frame, whatever the precision
+        // (narrowing an f64 beyond f32's range included): the frame is rejected as
+        // a solver failure and the state rolled back.
+        if !output_is_finite(&output, has_decoy) {
+            return Err(SolveError::NonFinite { joint: 0 });
+        }
+        Ok(output)
     }
+}
+
+/// The steps of `dt` the wave-speed limit asks for at the wave-speed rate `rate`
+/// (max_i c_i / l_i, 1/s): ceil(dt rate / [`WAVE_STEP_FACTOR`]); 0 if not finite.
+fn wave_steps<T: Real>(dt: f64, rate: T) -> f64 {
+    // In T (f64 is emulated on the M4F); an exact integer here is a tie of no
+    // consequence either way.
+    let steps = (T::lit(dt) * rate * T::lit(1.0 / WAVE_STEP_FACTOR)).ceil();
+    if steps.finite() { steps.to_f64() } else { 0.0 }
+}
+
+/// True when every value of an Output frame is finite (the decoy's position,
+/// attitude, angle of attack and clearance only when there is a decoy: without
+/// one they are NaN and infinity by definition).
+fn output_is_finite(o: &OutputFrame, has_decoy: bool) -> bool {
+    let always = [
+        o.connection_tension_n,
+        o.tow_tension_n,
+        o.cable_clearance_exhaust_m,
+    ];
+    let decoy = o
+        .decoy_position_fp_m
+        .iter()
+        .chain(&o.decoy_euler_rel_rad)
+        .chain([&o.angle_of_attack_rad, &o.decoy_clearance_aircraft_m]);
+    always.iter().all(|v| v.is_finite()) && (!has_decoy || decoy.into_iter().all(|v| v.is_finite()))
 }
 
 /// A built-in profile's flight path.

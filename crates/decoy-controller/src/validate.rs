@@ -12,6 +12,15 @@ pub const MAX_ALTITUDE_M: f64 = solver_core::atmosphere::MAX_ALTITUDE_M;
 pub const MAX_MACH: f64 = 2.0;
 /// Largest accepted deviation of |q| from 1.
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
+/// Largest accepted |acceleration| of the aircraft reference point, m/s² (15 g:
+/// beyond the structural limit of any towing aircraft; the paper's tightest turn
+/// is about 5 g).
+pub const MAX_ACCELERATION_MPS2: f32 = 150.0;
+/// Largest accepted |body rate|, rad/s (about 400 °/s, above a fighter's peak
+/// roll rate).
+pub const MAX_BODY_RATE_RADPS: f32 = 7.0;
+/// Largest accepted |body angular acceleration|, rad/s².
+pub const MAX_ANGULAR_ACCELERATION_RADPS2: f32 = 50.0;
 
 /// True when every field of the frame is finite.
 pub fn is_finite(frame: &AircraftStateFrame) -> bool {
@@ -27,11 +36,27 @@ pub fn is_finite(frame: &AircraftStateFrame) -> bool {
         && f32s.into_iter().all(|v| v.is_finite())
 }
 
+/// |v| of an f32 triple, in f32 (the frame's own precision), computed on the
+/// largest component's scale so that no finite triple overflows.
+fn magnitude(v: &[f32; 3]) -> f32 {
+    let scale = v
+        .iter()
+        .fold(0.0f32, |m, c| if c.abs() > m { c.abs() } else { m });
+    if !(scale > 0.0) {
+        return scale;
+    }
+    let sum: f32 = v.iter().map(|c| (c / scale) * (c / scale)).sum();
+    scale * libm::sqrtf(sum)
+}
+
 /// Checks a frame whose kinematics drive the solver (streamed mode), in this
 /// order: every field finite ([`RejectReason::NonFinite`]); |q| in [0.999, 1.001]
 /// ([`RejectReason::BadQuaternion`]); the altitude -z within
-/// [`MIN_ALTITUDE_M`]..=[`MAX_ALTITUDE_M`] and the Mach number
-/// |v - wind| / a(altitude) in (0, [`MAX_MACH`]] ([`RejectReason::OutOfRange`]).
+/// [`MIN_ALTITUDE_M`]..=[`MAX_ALTITUDE_M`], the Mach number
+/// |v - wind| / a(altitude) in (0, [`MAX_MACH`]], and the physical envelope
+/// |acceleration| <= [`MAX_ACCELERATION_MPS2`], |body rate| <=
+/// [`MAX_BODY_RATE_RADPS`], |angular acceleration| <=
+/// [`MAX_ANGULAR_ACCELERATION_RADPS2`] ([`RejectReason::OutOfRange`]).
 /// The speed of sound comes from `atmosphere` in the solver's precision.
 pub fn validate_streamed<T: Real>(
     frame: &AircraftStateFrame,
@@ -48,6 +73,17 @@ pub fn validate_streamed<T: Real>(
     let tolerance = QUATERNION_NORM_TOLERANCE as f32;
     if !((1.0 - tolerance)..=(1.0 + tolerance)).contains(&norm) {
         return Err(RejectReason::BadQuaternion);
+    }
+    let envelope = [
+        (&frame.acceleration_ned_mps2, MAX_ACCELERATION_MPS2),
+        (&frame.body_rate_radps, MAX_BODY_RATE_RADPS),
+        (
+            &frame.body_angular_acceleration_radps2,
+            MAX_ANGULAR_ACCELERATION_RADPS2,
+        ),
+    ];
+    if envelope.iter().any(|(v, limit)| !(magnitude(v) <= *limit)) {
+        return Err(RejectReason::OutOfRange);
     }
     let altitude = -frame.position_ned_m[2];
     if !(MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&altitude) {

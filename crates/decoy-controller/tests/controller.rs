@@ -523,3 +523,196 @@ fn the_paper_manoeuvres_fly_through_with_the_wave_step_limit() {
         );
     }
 }
+
+/// A controller of precision `T` trimmed at t = 0 and stepped through `frames`
+/// 10 ms frames.
+fn running_in<T: solver_core::Real>(frames: u32) -> Controller<T, CAPACITY> {
+    let mut c = Controller::new(common::config::<T>()).unwrap();
+    for k in 0..=frames {
+        output(send(&mut c, frame(k, 0.01 * f64::from(k))));
+    }
+    c
+}
+
+/// The next `count` answers after frame 5, the frames of a gentle climbing turn
+/// (so that the stepping rule and the tensions move), as wire bytes.
+fn answers_after<T: solver_core::Real>(
+    c: &mut Controller<T, CAPACITY>,
+    count: u32,
+) -> Vec<Vec<u8>> {
+    (6..6 + count)
+        .map(|k| {
+            let t = 0.01 * f64::from(k);
+            let mut f = frame(k, t);
+            f.acceleration_ned_mps2 = [0.0, 20.0, -10.0];
+            f.velocity_ned_mps[1] = (20.0 * (t - 0.05)) as f32;
+            f.position_ned_m[1] += 10.0 * (t - 0.05) * (t - 0.05);
+            let answer = send(c, f);
+            let mut out = [0u8; MAX_WIRE_BYTES];
+            let n = encode(&answer, &mut out).unwrap();
+            out[..n].to_vec()
+        })
+        .collect()
+}
+
+/// Sends `bad` after frame 5 to one controller and not to another; returns the
+/// rejection reason, after checking that the next 20 answers of the two are the
+/// same bytes (Outputs, with `instructions` 0 under [`NoCounter`]).
+fn disturbed_run_answers_as_the_undisturbed<T: solver_core::Real>(
+    bad: decoy_link::AircraftStateFrame,
+) -> Option<RejectReason> {
+    let mut clean = running_in::<T>(5);
+    let mut tested = running_in::<T>(5);
+    let reason = match send(&mut tested, bad) {
+        DeviceMessage::Rejected(r) => r.reason,
+        DeviceMessage::Output(_) => return None,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(
+        answers_after(&mut clean, 20),
+        answers_after(&mut tested, 20),
+        "f{}: the answers after a {reason:?} rejection differ from an undisturbed run's",
+        core::mem::size_of::<T>() * 8
+    );
+    Some(reason)
+}
+
+#[test]
+fn the_answers_after_any_rejection_are_those_of_an_undisturbed_run() {
+    let base = frame(6, 0.06);
+    let mut cases: Vec<(decoy_link::AircraftStateFrame, Option<RejectReason>)> = vec![
+        (
+            {
+                let mut f = base;
+                f.acceleration_ned_mps2[0] = f32::NAN;
+                f
+            },
+            Some(RejectReason::NonFinite),
+        ),
+        (
+            {
+                let mut f = base;
+                f.attitude_wxyz = [0.9, 0.0, 0.0, 0.0];
+                f
+            },
+            Some(RejectReason::BadQuaternion),
+        ),
+        (
+            {
+                let mut f = base;
+                f.position_ned_m[2] = 1000.0;
+                f
+            },
+            Some(RejectReason::OutOfRange),
+        ),
+        (
+            {
+                let mut f = base;
+                f.body_angular_acceleration_radps2 = [1e5, 0.0, 0.0];
+                f
+            },
+            Some(RejectReason::OutOfRange),
+        ),
+        (
+            {
+                let mut f = base;
+                f.acceleration_ned_mps2 = [0.0, 1e30, 0.0];
+                f
+            },
+            Some(RejectReason::OutOfRange),
+        ),
+        (
+            {
+                let mut f = base;
+                f.body_rate_radps = [0.0, 0.0, 1e30];
+                f
+            },
+            Some(RejectReason::OutOfRange),
+        ),
+        (
+            {
+                let mut f = base;
+                f.time_s = 0.05;
+                f
+            },
+            Some(RejectReason::TimeNotIncreasing),
+        ),
+        (
+            {
+                let mut f = base;
+                f.time_s = 0.5;
+                f
+            },
+            Some(RejectReason::TimeJump),
+        ),
+    ];
+    // Frames inside the envelope whose path the solver cannot follow: the
+    // position jumps sideways, so the cubic between the frames demands enormous
+    // accelerations (a SolverFailure, or an accepted Output if it copes).
+    for jump in [1e2, 1e3, 1e4, 1e5, 1e6] {
+        let mut f = base;
+        f.position_ned_m[1] += jump;
+        cases.push((f, None));
+    }
+    let mut failures = [0usize; 2];
+    for (bad, expected) in &cases {
+        let got = [
+            disturbed_run_answers_as_the_undisturbed::<f32>(*bad),
+            disturbed_run_answers_as_the_undisturbed::<f64>(*bad),
+        ];
+        for (precision, reason) in got.iter().enumerate() {
+            match expected {
+                Some(e) => assert_eq!(reason.as_ref(), Some(e), "{bad:?}"),
+                None => {
+                    failures[precision] += usize::from(*reason == Some(RejectReason::SolverFailure))
+                }
+            }
+        }
+    }
+    assert!(
+        failures.iter().all(|&n| n > 0),
+        "no case reached a SolverFailure (f32, f64): {failures:?}"
+    );
+}
+
+#[test]
+fn a_trim_frame_at_the_edge_of_the_envelope_gives_finite_outputs_or_a_rejection() {
+    // Huge but finite inputs at the trim: rejected as out of range, never an
+    // accepted frame with an infinite tension.
+    for set in [
+        |f: &mut decoy_link::AircraftStateFrame| f.acceleration_ned_mps2 = [0.0, 0.0, 1e30],
+        |f: &mut decoy_link::AircraftStateFrame| {
+            f.body_angular_acceleration_radps2 = [0.0, 1e30, 0.0]
+        },
+        |f: &mut decoy_link::AircraftStateFrame| f.body_rate_radps = [1e30, 0.0, 0.0],
+    ] {
+        let mut f = frame(0, 0.0);
+        set(&mut f);
+        let mut c = controller();
+        assert_eq!(rejected(send(&mut c, f)).1, RejectReason::OutOfRange);
+        assert!(!c.is_trimmed());
+    }
+    // At the envelope's limits every accepted value is finite.
+    let mut f = frame(0, 0.0);
+    f.acceleration_ned_mps2 = [0.0, 149.0, 0.0];
+    f.body_rate_radps = [6.9, 0.0, 0.0];
+    f.body_angular_acceleration_radps2 = [0.0, 0.0, 49.0];
+    for answer in [
+        send(&mut controller(), f),
+        send(
+            &mut Controller::<f64, CAPACITY>::new(common::config()).unwrap(),
+            f,
+        ),
+    ] {
+        match answer {
+            DeviceMessage::Output(o) => {
+                assert!(
+                    o.connection_tension_n.is_finite() && o.tow_tension_n.is_finite(),
+                    "{o:?}"
+                )
+            }
+            DeviceMessage::Rejected(r) => assert_eq!(r.reason, RejectReason::SolverFailure),
+            other => panic!("{other:?}"),
+        }
+    }
+}

@@ -34,7 +34,10 @@ impl fmt::Display for ReferenceError {
         match self {
             ReferenceError::Config(e) => write!(f, "the host reference controller: {e}"),
             ReferenceError::Precision(bits) => {
-                write!(f, "the host reference runs f32 or f64, not {bits}-bit floats")
+                write!(
+                    f,
+                    "the host reference runs f32 or f64, not {bits}-bit floats"
+                )
             }
             ReferenceError::Protocol(e) => write!(f, "the host reference answered badly: {e}"),
         }
@@ -70,12 +73,20 @@ impl Reference {
         let bad = |e: &dyn fmt::Display| ReferenceError::Config(e.to_string());
         let controller = match precision_bits {
             32 => Precision::F32(Box::new(
-                Controller::new(config.controller_config(config.embedded_layout()).map_err(|e| bad(&e))?)
-                    .map_err(|e| bad(&e))?,
+                Controller::new(
+                    config
+                        .controller_config(config.embedded_layout())
+                        .map_err(|e| bad(&e))?,
+                )
+                .map_err(|e| bad(&e))?,
             )),
             64 => Precision::F64(Box::new(
-                Controller::new(config.controller_config(config.embedded_layout()).map_err(|e| bad(&e))?)
-                    .map_err(|e| bad(&e))?,
+                Controller::new(
+                    config
+                        .controller_config(config.embedded_layout())
+                        .map_err(|e| bad(&e))?,
+                )
+                .map_err(|e| bad(&e))?,
             )),
             other => return Err(ReferenceError::Precision(other)),
         };
@@ -90,8 +101,12 @@ impl Reference {
         let mut answers = Vec::new();
         let decoder = &mut self.decoder;
         match &mut self.controller {
-            Precision::F32(c) => c.handle_bytes(decoder, bytes, &mut NoCounter, |a| answers.push(*a)),
-            Precision::F64(c) => c.handle_bytes(decoder, bytes, &mut NoCounter, |a| answers.push(*a)),
+            Precision::F32(c) => {
+                c.handle_bytes(decoder, bytes, &mut NoCounter, |a| answers.push(*a))
+            }
+            Precision::F64(c) => {
+                c.handle_bytes(decoder, bytes, &mut NoCounter, |a| answers.push(*a))
+            }
         }
         answers
     }

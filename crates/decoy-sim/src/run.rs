@@ -1038,8 +1038,7 @@ mod tests {
             let sample = probe.sample(&solver.outputs(&path).unwrap(), &aircraft, None);
 
             let mut controller: Controller<f64, 16> =
-                Controller::new(config.controller_config(layout).unwrap())
-                    .unwrap();
+                Controller::new(config.controller_config(layout).unwrap()).unwrap();
             let frame = AircraftStateFrame {
                 seq: 1,
                 time_s: 0.0,

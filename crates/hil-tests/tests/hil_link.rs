@@ -50,15 +50,15 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use decoy_config::SystemConfig;
-use decoy_link::{
-    AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, RejectReason, StatusFlags,
-};
-use decoy_sim::{RunOptions, Scenario};
 use decoy_hil::flight::{self, Exchange};
 use decoy_hil::link::Session;
 use decoy_hil::qemu::Board;
 use decoy_hil::reference::Reference;
 use decoy_hil::{defmt, firmware};
+use decoy_link::{
+    AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, RejectReason, StatusFlags,
+};
+use decoy_sim::{RunOptions, Scenario};
 
 /// Time limit of the firmware build (a cold build takes about a minute).
 const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
