@@ -123,6 +123,10 @@ struct HilArgs {
     /// Do not draw the plots.
     #[arg(long)]
     no_plots: bool,
+    /// Boot this firmware ELF instead of building one (default: build the firmware
+    /// of the checkout this `decoy` was built from, or of $DECOY_SOURCE_DIR).
+    #[arg(long, value_name = "ELF")]
+    firmware: Option<PathBuf>,
 }
 
 /// The board `decoy hil` runs on.
@@ -549,6 +553,7 @@ fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<Stri
         rate: args.rate,
         out_dir: args.out.clone(),
         plots: !args.no_plots,
+        firmware: args.firmware.clone(),
     };
     let mut bar = Progress::new("flying on the firmware", json);
     let result = decoy_hil::hil_run::run_hil(config, &scenario, &options, |f| bar.update(f));
@@ -578,6 +583,7 @@ fn hil_text(config: &SystemConfig, run: &HilRun) -> String {
         "Hardware in the loop `{}` on the {} ({}-bit floats, {} segments), QEMU -icount",
         r.scenario, h.board, h.precision_bits, r.segments
     );
+    let _ = writeln!(s, "  firmware {} ({})", h.elf, h.firmware_source);
     let _ = writeln!(
         s,
         "  {} frames sent, {} answered with an output, {:.0} round trips/s over the UART",

@@ -860,8 +860,15 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
     }
     assert_eq!(summary["board"], "m4");
     assert_eq!(num(&summary, "segments"), 16.0);
-    assert_eq!(num(&summary, "frames_sent"), 102.0);
+    // Like with like: the State frames sent and the Outputs answering them.
+    assert_eq!(num(&summary, "frames_sent"), 101.0);
     assert_eq!(num(&summary, "frames_answered"), 101.0);
+    assert!(
+        summary["firmware_source"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("built from ")),
+        "{summary}"
+    );
     assert_eq!(
         num(&summary, "max_tension_diff_vs_host_same_precision_N"),
         0.0
@@ -883,5 +890,42 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
     ] {
         assert!(dir.join(file).is_file(), "{file} missing");
     }
+    // The same ELF given with --firmware (as an installed `decoy` would): the
+    // same answers, and the summary says where the firmware came from.
+    let elf = summary["elf"].as_str().unwrap().to_owned();
+    let given = json(&[
+        "hil",
+        "--scenario",
+        "acceleration",
+        "--t-end",
+        "0.2",
+        "--firmware",
+        &elf,
+        "--no-plots",
+        "--out",
+        out,
+        "--json",
+    ]);
+    assert_eq!(given["firmware_source"], "given with --firmware");
+    assert_eq!(given["elf"], elf.as_str());
+    assert_eq!(
+        num(&given, "max_tension_diff_vs_host_same_precision_N"),
+        0.0
+    );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn hil_rejects_a_firmware_that_is_not_an_elf() {
+    let out = decoy(&[
+        "hil",
+        "--scenario",
+        "steady",
+        "--firmware",
+        "Cargo.toml",
+        "--no-plots",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("not a readable ELF"), "{stderr}");
 }

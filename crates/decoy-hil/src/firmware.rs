@@ -21,13 +21,49 @@ pub const TARGET: &str = "thumbv7em-none-eabihf";
 /// The firmware's binary name.
 pub const BINARY: &str = "decoy-firmware";
 
-/// The repository root (the root workspace's directory).
+/// The environment variable naming the checkout whose `firmware/` is built (for
+/// a `decoy` installed away from its checkout).
+pub const SOURCE_ENV: &str = "DECOY_SOURCE_DIR";
+
+/// The repository root whose `firmware/` is built: [`SOURCE_ENV`] if set, else the
+/// checkout this program was built from.
 pub fn workspace_root() -> PathBuf {
+    if let Some(dir) = std::env::var_os(SOURCE_ENV) {
+        return PathBuf::from(dir);
+    }
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .ancestors()
         .nth(2)
         .map(Path::to_path_buf)
         .unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// The firmware's source directory, checked to hold the firmware's manifest;
+/// [`BuildError::NoSource`] says what to do otherwise.
+pub fn locate_source() -> Result<PathBuf, BuildError> {
+    let dir = firmware_dir();
+    let manifest = dir.join("Cargo.toml");
+    let is_firmware = fs::read_to_string(&manifest)
+        .is_ok_and(|text| text.contains(&format!("name = \"{BINARY}\"")));
+    if is_firmware {
+        Ok(dir)
+    } else {
+        Err(BuildError::NoSource(dir))
+    }
+}
+
+/// Checks that `path` is an ELF file (the `--firmware` argument).
+pub fn check_elf(path: &Path) -> Result<(), BuildError> {
+    let mut magic = [0u8; 4];
+    let is_elf = fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic))
+        .is_ok()
+        && magic == *b"\x7fELF";
+    if is_elf {
+        Ok(())
+    } else {
+        Err(BuildError::NotElf(path.to_path_buf()))
+    }
 }
 
 /// The firmware workspace.
@@ -77,6 +113,10 @@ pub enum BuildError {
     MissingElf(PathBuf),
     /// The sources of a [`build_with_segments`] variant could not be prepared.
     Variant(String),
+    /// No firmware source where it was looked for.
+    NoSource(PathBuf),
+    /// A `--firmware` file that is not an ELF (or cannot be read).
+    NotElf(PathBuf),
 }
 
 impl fmt::Display for BuildError {
@@ -96,6 +136,15 @@ impl fmt::Display for BuildError {
                 )
             }
             BuildError::Variant(message) => f.write_str(message),
+            BuildError::NoSource(dir) => write!(
+                f,
+                "no firmware source at {} (this `decoy` was built elsewhere): pass --firmware ELF, \
+                 or set {SOURCE_ENV} to a checkout of the project",
+                dir.display()
+            ),
+            BuildError::NotElf(path) => {
+                write!(f, "--firmware {}: not a readable ELF file", path.display())
+            }
         }
     }
 }

@@ -47,6 +47,8 @@ pub struct HilOptions {
     pub out_dir: Option<PathBuf>,
     /// Draw the plots.
     pub plots: bool,
+    /// A firmware ELF to boot instead of building one (`--firmware`).
+    pub firmware: Option<PathBuf>,
 }
 
 impl Default for HilOptions {
@@ -58,6 +60,7 @@ impl Default for HilOptions {
             rate: None,
             out_dir: None,
             plots: true,
+            firmware: None,
         }
     }
 }
@@ -101,6 +104,9 @@ pub struct HilSummary {
     pub link_frames_per_s: f64,
     /// The ELF that ran.
     pub elf: String,
+    /// Where it came from: "built from DIR" (the firmware source `decoy hil`
+    /// found and built) or "given with --firmware".
+    pub firmware_source: String,
 }
 
 /// A finished `decoy hil` run.
@@ -150,6 +156,7 @@ impl HilError {
     pub fn is_usage(&self) -> bool {
         match self {
             HilError::Usage(_) => true,
+            HilError::Build(BuildError::NotElf(_) | BuildError::NoSource(_)) => true,
             HilError::Scenario(e) => e.is_usage(),
             _ => false,
         }
@@ -242,7 +249,17 @@ pub fn run_hil(
             },
         )
         .map_err(HilError::Scenario)?;
-    let elf = build_firmware(options.board, segments, configured)?;
+    let (elf, firmware_source) = match &options.firmware {
+        Some(path) => {
+            firmware::check_elf(path).map_err(HilError::Build)?;
+            (path.clone(), "given with --firmware".to_owned())
+        }
+        None => {
+            let dir = firmware::locate_source().map_err(HilError::Build)?;
+            let elf = build_firmware(options.board, segments, configured)?;
+            (elf, format!("built from {}", dir.display()))
+        }
+    };
     let memory = firmware::memory_usage(&elf).map_err(HilError::Output)?;
 
     let wall = Instant::now();
@@ -250,6 +267,14 @@ pub fn run_hil(
     let messages = flight::scenario_messages(&frames);
     let mut session = Session::start(&elf, options.board).map_err(HilError::Link)?;
     let hello = session.hello;
+    if usize::from(hello.segments) != segments {
+        return Err(HilError::Usage(format!(
+            "the firmware {} runs {} segments, not {segments}: pass --segments {}",
+            elf.display(),
+            hello.segments,
+            hello.segments
+        )));
+    }
     let flown = fly_until_rejected(&mut session, &messages, progress);
     let log = session.finish();
     let (exchanges, stop, fps) = match flown {
@@ -322,6 +347,7 @@ pub fn run_hil(
         flash_bytes: memory.flash(),
         link_frames_per_s: fps,
         elf: elf.display().to_string(),
+        firmware_source,
     };
     let summary_path = out_dir.join("summary.json");
     let mut json = serde_json::to_string_pretty(&summary)
