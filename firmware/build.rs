@@ -39,12 +39,12 @@ fn main() -> Result<()> {
     // The same for the measurement examples (examples/step_cost.rs).
     println!("cargo:rustc-link-arg-examples=-Tlink.x");
     println!("cargo:rustc-link-arg-examples=-Tdefmt.x");
-    // The M7 profile's f64 runs in hardware only with the Cortex-M7's FPv5-D16.
-    if env::var_os("CARGO_FEATURE_M7").is_some() {
+    // f64 runs in hardware only with the Cortex-M7's FPv5-D16.
+    if env::var_os("CARGO_FEATURE_F64").is_some() {
         let flags = env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
         if !flags.contains("target-cpu=cortex-m7") {
             println!(
-                "cargo:warning=feature `m7` without `-C target-cpu=cortex-m7`: f64 is software-emulated; build with `cargo build-m7`"
+                "cargo:warning=feature `f64` without `-C target-cpu=cortex-m7`: f64 is software-emulated; build the M7 profile with `cargo build-m7`"
             );
         }
     }

@@ -1,6 +1,6 @@
 //! The instruction cost of one RK4 step of the embedded model, measured on the
 //! target: the firmware's solver (the reference system's 16 graded segments,
-//! capacity 64; f32 on the Cortex-M4F, f64 with the `m7` feature) stepped along
+//! capacity 64; f32 on the Cortex-M4F, f64 with the `f64` feature (the M7 profile)) stepped along
 //! the flight path of State frames 10 ms apart, exactly as `decoy_controller::Controller`
 //! steps it (two RK4 steps of 5 ms per frame, the outputs evaluated at the frame),
 //! but without the link, validation or clearances around it.
@@ -26,29 +26,14 @@
 #![no_std]
 #![no_main]
 
-#[allow(dead_code)]
-#[path = "../src/board.rs"]
-mod board;
-#[allow(dead_code)]
-#[path = "../src/reference.rs"]
-mod reference;
-
 use cortex_m as _;
 use cortex_m_rt::entry;
 use decoy_controller::{FramePath, InstructionCounter};
+use decoy_firmware::{SEGMENT_CAPACITY, Scalar, board, reference};
 use decoy_link::{AircraftStateFrame};
 use solver_core::{AircraftState, FlightPath, Model, Solver, Vec3, trim};
 use static_cell::StaticCell;
 
-/// The solver's scalar: f32 on the Cortex-M4F.
-#[cfg(not(feature = "m7"))]
-type Scalar = f32;
-/// The solver's scalar: f64 on the Cortex-M7.
-#[cfg(feature = "m7")]
-type Scalar = f64;
-
-/// Segment capacity, as in the firmware.
-const SEGMENT_CAPACITY: usize = 64;
 /// Frames measured.
 const FRAMES: u32 = 20;
 /// Frame period, s.

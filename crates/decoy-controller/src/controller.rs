@@ -12,8 +12,8 @@ use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body}
 use crate::path::FramePath;
 use crate::validate::{is_finite, validate_streamed};
 use decoy_link::{
-    AircraftStateFrame, Board, Command, Counters, DeviceMessage, Hello, HostMessage, OutputFrame,
-    PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
+    AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello, HostMessage,
+    OutputFrame, PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
 use decoy_link::{Decoder, FrameError};
 
@@ -208,10 +208,11 @@ impl<T: Real, const N: usize> Controller<T, N> {
     }
 
     /// The Hello message of this controller on `board`.
-    pub fn hello(&self, board: Board) -> DeviceMessage {
+    pub fn hello(&self, board: &BoardInfo) -> DeviceMessage {
         DeviceMessage::Hello(Hello {
             protocol_version: PROTOCOL_VERSION,
-            board,
+            board: board.name,
+            core_clock_hz: board.core_clock_hz,
             precision_bits: (core::mem::size_of::<T>() * 8) as u8,
             segments: self.segments(),
             capacity: N as u16,

@@ -14,6 +14,9 @@
 //! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
 //!   and the aircraft (the host's `decoy simulate` uses the same code).
 //! - [`controller`]: [`Controller`], the pure state machine.
+//! - [`serve`]: the controller's main loop over any byte link (`embedded-io`
+//!   `Read + ReadReady + Write`) and [`serve::Clock`]: the firmware's loop, which a
+//!   host test also runs against a loopback.
 //!
 //! The wire protocol is `decoy-link` (docs/protocol.md). `no_std`, no heap, no
 //! `unsafe`; every transcendental function goes to `libm` (solver-core's maths), so
@@ -27,6 +30,7 @@ pub mod controller;
 pub mod geometry;
 pub mod params;
 pub mod path;
+pub mod serve;
 pub mod validate;
 
 pub use controller::{

@@ -36,17 +36,11 @@ pub fn is_finite(frame: &AircraftStateFrame) -> bool {
         && f32s.into_iter().all(|v| v.is_finite())
 }
 
-/// |v| of an f32 triple, in f32 (the frame's own precision), computed on the
-/// largest component's scale so that no finite triple overflows.
-fn magnitude(v: &[f32; 3]) -> f32 {
-    let scale = v
-        .iter()
-        .fold(0.0f32, |m, c| if c.abs() > m { c.abs() } else { m });
-    if !(scale > 0.0) {
-        return scale;
-    }
-    let sum: f32 = v.iter().map(|c| (c / scale) * (c / scale)).sum();
-    scale * libm::sqrtf(sum)
+/// True when |v| <= `limit`, compared as |v|² <= limit² in f32 (the frame's own
+/// precision; no root, no division): a square that overflows is infinite and fails.
+fn within(v: &[f32; 3], limit: f32) -> bool {
+    let [x, y, z] = *v;
+    x * x + y * y + z * z <= limit * limit
 }
 
 /// Checks a frame whose kinematics drive the solver (streamed mode), in this
@@ -82,7 +76,7 @@ pub fn validate_streamed<T: Real>(
             MAX_ANGULAR_ACCELERATION_RADPS2,
         ),
     ];
-    if envelope.iter().any(|(v, limit)| !(magnitude(v) <= *limit)) {
+    if !envelope.iter().all(|(v, limit)| within(v, *limit)) {
         return Err(RejectReason::OutOfRange);
     }
     let altitude = -frame.position_ned_m[2];

@@ -7,9 +7,17 @@ mod common;
 use common::{CAPACITY, controller, frame, output, running, send};
 use decoy_controller::{Controller, InstructionCounter, NoCounter, SILENCE_MS};
 use decoy_link::{
-    Board, Command, DeviceMessage, FrameDecoder, HostMessage, MAX_WIRE_BYTES, PROTOCOL_VERSION,
-    Profile, RejectReason, StatusFlags, encode,
+    Command, DeviceMessage, FrameDecoder, HostMessage, MAX_WIRE_BYTES, PROTOCOL_VERSION, Profile,
+    RejectReason, StatusFlags, encode,
 };
+
+/// A board of that name with a 168 MHz core clock (any name: no enum to extend).
+fn board(name: &str) -> decoy_link::BoardInfo {
+    decoy_link::BoardInfo {
+        name: decoy_link::BoardName::new(name).unwrap(),
+        core_clock_hz: 168_000_000,
+    }
+}
 
 fn rejected(answer: DeviceMessage) -> (Option<u32>, RejectReason, u32) {
     match answer {
@@ -315,12 +323,13 @@ fn no_trim_and_solver_failures_leave_the_state_alone() {
 #[test]
 fn commands_are_answered() {
     let mut c = running(1);
-    let h = c.hello(Board::M4);
+    let h = c.hello(&board("mps2-an386"));
     assert_eq!(
         h,
         DeviceMessage::Hello(decoy_link::Hello {
             protocol_version: PROTOCOL_VERSION,
-            board: Board::M4,
+            board: decoy_link::BoardName::new("mps2-an386").unwrap(),
+            core_clock_hz: 168_000_000,
             precision_bits: 32,
             segments: 16,
             capacity: CAPACITY as u16,
@@ -433,10 +442,11 @@ fn f64_controllers_agree_with_f32_ones() {
         }
     }
     assert_eq!(
-        c64.hello(Board::M7),
+        c64.hello(&board("a-new-board")),
         DeviceMessage::Hello(decoy_link::Hello {
             protocol_version: PROTOCOL_VERSION,
-            board: Board::M7,
+            board: decoy_link::BoardName::new("a-new-board").unwrap(),
+            core_clock_hz: 168_000_000,
             precision_bits: 64,
             segments: 16,
             capacity: 16,

@@ -93,11 +93,12 @@ pub fn release_elf_m7() -> PathBuf {
 }
 
 /// Cargo arguments of the M7 profile (the firmware's `cargo build-m7` alias): the
-/// `m7` feature (f64 solver, `Board::M7` in Hello) and code for the Cortex-M7's
+/// board `mps2-an500` and the `f64` precision (two independent features) and code for the Cortex-M7's
 /// double-precision FPU.
 pub const M7_ARGS: &[&str] = &[
+    "--no-default-features",
     "--features",
-    "m7",
+    "qemu,defmt-semihosting,board-mps2-an500,f64",
     "--config",
     "target.thumbv7em-none-eabihf.rustflags=[\"-C\", \"target-cpu=cortex-m7\"]",
 ];

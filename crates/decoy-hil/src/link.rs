@@ -344,10 +344,7 @@ impl Session {
                 let send = |stream: &mut TcpStream, m: &DeviceMessage| {
                     encode_device(m).is_ok_and(|bytes| stream.write_all(&bytes).is_ok())
                 };
-                let hello = controller.hello(match board {
-                    Board::M4 => decoy_link::Board::M4,
-                    Board::M7 => decoy_link::Board::M7,
-                });
+                let hello = controller.hello(&board.info());
                 if !send(&mut stream, &hello) {
                     return;
                 }

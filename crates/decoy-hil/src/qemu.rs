@@ -42,6 +42,19 @@ impl Board {
         }
     }
 
+    /// The board as its firmware names itself in Hello, and its core clock.
+    pub fn info(self) -> decoy_link::BoardInfo {
+        let (name, core_clock_hz) = match self {
+            Board::M4 => ("mps2-an386", 25_000_000),
+            Board::M7 => ("mps2-an500", 25_000_000),
+        };
+        decoy_link::BoardInfo {
+            // Both names are short ASCII.
+            name: decoy_link::BoardName::new(name).unwrap_or_else(|| unreachable!()),
+            core_clock_hz,
+        }
+    }
+
     /// The board's name on the command line (`m4`, `m7`).
     pub fn name(self) -> &'static str {
         match self {

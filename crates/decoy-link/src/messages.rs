@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -260,13 +260,89 @@ impl Counters {
     }
 }
 
-/// The controller's hardware and precision.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Board {
-    /// Cortex-M4F (QEMU `mps2-an386`), f32 in hardware.
-    M4,
-    /// Cortex-M7 (QEMU `mps2-an500`), f64 in hardware.
-    M7,
+/// Longest board name, bytes.
+pub const BOARD_NAME_CAPACITY: usize = 24;
+
+/// The name of the controller's board (for example `mps2-an386`): ASCII, 1 to
+/// [`BOARD_NAME_CAPACITY`] bytes, on the wire a postcard string (varint length,
+/// bytes). A name rather than an enum, so that a new board needs no protocol change.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct BoardName {
+    len: u8,
+    bytes: [u8; BOARD_NAME_CAPACITY],
+}
+
+impl BoardName {
+    /// `name` if it is 1 to [`BOARD_NAME_CAPACITY`] printable ASCII bytes.
+    pub const fn new(name: &str) -> Option<Self> {
+        let src = name.as_bytes();
+        if src.is_empty() || src.len() > BOARD_NAME_CAPACITY {
+            return None;
+        }
+        let mut bytes = [0u8; BOARD_NAME_CAPACITY];
+        let mut i = 0;
+        while i < src.len() {
+            if !src[i].is_ascii_graphic() {
+                return None;
+            }
+            bytes[i] = src[i];
+            i += 1;
+        }
+        Some(BoardName {
+            len: src.len() as u8,
+            bytes,
+        })
+    }
+
+    /// The name.
+    pub fn as_str(&self) -> &str {
+        // Only ASCII is ever stored (`new` and deserialisation check it).
+        core::str::from_utf8(&self.bytes[..usize::from(self.len)]).unwrap_or("")
+    }
+}
+
+impl core::fmt::Debug for BoardName {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        core::fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl core::fmt::Display for BoardName {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl Serialize for BoardName {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.as_str())
+    }
+}
+
+impl<'de> Deserialize<'de> for BoardName {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = BoardName;
+            fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                write!(f, "1 to {BOARD_NAME_CAPACITY} printable ASCII bytes")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<BoardName, E> {
+                BoardName::new(v)
+                    .ok_or_else(|| E::invalid_value(serde::de::Unexpected::Str(v), &self))
+            }
+        }
+        deserializer.deserialize_str(Visitor)
+    }
+}
+
+/// What the controller runs on, as Hello describes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BoardInfo {
+    /// The board's name.
+    pub name: BoardName,
+    /// The core clock, Hz.
+    pub core_clock_hz: u32,
 }
 
 /// Sent once at boot.
@@ -274,8 +350,10 @@ pub enum Board {
 pub struct Hello {
     /// [`PROTOCOL_VERSION`].
     pub protocol_version: u16,
-    /// The board.
-    pub board: Board,
+    /// The board's name (for example `mps2-an386`, `netduinoplus2`).
+    pub board: BoardName,
+    /// The core clock, Hz.
+    pub core_clock_hz: u32,
     /// Bits of the solver's scalar: 32 or 64.
     pub precision_bits: u8,
     /// Segments of the model.
@@ -311,5 +389,28 @@ impl StatusFlags {
     /// True when every bit of `bits` is set.
     pub fn contains(self, bits: u16) -> bool {
         self.0 & bits == bits
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn board_names_are_short_printable_ascii_and_round_trip_as_strings() {
+        assert!(BoardName::new("").is_none());
+        assert!(BoardName::new("a board").is_none());
+        assert!(BoardName::new("mps2-än386").is_none());
+        assert!(BoardName::new(&"x".repeat(BOARD_NAME_CAPACITY + 1)).is_none());
+        let name = BoardName::new("netduinoplus2").unwrap();
+        assert_eq!(name.as_str(), "netduinoplus2");
+        let mut buf = [0u8; 64];
+        let wire = postcard::to_slice(&name, &mut buf).unwrap();
+        // A postcard string: length, then the bytes.
+        assert_eq!(wire[0] as usize, "netduinoplus2".len());
+        assert_eq!(&wire[1..], b"netduinoplus2");
+        assert_eq!(postcard::from_bytes::<BoardName>(wire).unwrap(), name);
+        let bad = postcard::to_slice("two words", &mut buf).unwrap();
+        assert!(postcard::from_bytes::<BoardName>(bad).is_err());
     }
 }

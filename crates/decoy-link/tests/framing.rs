@@ -3,9 +3,9 @@
 
 use decoy_link::framing::{CRC_BYTES, MAX_PAYLOAD_BYTES};
 use decoy_link::{
-    AircraftStateFrame, Board, Command, Counters, DeviceMessage, FrameDecoder, FrameError, Hello,
-    HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, OutputFrame, Profile, RejectReason, Rejected,
-    StatusFrame, crc32, encode,
+    AircraftStateFrame, BoardName, Command, Counters, DeviceMessage, FrameDecoder, FrameError,
+    Hello, HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, OutputFrame, Profile, RejectReason,
+    Rejected, StatusFrame, crc32, encode,
 };
 
 /// A small deterministic generator (SplitMix64), so failures reproduce.
@@ -157,11 +157,16 @@ fn device_message(r: &mut Rng) -> DeviceMessage {
         },
         _ => DeviceMessage::Hello(Hello {
             protocol_version: r.u16(),
-            board: if r.next().is_multiple_of(2) {
-                Board::M4
-            } else {
-                Board::M7
-            },
+            board: BoardName::new(
+                [
+                    "mps2-an386",
+                    "mps2-an500",
+                    "netduinoplus2",
+                    "a-board-named-24-chars-x",
+                ][(r.next() % 4) as usize],
+            )
+            .unwrap(),
+            core_clock_hz: r.u32(),
             precision_bits: r.byte(),
             segments: r.u16(),
             capacity: r.u16(),

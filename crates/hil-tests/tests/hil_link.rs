@@ -369,7 +369,8 @@ fn m7_profile_matches_the_host_in_f64() {
     defmt::require().unwrap_or_else(|e| panic!("{e}"));
     let elf = firmware::build_board(Board::M7, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
     let mut s = Session::start(&elf, Board::M7).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(s.hello.board, decoy_link::Board::M7);
+    assert_eq!(s.hello.board, Board::M7.info().name);
+    assert_eq!(s.hello.core_clock_hz, 25_000_000);
     assert_eq!(s.hello.precision_bits, 64);
     let messages = flight::scenario_messages(&frames("acceleration", None, 3.0));
     let flown = flight::fly(&mut s, &messages, |_| {}).unwrap_or_else(|e| panic!("{e}"));

@@ -35,8 +35,10 @@ use defmt_semihosting as _;
 
 /// SysTick's reload value: the full 24-bit range.
 const SYSTICK_RELOAD: u32 = 0x00FF_FFFF;
-/// SysTick ticks per millisecond (25 MHz core clock).
-const TICKS_PER_MS: u64 = 25_000;
+/// The core clock (SysTick's source), Hz.
+pub const CORE_CLOCK_HZ: u32 = 25_000_000;
+/// SysTick ticks per millisecond.
+const TICKS_PER_MS: u64 = CORE_CLOCK_HZ as u64 / 1000;
 
 /// Executed instructions per SysTick tick under `-icount shift=0`: virtual time
 /// advances 1 ns per instruction and SysTick runs on the 25 MHz core clock, so one
@@ -135,7 +137,7 @@ impl embedded_io::Error for UartError {
 }
 
 /// Core clock / 115,200 baud.
-const BAUD_DIVIDER: u32 = 25_000_000 / 115_200;
+const BAUD_DIVIDER: u32 = CORE_CLOCK_HZ / 115_200;
 
 impl Uart {
     /// Enables UART0's transmitter and receiver. The one dummy DATA read after
@@ -301,6 +303,31 @@ impl Clock {
         (self.ticks() / TICKS_PER_MS) as u32
     }
 }
+
+impl decoy_controller::serve::Clock for Clock {
+    fn now_ms(&self) -> u32 {
+        Clock::now_ms(self)
+    }
+    fn align(&self) {
+        Clock::align(self)
+    }
+}
+
+/// The board's name in Hello.
+#[cfg(feature = "board-mps2-an386")]
+const NAME: &str = "mps2-an386";
+/// The board's name in Hello.
+#[cfg(feature = "board-mps2-an500")]
+const NAME: &str = "mps2-an500";
+
+/// The board as Hello describes it: its name and the 25 MHz core clock.
+pub const INFO: decoy_link::BoardInfo = decoy_link::BoardInfo {
+    name: match decoy_link::BoardName::new(NAME) {
+        Some(name) => name,
+        None => panic!("a board name is 1 to 24 printable ASCII bytes"),
+    },
+    core_clock_hz: CORE_CLOCK_HZ,
+};
 
 impl decoy_controller::InstructionCounter for Clock {
     /// Instructions since the clock started, wrapping at 2^32, in multiples of
