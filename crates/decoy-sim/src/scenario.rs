@@ -34,9 +34,9 @@ use solver_core::SegmentLayout;
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 
 use crate::error::SimError;
+use crate::options::RunOptions;
 use crate::profile::FlightProfile;
 use crate::recorded::RecordedFlight;
-use crate::run::RunOptions;
 
 /// The shipped scenarios: name and TOML text (embedded from `scenarios/`).
 pub const BUILTIN_SCENARIOS: [(&str, &str); 5] = [
@@ -56,8 +56,7 @@ pub const RECORDED_EXAMPLE_CSV: &str = include_str!("../../../scenarios/recorded
 /// The file name the built-in `recorded` scenario refers to.
 pub const RECORDED_EXAMPLE_NAME: &str = "recorded-example.csv";
 
-/// Capacity of the solver's segment arrays: the largest segment count a run may use.
-pub const MAX_SEGMENTS: usize = 512;
+pub use crate::capacity::MAX_SEGMENTS;
 /// Altitude range accepted, m (the ISA 1976 model's range above sea level).
 pub const ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
 /// Largest Mach number accepted.

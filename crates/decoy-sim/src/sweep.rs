@@ -24,18 +24,18 @@ use decoy_plots::{Aspect, Plot, PlotError, Series, write_plot, write_stacked};
 use serde::Serialize;
 use solver_core::{AircraftState, Model, SegmentLayout, Solver, Uniform, trim};
 
+use crate::capacity::with_capacity;
 use crate::error::SimError;
+use crate::format::format_value;
 use crate::geometry::FlightPathFrame;
-use crate::run::{InitialState, RunOptions, format_value};
+use crate::options::{InitialState, RunOptions};
 use crate::scenario::{
-    MAX_SEGMENTS, RunPlan, Scenario, check_altitude, check_grading, check_mach, check_segments,
+    RunPlan, Scenario, check_altitude, check_grading, check_mach, check_segments,
 };
 use crate::trace::{Start, TraceOptions, trace};
 
 /// Most points one sweep may have.
 pub const MAX_SWEEP_POINTS: usize = 1000;
-/// Capacity of the model for small segment counts (as [`crate::simulate`]).
-const SMALL_CAPACITY: usize = 32;
 /// Interval of the pitch histories kept for the plots and `pitch.csv`, s.
 const HISTORY_INTERVAL_S: f64 = 0.01;
 /// Most pitch histories drawn in one panel (the palette has 10 colours).
@@ -195,11 +195,7 @@ pub fn trim_point(
     altitude: f64,
     mach: f64,
 ) -> Result<TrimPoint, SimError> {
-    if layout.count() <= SMALL_CAPACITY {
-        trim_point_with::<SMALL_CAPACITY>(config, layout, altitude, mach)
-    } else {
-        trim_point_with::<MAX_SEGMENTS>(config, layout, altitude, mach)
-    }
+    with_capacity!(layout.count(), N => trim_point_with::<N>(config, layout, altitude, mach))
 }
 
 fn trim_point_with<const N: usize>(
@@ -407,7 +403,7 @@ pub fn steady_sweep(
         variable: spec.variable,
         fixed_mach: (spec.variable == SteadyVariable::Altitude).then_some(spec.mach),
         fixed_altitude_m: (spec.variable == SteadyVariable::Speed).then_some(spec.altitude_m),
-        layout: crate::run::describe_layout(&spec.layout),
+        layout: crate::format::describe_layout(&spec.layout),
         points,
     })
 }
@@ -982,7 +978,7 @@ impl SettlingSweep {
             for &(t, pitch) in &p.pitch_history {
                 s.push_str(&format!(
                     "{stations},{},{}\n",
-                    crate::run::format_time(t),
+                    crate::format::format_time(t),
                     format_value(pitch)
                 ));
             }
