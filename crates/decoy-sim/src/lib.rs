@@ -40,13 +40,16 @@
 //!    capacity chosen from the segment count), `geometry`, `options`
 //!    ([`RunOptions`]);
 //! 2. `recorded` (recorded flights), `profile` ([`FlightProfile`]);
-//! 3. `scenario` (scenario files and [`RunPlan`]);
+//! 3. `scenario` (scenario files and [`RunPlan`]), `trim` (the steady trim of
+//!    one flight condition, `decoy trim`);
 //! 4. `record` (the probe, running statistics and CSV rows of a run), then
 //!    `summary` ([`Summary`], [`summarize`]);
 //! 5. `plots`;
 //! 6. `run` ([`simulate`]: the integration loop and the output directory);
 //! 7. `trace` (a run in memory);
-//! 8. `sweep`, then `study`, then `report`.
+//! 8. `sweep` (`mod.rs`: ranges and table/plot helpers; `steady`, `settling`),
+//!    then `study`, then `report` (`mod.rs`: the entry point; `data`, `claims`,
+//!    `figures`, `render`).
 //!
 //! ```no_run
 //! use decoy_config::SystemConfig;
@@ -76,6 +79,7 @@ pub mod study;
 pub mod summary;
 pub mod sweep;
 pub mod trace;
+pub mod trim;
 
 pub use error::SimError;
 pub use format::{describe_layout, format_time, format_value};

@@ -1,0 +1,126 @@
+//! [`trim_point`]: the trim (steady equilibrium) of level flight at one flight
+//! condition, with its cable, as `decoy trim` and the steady sweeps report it.
+
+use decoy_config::SystemConfig;
+use serde::Serialize;
+use solver_core::{AircraftState, Model, SegmentLayout, Solver, Uniform, trim};
+
+use crate::capacity::with_capacity;
+use crate::error::SimError;
+use crate::geometry::FlightPathFrame;
+
+/// One joint of a trimmed cable: distance along the cable from the connection
+/// point, behind and below the aircraft reference point (flight-path frame), m,
+/// and the tension there, N.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CablePoint {
+    /// Distance along the cable from the connection point, m.
+    pub along_m: f64,
+    /// Behind the aircraft reference point, m.
+    pub behind_m: f64,
+    /// Below the flight path, m.
+    pub below_m: f64,
+    /// Tension, N.
+    #[serde(rename = "tension_N")]
+    pub tension_n: f64,
+}
+
+/// The trim of steady level flight at one flight condition.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TrimPoint {
+    /// Mach number.
+    pub mach: f64,
+    /// Altitude, m.
+    pub altitude_m: f64,
+    /// True airspeed, m/s.
+    pub speed_mps: f64,
+    /// Tension at the connection point (joint 0), N.
+    #[serde(rename = "tension_connection_N")]
+    pub tension_connection_n: f64,
+    /// Tension at the towing point (joint N), N.
+    #[serde(rename = "tension_tow_N")]
+    pub tension_tow_n: f64,
+    /// Largest tension along the cable, N.
+    #[serde(rename = "tension_max_N")]
+    pub tension_max_n: f64,
+    /// Decoy pitch, deg, positive nose-up.
+    pub decoy_pitch_deg: f64,
+    /// Decoy total angle of attack, deg.
+    pub decoy_aoa_deg: f64,
+    /// Decoy CG behind the aircraft reference point, m.
+    pub decoy_cg_behind_m: f64,
+    /// Decoy CG below the flight path (the decoy's depth), m.
+    pub decoy_cg_below_m: f64,
+    /// The cable, joint 0 (connection point) to joint N (towing point).
+    #[serde(skip)]
+    pub cable: Vec<CablePoint>,
+}
+
+/// The trim of steady level flight at `altitude` m and `mach` with `layout`, and
+/// its cable. Errors: no trim ([`SimError::NoTrim`]), an unusable configuration.
+pub fn trim_point(
+    config: &SystemConfig,
+    layout: SegmentLayout<f64>,
+    altitude: f64,
+    mach: f64,
+) -> Result<TrimPoint, SimError> {
+    with_capacity!(layout.count(), N => trim_point_with::<N>(config, layout, altitude, mach))
+}
+
+fn trim_point_with<const N: usize>(
+    config: &SystemConfig,
+    layout: SegmentLayout<f64>,
+    altitude: f64,
+    mach: f64,
+) -> Result<TrimPoint, SimError> {
+    let model: Model<f64, N> = config.model(layout)?;
+    let n = model.segment_count();
+    let speed = config.mach_to_speed(altitude, mach)?;
+    let aircraft = AircraftState::level(altitude, speed);
+    let state = trim(&model, &aircraft).map_err(SimError::NoTrim)?;
+    let mut along = vec![0.0];
+    for l in model.lengths() {
+        along.push(along[along.len() - 1] + l);
+    }
+    let mut solver: Box<Solver<f64, N>> =
+        Box::new(Solver::new(model, state).map_err(SimError::Initial)?);
+    let path = Uniform { initial: aircraft };
+    let out = solver.outputs(&path).map_err(SimError::Initial)?;
+    let frame = FlightPathFrame::of(&aircraft);
+    let relative = |p: &nalgebra::Vector3<f64>| frame.components(&(p - aircraft.position));
+    let cable: Vec<CablePoint> = (0..=n)
+        .map(|j| {
+            let c = relative(&out.joint_position(j));
+            CablePoint {
+                along_m: along[j],
+                behind_m: -c.x,
+                below_m: c.z,
+                tension_n: out.tension(j),
+            }
+        })
+        .collect();
+    let (pitch, aoa, cg) = match out.decoy() {
+        Some(d) => (
+            d.euler.1.to_degrees(),
+            d.angle_of_attack.to_degrees(),
+            relative(&d.cg_position),
+        ),
+        None => (f64::NAN, f64::NAN, nalgebra::Vector3::repeat(f64::NAN)),
+    };
+    Ok(TrimPoint {
+        mach,
+        altitude_m: altitude,
+        speed_mps: speed,
+        tension_connection_n: out.connection_tension(),
+        tension_tow_n: out.tow_tension(),
+        tension_max_n: cable
+            .iter()
+            .map(|c| c.tension_n)
+            .fold(f64::NEG_INFINITY, f64::max),
+        decoy_pitch_deg: pitch,
+        decoy_aoa_deg: aoa,
+        decoy_cg_behind_m: -cg.x,
+        decoy_cg_below_m: cg.z,
+        cable,
+    })
+}
