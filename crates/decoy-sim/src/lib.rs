@@ -89,7 +89,7 @@ pub use plots::{COMPARISON_PLOT_NAMES, PLOT_NAMES, write_comparison_plots};
 pub use profile::FlightProfile;
 pub use record::{CABLE_HEADER, Sample, Snapshot, TIMESERIES_HEADER};
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
-pub use run::{RunOutput, simulate};
+pub use run::{RunOutput, output_file_names, simulate};
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,
 };

@@ -69,6 +69,23 @@ pub struct Sample {
 }
 
 impl Sample {
+    /// A sample of no state (a run that did not start): every value NaN, t = 0.
+    pub(crate) fn unknown() -> Sample {
+        Sample {
+            t: 0.0,
+            tension_connection: f64::NAN,
+            tension_tow: f64::NAN,
+            cg: [f64::NAN; 3],
+            euler_deg: [f64::NAN; 3],
+            aoa_deg: f64::NAN,
+            exhaust_clearance: f64::NAN,
+            exhaust_along: f64::NAN,
+            decoy_clearance: f64::NAN,
+            speed: f64::NAN,
+            altitude: f64::NAN,
+        }
+    }
+
     fn csv_row(&self) -> String {
         let values = [
             self.tension_connection,
@@ -178,29 +195,27 @@ impl Probe {
         }
     }
 
-    /// The cable in the flight-path frame, relative to the aircraft reference point.
-    fn snapshot<const N: usize>(
+    /// Writes the cable in the flight-path frame, relative to the aircraft
+    /// reference point, into `snapshot` (reusing its storage).
+    fn snapshot_into<const N: usize>(
         &self,
         out: &Outputs<'_, f64, N>,
         aircraft: &AircraftState<f64>,
-    ) -> Snapshot {
+        snapshot: &mut Snapshot,
+    ) {
         let frame = FlightPathFrame::of(aircraft);
-        let joints = (0..=out.segment_count())
-            .map(|j| {
-                let c = frame.components(&(out.joint_position(j) - aircraft.position));
-                [
-                    self.joint_along[j],
-                    -c.x,
-                    self.lateral_sign * -c.y + 0.0,
-                    c.z,
-                    out.tension(j),
-                ]
-            })
-            .collect();
-        Snapshot {
-            t: out.time(),
-            joints,
-        }
+        snapshot.t = out.time();
+        snapshot.joints.clear();
+        snapshot.joints.extend((0..=out.segment_count()).map(|j| {
+            let c = frame.components(&(out.joint_position(j) - aircraft.position));
+            [
+                self.joint_along[j],
+                -c.x,
+                self.lateral_sign * -c.y + 0.0,
+                c.z,
+                out.tension(j),
+            ]
+        }));
     }
 }
 
@@ -332,6 +347,13 @@ pub(crate) struct Recorder<'a> {
     pub snapshots: Vec<Snapshot>,
     /// The last good sample.
     pub last: Sample,
+    /// The cable at the last good state (kept every step, so that a run that
+    /// stops can still end `cable.csv` with it).
+    pub last_cable: Snapshot,
+    /// Scratch for the cable of the state being recorded.
+    candidate_cable: Snapshot,
+    /// True once a state has been recorded.
+    pub recorded_any: bool,
     pub last_written: bool,
     pub sample_every: u64,
     pub snapshot_every: u64,
@@ -366,6 +388,15 @@ impl<'a> Recorder<'a> {
             samples: Vec::new(),
             snapshots: Vec::new(),
             last: Sample::default(),
+            last_cable: Snapshot {
+                t: 0.0,
+                joints: Vec::new(),
+            },
+            candidate_cable: Snapshot {
+                t: 0.0,
+                joints: Vec::new(),
+            },
+            recorded_any: false,
             last_written: false,
             sample_every: ((sample_interval / plan.dt).round() as u64).max(1),
             snapshot_every: ((snapshot_interval / plan.dt).round() as u64).max(1),
@@ -387,7 +418,8 @@ impl<'a> Recorder<'a> {
         let take_snapshot = k == 0 || k.is_multiple_of(self.snapshot_every) || k == self.steps;
         let previous_yaw = (k > 0).then_some(self.last.euler_deg[2]);
         let sample = self.probe.sample(out, &aircraft, previous_yaw);
-        let snapshot = take_snapshot.then(|| self.probe.snapshot(out, &aircraft));
+        self.probe
+            .snapshot_into(out, &aircraft, &mut self.candidate_cable);
         if !(sample.tension_connection.is_finite() && sample.tension_tow.is_finite()) {
             return Ok(Some((
                 format!(
@@ -399,6 +431,8 @@ impl<'a> Recorder<'a> {
             )));
         }
         self.last = sample;
+        std::mem::swap(&mut self.last_cable, &mut self.candidate_cable);
+        self.recorded_any = true;
         self.statistics.add(&sample);
         self.last_written = write_row;
         if write_row {
@@ -407,17 +441,30 @@ impl<'a> Recorder<'a> {
             }
             self.samples.push(sample);
         }
-        if let Some(snapshot) = snapshot {
-            if let Some(csv) = &mut self.cable {
-                write_snapshot(csv, &snapshot)?;
-            }
-            self.snapshots.push(snapshot);
+        if take_snapshot {
+            self.keep_last_cable()?;
         }
         Ok(None)
     }
 
-    /// Keeps (and writes) the last good state's row if it fell between rows.
+    /// Keeps (and writes) the snapshot of the last good state.
+    fn keep_last_cable(&mut self) -> Result<(), SimError> {
+        if let Some(csv) = &mut self.cable {
+            write_snapshot(csv, &self.last_cable)?;
+        }
+        self.snapshots.push(self.last_cable.clone());
+        Ok(())
+    }
+
+    /// Keeps (and writes) the last good state's row if it fell between rows, and
+    /// its cable snapshot if it fell between snapshots (a run that stopped).
     pub(crate) fn finish(&mut self) -> Result<(), SimError> {
+        if !self.recorded_any {
+            return Ok(());
+        }
+        if self.snapshots.last().map(|s| s.t) != Some(self.last.t) {
+            self.keep_last_cable()?;
+        }
         if !self.last_written {
             if let Some(csv) = &mut self.timeseries {
                 csv.write(&self.last.csv_row())?;

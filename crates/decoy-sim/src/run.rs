@@ -11,9 +11,10 @@ use crate::capacity::with_capacity;
 use crate::error::SimError;
 use crate::format::round_time;
 use crate::options::{InitialState, RunOptions};
+use crate::plots::PLOT_NAMES;
 use crate::record::{
-    CABLE_HEADER, CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Stop,
-    TIMESERIES_HEADER, probe,
+    CABLE_HEADER, CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample,
+    Stop, TIMESERIES_HEADER, probe,
 };
 use crate::scenario::{RunPlan, Scenario};
 use crate::summary::{RunIdentity, Summary, measured};
@@ -131,20 +132,14 @@ fn simulate_with<const N: usize>(
         .unwrap_or_else(|| Path::new("out").join(&plan.name));
     let model: Model<f64, N> = config.model(plan.layout)?;
     let n = model.segment_count();
-    let initial = plan.profile.initial_condition();
-    let state = match options.initial {
-        InitialState::Trim => trim(&model, &initial).map_err(SimError::NoTrim)?,
-        InitialState::Straight => straight_state(&model, &initial),
-    };
     let probe = probe(config, &model, plan.lateral_sign);
-    let mut solver: Box<Solver<f64, N>> =
-        Box::new(Solver::new(model, state).map_err(SimError::Initial)?);
 
     std::fs::create_dir_all(&out_dir).map_err(|source| SimError::Io {
         action: "create the directory",
         path: out_dir.clone(),
         source,
     })?;
+    remove_previous_outputs(&out_dir)?;
     let timeseries_path = out_dir.join("timeseries.csv");
     let cable_path = out_dir.join("cable.csv");
     let files = (
@@ -158,7 +153,19 @@ fn simulate_with<const N: usize>(
         SAMPLE_INTERVAL_S,
         SNAPSHOT_INTERVAL_S,
     );
-    let stopped = integrate(&mut solver, &plan, &mut recorder, progress)?;
+    // A run that cannot start (no trim, an initial state that cannot be
+    // evaluated) still leaves a summary that says so.
+    let started = initial_solver(model, options.initial, &plan)
+        .and_then(|mut solver| integrate(&mut solver, &plan, &mut recorder, progress));
+    let (stopped, not_started) = match started {
+        Ok(stopped) => (stopped, None),
+        Err(e @ (SimError::NoTrim(_) | SimError::Initial(_))) => (
+            Some((format!("the run could not start: {e}"), None)),
+            Some(e),
+        ),
+        Err(e) => return Err(e),
+    };
+    let recorded_any = recorder.recorded_any;
     let Recorder {
         timeseries,
         cable,
@@ -175,6 +182,12 @@ fn simulate_with<const N: usize>(
         segments: n,
         dt: plan.dt,
         t_end: plan.t_end,
+    };
+    // Without a recorded state the final values are unknown (`null`).
+    let last = if recorded_any {
+        last
+    } else {
+        Sample::unknown()
     };
     let summary = measured(
         &identity,
@@ -198,6 +211,9 @@ fn simulate_with<const N: usize>(
     })?;
     let mut files = vec![timeseries_path, cable_path, summary_path];
 
+    if let Some(e) = not_started {
+        return Err(e);
+    }
     if options.plots {
         let recorded = Recorded {
             samples: &samples,
@@ -220,6 +236,55 @@ fn simulate_with<const N: usize>(
         files,
         plan,
     })
+}
+
+/// The solver at the run's initial state: the trim of the flight condition at
+/// t = 0 ([`SimError::NoTrim`] when there is none) or the straight cable.
+fn initial_solver<const N: usize>(
+    model: Model<f64, N>,
+    initial: InitialState,
+    plan: &RunPlan,
+) -> Result<Box<Solver<f64, N>>, SimError> {
+    let aircraft = plan.profile.initial_condition();
+    let state = match initial {
+        InitialState::Trim => trim(&model, &aircraft).map_err(SimError::NoTrim)?,
+        InitialState::Straight => straight_state(&model, &aircraft),
+    };
+    Ok(Box::new(
+        Solver::new(model, state).map_err(SimError::Initial)?,
+    ))
+}
+
+/// The names of every file `decoy simulate` writes into its output directory.
+pub fn output_file_names() -> Vec<String> {
+    let mut names: Vec<String> = ["timeseries.csv", "cable.csv", "summary.json"]
+        .map(str::to_owned)
+        .to_vec();
+    for stem in PLOT_NAMES {
+        names.extend(["png", "svg"].map(|ext| format!("{stem}.{ext}")));
+    }
+    names
+}
+
+/// Removes the files an earlier run of `decoy simulate` left in `dir` (only the
+/// names in [`output_file_names`]; any other file stays), so that the directory
+/// describes the new run only.
+fn remove_previous_outputs(dir: &Path) -> Result<(), SimError> {
+    for name in output_file_names() {
+        let path = dir.join(name);
+        match std::fs::remove_file(&path) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(source) => {
+                return Err(SimError::Io {
+                    action: "remove the previous run's",
+                    path,
+                    source,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Why stepping stopped, in words.

@@ -708,3 +708,98 @@ fn straight_initial_state_trails_behind_the_connection_point() {
         assert!((below - 1.0).abs() < 1e-9, "{line}");
     }
 }
+
+/// The rows of `cable.csv` (header checked) as numbers.
+fn cable_rows(dir: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(dir.join("cable.csv")).expect("cable.csv");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some(decoy_sim::CABLE_HEADER));
+    lines
+        .map(|line| line.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn a_run_that_cannot_start_replaces_the_previous_summary() {
+    let steady = Scenario::builtin("steady").unwrap();
+    let options = RunOptions {
+        t_end: Some(0.2),
+        ..reduced("cannot-start")
+    };
+    simulate(&config(), &steady, &options, |_| {}).unwrap();
+    assert!(summary_json(options.out_dir.as_ref().unwrap())["stopped"].is_null());
+
+    // The same directory, a flight condition without a trim.
+    let slow = RunOptions {
+        mach: Some(0.001),
+        ..options.clone()
+    };
+    let e = simulate(&config(), &steady, &slow, |_| {}).unwrap_err();
+    assert!(matches!(e, SimError::NoTrim(_)), "{e:?}");
+    let dir = slow.out_dir.unwrap();
+    let summary = summary_json(&dir);
+    assert_eq!(summary["stopped"]["t_s"].as_f64(), Some(0.0), "{summary}");
+    let reason = summary["stopped"]["reason"].as_str().unwrap();
+    assert!(reason.contains("no trim"), "{reason}");
+    assert!(
+        summary["final"]["tension_connection_N"].is_null(),
+        "{summary}"
+    );
+    assert!(timeseries(&dir).is_empty() && cable_rows(&dir).is_empty());
+}
+
+#[test]
+fn a_rerun_leaves_only_its_own_outputs() {
+    let steady = Scenario::builtin("steady").unwrap();
+    let with_plots = RunOptions {
+        t_end: Some(0.2),
+        plots: true,
+        ..reduced("rerun")
+    };
+    simulate(&config(), &steady, &with_plots, |_| {}).unwrap();
+    let dir = with_plots.out_dir.clone().unwrap();
+    assert!(dir.join("tensions.png").is_file());
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+
+    let without_plots = RunOptions {
+        plots: false,
+        ..with_plots
+    };
+    let run = simulate(&config(), &steady, &without_plots, |_| {}).unwrap();
+    let mut left: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["cable.csv", "notes.txt", "summary.json", "timeseries.csv"],
+        "the old plots are gone, the unknown file stays"
+    );
+    assert_eq!(run.files.len(), 3);
+}
+
+#[test]
+fn a_stopped_run_ends_cable_csv_at_its_last_good_state() {
+    let options = RunOptions {
+        dt: Some(0.3),
+        t_end: Some(10.0),
+        ..reduced("stopped-cable")
+    };
+    let e = simulate(
+        &config(),
+        &Scenario::builtin("steady").unwrap(),
+        &options,
+        |_| {},
+    )
+    .unwrap_err();
+    let SimError::Stopped { t_s, .. } = e else {
+        panic!("expected a stopped run, got {e:?}");
+    };
+    let dir = options.out_dir.unwrap();
+    let rows = cable_rows(&dir);
+    let last = rows.last().unwrap();
+    assert_eq!(last[0], t_s, "the last snapshot is the last good state");
+    assert_eq!(last[1], 16.0, "a whole snapshot, joints 0 to 16");
+    assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
+}
