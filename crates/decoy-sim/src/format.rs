@@ -7,6 +7,17 @@ pub(crate) fn round_time(t: f64) -> f64 {
     (t * 1e9).round() / 1e9
 }
 
+/// Numbers in messages: as written (`0.25`, `300`) in the usual range, in
+/// scientific notation (`1e9`, `1.7976931348623157e308`, `1e-7`) when very large
+/// or very small; `NaN`, `inf`, `-inf` as such.
+pub fn format_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// Times in the CSV files: up to nine decimals, trailing zeros dropped.
 pub fn format_time(t: f64) -> String {
     let s = format!("{t:.9}");
@@ -42,6 +53,18 @@ pub fn describe_layout(layout: &SegmentLayout<f64>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        assert_eq!(format_number(1e9), "1e9");
+        assert_eq!(format_number(f64::MAX), "1.7976931348623157e308");
+        assert_eq!(format_number(-2.5e-7), "-2.5e-7");
+        assert_eq!(format_number(0.25), "0.25");
+        assert_eq!(format_number(20000.0), "20000");
+        assert_eq!(format_number(0.0), "0");
+        assert_eq!(format_number(f64::NAN), "NaN");
+        assert_eq!(format_number(f64::NEG_INFINITY), "-inf");
+    }
 
     #[test]
     fn number_formats() {

@@ -34,6 +34,7 @@ use solver_core::SegmentLayout;
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 
 use crate::error::SimError;
+use crate::format::format_number;
 use crate::options::RunOptions;
 use crate::profile::FlightProfile;
 use crate::recorded::RecordedFlight;
@@ -377,37 +378,55 @@ impl Scenario {
             ));
         }
 
-        // Values: overrides first (already checked), then the file's.
-        let t_end = options.t_end.unwrap_or(self.t_end_s);
-        check_positive(&invalid, "t_end_s", t_end)?;
-        let dt = match options.dt.or(self.dt_s) {
-            Some(dt) => dt,
-            None => config.solver.time_step_host,
+        // Values: overrides first (already checked), then the file's, then the
+        // configuration's; each error names where its value came from.
+        let from_file = |field: &str| Source::new(&origin, field);
+        let from_config = |field: &str| Source::new(&config.source, field);
+        let (t_end, t_end_source) = match options.t_end {
+            Some(t) => (t, Source::new(cli, "--t-end")),
+            None => (self.t_end_s, from_file("t_end_s")),
         };
-        check_positive(&invalid, "dt_s", dt)?;
+        t_end_source.check(check_positive, t_end)?;
+        let (dt, dt_source) = match (options.dt, self.dt_s) {
+            (Some(dt), _) => (dt, Source::new(cli, "--dt")),
+            (None, Some(dt)) => (dt, from_file("dt_s")),
+            (None, None) => (
+                config.solver.time_step_host,
+                from_config("solver.time_step_host"),
+            ),
+        };
+        dt_source.check(check_positive, dt)?;
         if dt > t_end {
-            return Err(SimError::invalid(
-                if options.dt.is_some() || options.t_end.is_some() {
-                    cli
-                } else {
-                    &origin
-                },
-                "time step",
-                format!("{dt} s is longer than the simulated time {t_end} s"),
-            ));
+            return Err(dt_source.invalid(format!(
+                "{} s is longer than the simulated time {} s ({})",
+                format_number(dt),
+                format_number(t_end),
+                t_end_source.describe()
+            )));
         }
         let steps = (t_end / dt * (1.0 - 1e-12)).ceil();
         if steps > MAX_STEPS {
-            return Err(invalid(
-                "t_end_s / dt_s",
-                format!("asks for {steps:e} steps, more than {MAX_STEPS:e}"),
-            ));
+            return Err(t_end_source.invalid(format!(
+                "{} s asks for {steps:.1e} steps of {} s ({}), more than {}",
+                format_number(t_end),
+                format_number(dt),
+                dt_source.describe(),
+                format_number(MAX_STEPS)
+            )));
         }
-        let segments = options
-            .segments
-            .or(self.segments)
-            .unwrap_or(config.solver.segments_host);
-        check_segments(&invalid, "segments", segments)?;
+        let (segments, segments_source) = match (options.segments, self.segments) {
+            (Some(n), _) => (n, Source::new(cli, "--segments")),
+            (None, Some(n)) => (n, from_file("segments")),
+            (None, None) => (
+                config.solver.segments_host,
+                from_config("solver.segments_host"),
+            ),
+        };
+        check_segments(
+            &|f, m| segments_source.invalid_as(f, m),
+            &segments_source.field,
+            segments,
+        )?;
         let grading = options.grading.or(self.grading).unwrap_or(1.0);
         check_grading(&invalid, "grading", grading)?;
         let layout = if grading == 1.0 {
@@ -500,7 +519,11 @@ impl Scenario {
                         } else {
                             "t_end_s"
                         },
-                        format!("{t_end} s is longer than the recording `{file}` ({duration} s)"),
+                        format!(
+                            "{} s is longer than the recording `{file}` ({} s)",
+                            format_number(t_end),
+                            format_number(duration)
+                        ),
                     ));
                 }
                 FlightProfile::Recorded(flight)
@@ -549,6 +572,53 @@ impl Scenario {
     }
 }
 
+/// Where a value of a run comes from (the command line, a scenario file, the
+/// configuration) and under which name, for its error messages.
+struct Source {
+    /// `command line`, the scenario file, or the configuration file.
+    origin: String,
+    /// The flag, key or configuration field.
+    field: String,
+}
+
+impl Source {
+    fn new(origin: &str, field: &str) -> Self {
+        Source {
+            origin: origin.to_owned(),
+            field: field.to_owned(),
+        }
+    }
+
+    /// An [`SimError::InvalidInput`] about this value.
+    fn invalid(&self, message: String) -> SimError {
+        SimError::invalid(&self.origin, &self.field, message)
+    }
+
+    /// The same, for a checker that passes the field back.
+    fn invalid_as(&self, _field: &str, message: String) -> SimError {
+        self.invalid(message)
+    }
+
+    /// Runs `check` on `v` with this source's origin and field.
+    fn check(
+        &self,
+        check: fn(&Invalid<'_>, &str, f64) -> Result<(), SimError>,
+        v: f64,
+    ) -> Result<(), SimError> {
+        check(&|f, m| self.invalid_as(f, m), &self.field, v)
+    }
+
+    /// The field and where it is, in words (`--t-end on the command line`,
+    /// `t_end_s in steady.toml`).
+    fn describe(&self) -> String {
+        if self.origin == "command line" {
+            format!("{} on the command line", self.field)
+        } else {
+            format!("{} in {}", self.field, self.origin)
+        }
+    }
+}
+
 /// Checks the command-line overrides, naming the flags.
 fn check_options(o: &RunOptions) -> Result<(), SimError> {
     let cli = |field: &str, message: String| SimError::invalid("command line", field, message);
@@ -582,7 +652,10 @@ pub(crate) fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result
     if v.is_finite() {
         Ok(())
     } else {
-        Err(invalid(field, format!("must be a finite number, got {v}")))
+        Err(invalid(
+            field,
+            format!("must be a finite number, got {}", format_number(v)),
+        ))
     }
 }
 
@@ -591,7 +664,10 @@ pub(crate) fn check_positive(invalid: &Invalid<'_>, field: &str, v: f64) -> Resu
     if v > 0.0 {
         Ok(())
     } else {
-        Err(invalid(field, format!("must be positive, got {v}")))
+        Err(invalid(
+            field,
+            format!("must be positive, got {}", format_number(v)),
+        ))
     }
 }
 
@@ -600,7 +676,10 @@ fn check_non_negative(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), 
     if v >= 0.0 {
         Ok(())
     } else {
-        Err(invalid(field, format!("must not be negative, got {v}")))
+        Err(invalid(
+            field,
+            format!("must not be negative, got {}", format_number(v)),
+        ))
     }
 }
 
@@ -611,7 +690,7 @@ pub(crate) fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Resu
     } else {
         Err(invalid(
             field,
-            format!("must be between {lo} and {hi} m, got {h}"),
+            format!("must be between {lo} and {hi} m, got {}", format_number(h)),
         ))
     }
 }
@@ -622,7 +701,10 @@ pub(crate) fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(
     } else {
         Err(invalid(
             field,
-            format!("must be above 0 and at most {MAX_MACH}, got {m}"),
+            format!(
+                "must be above 0 and at most {MAX_MACH}, got {}",
+                format_number(m)
+            ),
         ))
     }
 }
@@ -633,7 +715,10 @@ fn check_rate(invalid: &Invalid<'_>, field: &str, w: f64) -> Result<(), SimError
     } else {
         Err(invalid(
             field,
-            format!("must be a rate between -{MAX_RATE_RADPS} and {MAX_RATE_RADPS} rad/s, got {w}"),
+            format!(
+                "must be a rate between -{MAX_RATE_RADPS} and {MAX_RATE_RADPS} rad/s, got {}",
+                format_number(w)
+            ),
         ))
     }
 }
@@ -656,7 +741,10 @@ pub(crate) fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Resul
     } else {
         Err(invalid(
             field,
-            format!("must be a length ratio between {lo} and {hi}, got {r}"),
+            format!(
+                "must be a length ratio between {lo} and {hi}, got {}",
+                format_number(r)
+            ),
         ))
     }
 }

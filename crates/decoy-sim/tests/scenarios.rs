@@ -803,3 +803,73 @@ fn a_stopped_run_ends_cable_csv_at_its_last_good_state() {
     assert_eq!(last[1], 16.0, "a whole snapshot, joints 0 to 16");
     assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
 }
+
+/// `(origin, field, message)` of an [`SimError::InvalidInput`].
+fn invalid_parts(e: &SimError) -> (&str, &str, &str) {
+    match e {
+        SimError::InvalidInput {
+            origin,
+            field,
+            message,
+        } => (origin, field, message),
+        other => panic!("expected an invalid input, got {other:?}"),
+    }
+}
+
+#[test]
+fn errors_name_the_source_of_the_value() {
+    let steady = Scenario::builtin("steady").unwrap();
+    // A flag.
+    let options = RunOptions {
+        t_end: Some(1e9),
+        ..reduced("source-flag")
+    };
+    let e = plan_error(&steady, &options);
+    let (origin, field, message) = invalid_parts(&e);
+    assert_eq!((origin, field), ("command line", "--t-end"), "{e}");
+    assert!(message.starts_with("1e9 s asks for 1.0e12 steps"), "{e}");
+
+    // A configuration field.
+    let mut config = config();
+    config.solver.time_step_host = 20.0;
+    let options = RunOptions {
+        dt: None,
+        ..reduced("source-config")
+    };
+    let e = steady.plan(&config, &options).unwrap_err();
+    let (origin, field, message) = invalid_parts(&e);
+    assert_eq!(
+        (origin, field),
+        (config.source.as_str(), "solver.time_step_host"),
+        "{e}"
+    );
+    assert!(
+        message.contains("t_end_s in built-in scenario steady.toml"),
+        "{e}"
+    );
+
+    // A scenario file's key.
+    let file = Scenario::from_toml(
+        "name = \"x\"\nkind = \"steady\"\naltitude_m = 9000.0\nmach = 0.8\nt_end_s = 1.0\ndt_s = 2.0\n",
+    )
+    .unwrap();
+    let e = plan_error(
+        &file,
+        &RunOptions {
+            dt: None,
+            ..reduced("source-file")
+        },
+    );
+    assert_eq!(invalid_parts(&e).1, "dt_s", "{e}");
+}
+
+#[test]
+fn huge_numbers_are_short_in_messages() {
+    let options = RunOptions {
+        mach: Some(f64::MAX),
+        ..reduced("huge")
+    };
+    let e = plan_error(&Scenario::builtin("steady").unwrap(), &options);
+    let text = e.to_string();
+    assert!(text.ends_with("got 1.7976931348623157e308"), "{text}");
+}

@@ -27,7 +27,7 @@ use serde::Serialize;
 use solver_core::SegmentLayout;
 
 use crate::error::SimError;
-use crate::format::format_value;
+use crate::format::{format_number, format_value};
 use crate::scenario::{check_grading, check_segments};
 
 pub use crate::trim::{CablePoint, TrimPoint, trim_point};
@@ -78,14 +78,14 @@ impl SweepRange {
             if !v.is_finite() {
                 return Err(cli_invalid(
                     flag,
-                    format!("must be a finite number, got {v}"),
+                    format!("must be a finite number, got {}", format_number(v)),
                 ));
             }
         }
         if self.step <= 0.0 {
             return Err(cli_invalid(
                 "--step",
-                format!("must be positive, got {}", self.step),
+                format!("must be positive, got {}", format_number(self.step)),
             ));
         }
         if self.from > self.to {
