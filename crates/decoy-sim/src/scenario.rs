@@ -506,6 +506,7 @@ impl Scenario {
             ScenarioKind::Recorded => {
                 let file = self.file.as_deref().unwrap_or_default();
                 let flight = self.load_recording(file)?;
+                flight.check_mach(config, MAX_MACH)?;
                 let duration = flight.duration();
                 if t_end > duration * (1.0 + 1e-12) {
                     return Err(SimError::invalid(

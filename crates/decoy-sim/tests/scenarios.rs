@@ -873,3 +873,75 @@ fn huge_numbers_are_short_in_messages() {
     let text = e.to_string();
     assert!(text.ends_with("got 1.7976931348623157e308"), "{text}");
 }
+
+/// A recorded-flight CSV of level flight north at 9 km: `(t, speed)` per row,
+/// positions following the velocities exactly (trapezoidal).
+fn level_recording(rows: &[(f64, f64)]) -> String {
+    let mut text = format!("{}\n", RECORDED_COLUMNS.join(","));
+    let mut north = 0.0;
+    for (k, &(t, v)) in rows.iter().enumerate() {
+        if k > 0 {
+            let (t0, v0) = rows[k - 1];
+            north += 0.5 * (v0 + v) * (t - t0);
+        }
+        text.push_str(&format!("{t},{north},0,-9000,{v},0,0,1,0,0,0,0,0,0\n"));
+    }
+    text
+}
+
+#[test]
+fn a_recorded_flight_beyond_mach_2_is_rejected() {
+    let dir = out_dir("mach-3");
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = config();
+    let speed = config.mach_to_speed(9000.0, 3.0).unwrap();
+    let csv = dir.join("fast.csv");
+    std::fs::write(&csv, level_recording(&[(0.0, speed), (1.0, speed)])).unwrap();
+    let toml = dir.join("fast.toml");
+    std::fs::write(
+        &toml,
+        "name = \"fast\"\nkind = \"recorded\"\nfile = \"fast.csv\"\nt_end_s = 1.0\n",
+    )
+    .unwrap();
+    let scenario = Scenario::from_file(&toml).unwrap();
+    let e = scenario.plan(&config, &reduced("mach-3-run")).unwrap_err();
+    let SimError::RecordedFlight {
+        line,
+        column,
+        message,
+        ..
+    } = &e
+    else {
+        panic!("expected a recorded-flight error, got {e:?}");
+    };
+    assert_eq!((*line, column.as_deref()), (Some(2), Some("vn_mps")), "{e}");
+    assert!(
+        message.contains("Mach 3") && message.contains("Mach 2"),
+        "{e}"
+    );
+    assert!(e.is_usage());
+}
+
+#[test]
+fn a_velocity_step_in_a_nanosecond_is_rejected() {
+    let text = level_recording(&[(0.0, 200.0), (1.0, 200.0), (1.000_000_001, 250.0)]);
+    let e = RecordedFlight::parse("step.csv", &text).unwrap_err();
+    let SimError::RecordedAcceleration {
+        line,
+        acceleration_mps2,
+        limit_mps2,
+        ..
+    } = e
+    else {
+        panic!("expected an acceleration error, got {e:?}");
+    };
+    assert_eq!(line, Some(4), "the row of the step");
+    assert!(acceleration_mps2 > 1e9 && limit_mps2 == 100.0);
+    assert!(
+        e.to_string()
+            .starts_with("step.csv, line 4: the acceleration"),
+        "{e}"
+    );
+    // The shipped example stays within the bound.
+    RecordedFlight::parse("example", decoy_sim::RECORDED_EXAMPLE_CSV).unwrap();
+}
