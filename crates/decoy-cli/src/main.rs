@@ -414,14 +414,14 @@ fn simulate_command(
         text.push('\n');
         return Ok(text);
     }
-    Ok(simulate_text(config, &scenario, &run, args.initial))
+    Ok(simulate_text(config, &scenario, &run, args))
 }
 
 fn simulate_text(
     config: &SystemConfig,
     scenario: &Scenario,
     run: &RunOutput,
-    initial: Initial,
+    args: &SimulateArgs,
 ) -> String {
     let r = &run.summary;
     let f = &r.final_values;
@@ -434,10 +434,21 @@ fn simulate_text(
         scenario.origin.describe(),
         config.source
     );
-    if !scenario.description.is_empty() {
+    // The scenario's description states its flight condition and duration: it
+    // is shown only when no flag changed them.
+    let overridden = args.altitude.is_some()
+        || args.mach.is_some()
+        || args.rate.is_some()
+        || args.t_end.is_some();
+    if !scenario.description.is_empty() && !overridden {
         let _ = writeln!(s, "  {}", scenario.description);
     }
-    let initial = match initial {
+    let _ = writeln!(
+        s,
+        "  initial flight condition: {}",
+        run.plan.describe_initial_condition(config)
+    );
+    let initial = match args.initial {
         Initial::Trim => "trim",
         Initial::Straight => "straight cable",
     };

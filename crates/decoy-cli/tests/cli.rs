@@ -602,6 +602,48 @@ fn simulate_human_output_lists_the_files() {
 }
 
 #[test]
+fn simulate_text_shows_the_condition_flown() {
+    let out = sim_out("steady-overridden");
+    let args = |extra: &[&str]| {
+        let mut v = vec![
+            "simulate",
+            "--scenario",
+            "steady",
+            "--segments",
+            "16",
+            "--grading",
+            "1.3",
+            "--no-plots",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        v.extend_from_slice(extra);
+        v.into_iter().map(str::to_owned).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str]| {
+        let owned = args(extra);
+        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
+        stdout_of(&refs)
+    };
+    let text = run(&["--mach", "0.6", "--altitude", "5000", "--t-end", "0.2"]);
+    assert!(
+        !text.contains("Mach 0.8, 9 km"),
+        "the scenario's condition:\n{text}"
+    );
+    assert!(
+        text.contains("initial flight condition: Mach 0.600 at 5000 m"),
+        "{text}"
+    );
+    // Without overrides the description stays, beside the same condition.
+    let text = run(&["--dt", "0.005"]);
+    assert!(text.contains("Mach 0.8, 9 km"), "{text}");
+    assert!(
+        text.contains("initial flight condition: Mach 0.800 at 9000 m"),
+        "{text}"
+    );
+}
+
+#[test]
 fn simulate_errors_are_one_line() {
     let message = error_of(&["simulate", "--scenario", "barrel-roll"], 2);
     assert!(

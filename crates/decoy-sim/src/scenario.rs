@@ -187,6 +187,41 @@ pub struct RunPlan {
     pub lateral_sign: f64,
 }
 
+impl RunPlan {
+    /// The flight condition the run starts from, in words, as flown (after the
+    /// command line's overrides): `Mach 0.600 at 9000 m (182.31 m/s airspeed)`,
+    /// with the rotation rate for a pull-up or turn.
+    pub fn describe_initial_condition(&self, config: &SystemConfig) -> String {
+        let aircraft = self.profile.initial_condition();
+        let altitude = aircraft.altitude();
+        let wind = nalgebra::Vector3::from(config.environment.wind_ned);
+        let airspeed = (aircraft.velocity - wind).norm();
+        let mach = match config.speed_of_sound(altitude) {
+            Ok(a) => format!("Mach {:.3}", airspeed / a),
+            Err(_) => "Mach unknown".to_owned(),
+        };
+        let mut text = format!("{mach} at {altitude:.0} m ({airspeed:.2} m/s airspeed)");
+        match &self.profile {
+            FlightProfile::PullUp(p) => {
+                text.push_str(&format!(
+                    ", flight path rotating at {} rad/s from t = {} s",
+                    format_number(p.rate),
+                    format_number(p.start)
+                ));
+            }
+            FlightProfile::Turn(t) => {
+                text.push_str(&format!(
+                    ", turning at {} rad/s from t = {} s",
+                    format_number(t.rate),
+                    format_number(t.start)
+                ));
+            }
+            _ => {}
+        }
+        text
+    }
+}
+
 impl Scenario {
     /// The names of the shipped scenarios.
     pub fn builtin_names() -> Vec<String> {
