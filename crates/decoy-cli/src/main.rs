@@ -1021,12 +1021,12 @@ fn trim_text(config: &SystemConfig, trim: &LevelTrim) -> String {
     let _ = writeln!(
         s,
         "  CG behind connection point    {:>10.3} m",
-        r.decoy_cg_behind_m
+        r.decoy_cg_behind_connection_m
     );
     let _ = writeln!(
         s,
         "  CG below connection point     {:>10.3} m",
-        r.decoy_cg_below_m
+        r.decoy_cg_below_connection_m
     );
     let _ = writeln!(s, "Cable tension");
     let _ = writeln!(

@@ -98,10 +98,15 @@ pub struct TrimReport {
     /// Tension at the towing point (joint N), N.
     #[serde(rename = "tension_tow_N")]
     pub tension_tow_n: f64,
-    /// Decoy CG behind the connection point along the flight path, m.
+    /// Decoy CG behind the aircraft reference point along the flight path, m (as
+    /// `decoy_cg_behind_m` in every output).
     pub decoy_cg_behind_m: f64,
-    /// Decoy CG below the connection point, m.
+    /// Decoy CG below the flight path, from the aircraft reference point, m.
     pub decoy_cg_below_m: f64,
+    /// Decoy CG behind the cable's connection point along the flight path, m.
+    pub decoy_cg_behind_connection_m: f64,
+    /// Decoy CG below the cable's connection point, m.
+    pub decoy_cg_below_connection_m: f64,
     /// Tension at joints 0 (connection) to N (towing point), N.
     #[serde(rename = "tension_profile_N")]
     pub tension_profile_n: Vec<f64>,
@@ -115,8 +120,10 @@ impl LevelTrim {
             decoy_pitch_deg: p.decoy_pitch_deg,
             tension_connection_n: p.tension_connection_n,
             tension_tow_n: p.tension_tow_n,
-            decoy_cg_behind_m: p.decoy_cg_behind_connection_m,
-            decoy_cg_below_m: p.decoy_cg_below_connection_m,
+            decoy_cg_behind_m: p.decoy_cg_behind_m,
+            decoy_cg_below_m: p.decoy_cg_below_m,
+            decoy_cg_behind_connection_m: p.decoy_cg_behind_connection_m,
+            decoy_cg_below_connection_m: p.decoy_cg_below_connection_m,
             tension_profile_n: p.cable.iter().map(|c| c.tension_n).collect(),
         }
     }
