@@ -158,12 +158,16 @@ impl SettlingSpec {
         Ok(())
     }
 
-    /// The run plan (steady level flight; errors name the flags).
+    /// The run plan (steady level flight; errors name the flags, or the
+    /// configuration's `solver.time_step_host` when the time step is that one).
     pub fn plan(&self, config: &SystemConfig) -> Result<RunPlan, SimError> {
+        // The configuration's time step is left to the scenario's default, so that
+        // an error about it names the configuration, not a flag.
+        let dt = (self.dt != config.solver.time_step_host).then_some(self.dt);
         let options = RunOptions {
             segments: Some(self.segments),
             grading: Some(self.grading),
-            dt: Some(self.dt),
+            dt,
             t_end: Some(self.t_end),
             altitude: Some(self.altitude_m),
             mach: Some(self.mach),
