@@ -126,7 +126,12 @@ pub(crate) fn measured(
         dt: run.dt,
         t_end: run.t_end,
         max_tension_connection_n: statistics.max_tension,
-        t_at_max_tension_s: round_time(statistics.t_at_max),
+        // No measured state (a run that could not start): no time either (`null`).
+        t_at_max_tension_s: if statistics.max_tension.is_finite() {
+            round_time(statistics.t_at_max)
+        } else {
+            f64::NAN
+        },
         pitch_oscillation_amplitude_deg: statistics.pitch_amplitude(),
         settling_time_s: if stopped.is_some() {
             None
