@@ -56,7 +56,7 @@ pub enum SimError {
         message: String,
     },
     /// A recorded flight implies an acceleration no aircraft flies (above
-    /// [`crate::recorded::MAX_RECORDED_ACCELERATION_MPS2`]): a velocity or a time
+    /// `recorded::MAX_RECORDED_ACCELERATION_MPS2`, 100 m/s²): a velocity or a time
     /// of the row is wrong.
     #[error("{file}{}: the acceleration implied between the samples at t = {} s and {} s is {} m/s², more than {limit_mps2} m/s² (about 10 g); is a velocity or a time wrong?", line_suffix(*line), format_number(*t0_s), format_number(*t1_s), format_number(*acceleration_mps2))]
     RecordedAcceleration {

@@ -336,7 +336,7 @@ fn write_snapshot(csv: &mut CsvFile, snapshot: &Snapshot) -> Result<(), SimError
 /// It is fed the outputs of RK4's first stage ([`Solver::step_observed`]), which
 /// evaluates the dynamics at the state before each step anyway, so measuring every
 /// step costs no extra evaluation. The CSV files are optional: an in-memory run
-/// ([`crate::trace()`]) keeps only the samples and snapshots.
+/// (`trace`) keeps only the samples and snapshots.
 pub(crate) struct Recorder<'a> {
     pub path: &'a FlightProfile,
     pub probe: Probe,

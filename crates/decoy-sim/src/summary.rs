@@ -73,7 +73,7 @@ pub struct Summary {
 
 /// The summary of a run measured elsewhere (for example by the firmware in the
 /// loop, `decoy hil`) from its samples, with the same definitions as
-/// [`simulate`]'s: `samples` in time order, every one of them measured (maxima,
+/// `simulate`'s: `samples` in time order, every one of them measured (maxima,
 /// minima, pitch amplitude from `manoeuvre_start` on) and taken as the rows of
 /// `timeseries.csv` (settling time). `stopped` says why such a run ended early.
 #[allow(clippy::too_many_arguments)]
