@@ -33,6 +33,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
 use decoy_hil::hil_run::{HilOptions, HilRun};
 use decoy_hil::qemu::Board;
+use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use progress::Progress;
 use serde::Serialize;
@@ -40,20 +41,14 @@ use solver_core::dense::evaluate_dense;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
 use solver_core::solver::connection_and_air;
 use solver_core::{
-    AircraftState, Derivative, Model, SegmentLayout, Solver, State, Uniform, Vec3, pendulum_energy,
-    pendulum_initial_state, reference_pendulum, trim,
+    AircraftState, Derivative, Model, Solver, State, Uniform, Vec3, pendulum_energy,
+    pendulum_initial_state, reference_pendulum,
 };
 
 /// Segment capacity of the pendulum solver.
 const PENDULUM_CAPACITY: usize = 512;
-/// Segment capacity of the towed-system model used by `trim`.
-const TRIM_CAPACITY: usize = 512;
 /// Stack of the worker thread (the fixed-capacity solver types are large values).
 const WORKER_STACK_BYTES: usize = 64 << 20;
-/// Altitude range accepted by `trim`, m.
-const ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
-/// Largest Mach number accepted by `trim`.
-const MAX_MACH: f64 = 2.0;
 /// Relative tolerance for a sample time to be a whole number of time steps.
 const TIME_MULTIPLE_TOLERANCE: f64 = 1e-9;
 /// Most time steps a pendulum run may take.
@@ -423,14 +418,14 @@ fn simulate_command(
         text.push('\n');
         return Ok(text);
     }
-    Ok(simulate_text(config, &scenario, &run, args.initial))
+    Ok(simulate_text(config, &scenario, &run, args))
 }
 
 fn simulate_text(
     config: &SystemConfig,
     scenario: &Scenario,
     run: &RunOutput,
-    initial: Initial,
+    args: &SimulateArgs,
 ) -> String {
     let r = &run.summary;
     let f = &r.final_values;
@@ -443,10 +438,21 @@ fn simulate_text(
         scenario.origin.describe(),
         config.source
     );
-    if !scenario.description.is_empty() {
+    // The scenario's description states its flight condition and duration: it
+    // is shown only when no flag changed them.
+    let overridden = args.altitude.is_some()
+        || args.mach.is_some()
+        || args.rate.is_some()
+        || args.t_end.is_some();
+    if !scenario.description.is_empty() && !overridden {
         let _ = writeln!(s, "  {}", scenario.description);
     }
-    let initial = match initial {
+    let _ = writeln!(
+        s,
+        "  initial flight condition: {}",
+        run.plan.describe_initial_condition(config)
+    );
+    let initial = match args.initial {
         Initial::Trim => "trim",
         Initial::Straight => "straight cable",
     };
@@ -970,135 +976,37 @@ fn pendulum_text(report: &PendulumReport, method: Method) -> String {
 
 // ---------------------------------------------------------------- trim
 
-#[derive(Serialize, Debug)]
-struct TrimReport {
-    /// Decoy pitch, degrees, positive nose-up.
-    decoy_pitch_deg: f64,
-    /// Tension at the connection point (joint 0), N.
-    #[serde(rename = "tension_connection_N")]
-    tension_connection_n: f64,
-    /// Tension at the towing point (joint N), N.
-    #[serde(rename = "tension_tow_N")]
-    tension_tow_n: f64,
-    /// Decoy CG behind the connection point along the flight path, m.
-    decoy_cg_behind_m: f64,
-    /// Decoy CG below the connection point, m.
-    decoy_cg_below_m: f64,
-    /// Tension at joints 0 (connection) to N (towing point), N.
-    #[serde(rename = "tension_profile_N")]
-    tension_profile_n: Vec<f64>,
-}
-
-fn trim_layout(config: &SystemConfig, args: &TrimArgs) -> Result<SegmentLayout<f64>, Failure> {
-    let count = args.segments.unwrap_or(config.solver.segments_host);
-    if count == 0 {
-        return Err(usage("--segments must be at least 1"));
-    }
-    if count > TRIM_CAPACITY {
-        return Err(usage(format!(
-            "--segments {count}: the solver holds at most {TRIM_CAPACITY} segments"
-        )));
-    }
-    match args.grading {
-        None => Ok(SegmentLayout::Uniform { count }),
-        Some(r) if !r.is_finite() => {
-            Err(usage(format!("--grading must be a finite number, got {r}")))
-        }
-        Some(r) if !(1.0..=10.0).contains(&r) => Err(usage(format!(
-            "--grading must be between 1 and 10, got {r}"
-        ))),
-        Some(1.0) => Ok(SegmentLayout::Uniform { count }),
-        Some(ratio) => Ok(SegmentLayout::Graded { count, ratio }),
-    }
-}
-
 fn trim_command(config: &SystemConfig, args: &TrimArgs, json: bool) -> Result<String, Failure> {
-    let (altitude, mach) = (args.altitude, args.mach);
-    let (h_min, h_max) = ALTITUDE_RANGE_M;
-    if !altitude.is_finite() || !(h_min..=h_max).contains(&altitude) {
-        return Err(usage(format!(
-            "--altitude must be between {h_min} and {h_max} m, got {altitude}"
-        )));
-    }
-    if !mach.is_finite() || mach <= 0.0 || mach > MAX_MACH {
-        return Err(usage(format!(
-            "--mach must be above 0 and at most {MAX_MACH}, got {mach}"
-        )));
-    }
-    let layout = trim_layout(config, args)?;
-    let model: Model<f64, TRIM_CAPACITY> = config.model(layout)?;
-    let n = model.segment_count();
-    let speed = config.mach_to_speed(altitude, mach)?;
-    let aircraft = AircraftState::level(altitude, speed);
-    let state = trim(&model, &aircraft).map_err(|e| solver_failure("no trim", e))?;
-    let mut solver =
-        Box::new(Solver::new(model, state).map_err(|e| solver_failure("trim state rejected", e))?);
-    let path = Uniform { initial: aircraft };
-    let out = solver
-        .outputs(&path)
-        .map_err(|e| solver_failure("evaluation at trim failed", e))?;
-    let decoy = out
-        .decoy()
-        .ok_or_else(|| Failure::Solver("the model has no decoy".into()))?;
-    let connection = out.joint_position(0);
-    let offset = decoy.cg_position - connection;
-    let report = TrimReport {
-        decoy_pitch_deg: decoy.euler.1.to_degrees(),
-        tension_connection_n: out.tension(0),
-        tension_tow_n: out.tension(n),
-        // Level flight heading north (+x): behind is -x, below is +z (NED).
-        decoy_cg_behind_m: -offset.x,
-        decoy_cg_below_m: offset.z,
-        tension_profile_n: (0..=n).map(|j| out.tension(j)).collect(),
+    let request = TrimRequest {
+        altitude: args.altitude,
+        mach: args.mach,
+        segments: args.segments,
+        grading: args.grading,
     };
-    if report.tension_profile_n.iter().any(|t| !t.is_finite()) {
-        return Err(Failure::Solver("trim produced non-finite tensions".into()));
-    }
+    let trim = level_trim(config, &request)?;
     if json {
-        return Ok(to_json(&report));
+        return Ok(to_json(&trim.report()));
     }
-    let lengths = solver.model().lengths().to_vec();
-    Ok(trim_text(
-        config,
-        &report,
-        &TrimCase {
-            altitude,
-            mach,
-            speed,
-            layout,
-            lengths: &lengths,
-        },
-    ))
+    Ok(trim_text(config, &trim))
 }
 
-struct TrimCase<'a> {
-    altitude: f64,
-    mach: f64,
-    speed: f64,
-    layout: SegmentLayout<f64>,
-    lengths: &'a [f64],
-}
-
-fn trim_text(config: &SystemConfig, r: &TrimReport, case: &TrimCase<'_>) -> String {
+fn trim_text(config: &SystemConfig, trim: &LevelTrim) -> String {
     let mut s = String::new();
-    let n = case.lengths.len();
-    let layout = match case.layout {
-        SegmentLayout::Uniform { count } => format!("{count} uniform segments"),
-        SegmentLayout::Graded { count, ratio } => {
-            format!("{count} segments graded {ratio} (short at the decoy)")
-        }
-    };
+    let r = trim.report();
+    let point = &trim.point;
+    let n = point.cable.len() - 1;
+    let layout = describe_layout(&trim.layout);
     let allowable = config.cable.allowable_tension;
     let _ = writeln!(s, "Steady level-flight trim ({})", config.source);
     let _ = writeln!(
         s,
         "  altitude                      {:>10.1} m",
-        case.altitude
+        point.altitude_m
     );
     let _ = writeln!(
         s,
         "  Mach                          {:>10.3}   ({:.2} m/s true airspeed)",
-        case.mach, case.speed
+        point.mach, point.speed_mps
     );
     let _ = writeln!(
         s,
@@ -1119,12 +1027,12 @@ fn trim_text(config: &SystemConfig, r: &TrimReport, case: &TrimCase<'_>) -> Stri
     let _ = writeln!(
         s,
         "  CG behind connection point    {:>10.3} m",
-        r.decoy_cg_behind_m
+        r.decoy_cg_behind_connection_m
     );
     let _ = writeln!(
         s,
         "  CG below connection point     {:>10.3} m",
-        r.decoy_cg_below_m
+        r.decoy_cg_below_connection_m
     );
     let _ = writeln!(s, "Cable tension");
     let _ = writeln!(
@@ -1163,7 +1071,7 @@ fn trim_text(config: &SystemConfig, r: &TrimReport, case: &TrimCase<'_>) -> Stri
     let mut joints: Vec<usize> = (0..=4).map(|k| (k * n + 2) / 4).collect();
     joints.dedup();
     for j in joints {
-        let along = case.lengths[..j].iter().fold(0.0, |a, l| a + l);
+        let along = point.cable[j].along_m;
         let _ = writeln!(s, "  {j:>7}  {along:>16.3}  {:>12.3}", profile[j]);
     }
     s

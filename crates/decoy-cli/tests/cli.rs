@@ -224,6 +224,8 @@ fn trim_json_is_plausible() {
             "tension_tow_N",
             "decoy_cg_behind_m",
             "decoy_cg_below_m",
+            "decoy_cg_behind_connection_m",
+            "decoy_cg_below_connection_m",
             "tension_profile_N",
         ])
     );
@@ -237,9 +239,9 @@ fn trim_json_is_plausible() {
     assert!((200.0..350.0).contains(&connection), "{connection}");
     let pitch = num(&v, "decoy_pitch_deg");
     assert!(pitch.abs() < 20.0, "{pitch}");
-    let behind = num(&v, "decoy_cg_behind_m");
+    let behind = num(&v, "decoy_cg_behind_connection_m");
     assert!(behind > 90.0 && behind < 101.0, "{behind}");
-    let below = num(&v, "decoy_cg_below_m");
+    let below = num(&v, "decoy_cg_below_connection_m");
     assert!(below > 0.0 && below < 50.0, "{below}");
     let profile: Vec<f64> = v["tension_profile_N"]
         .as_array()
@@ -334,7 +336,7 @@ fn config_file_is_used_and_checked() {
         "40",
         "--json",
     ]);
-    let behind = num(&v, "decoy_cg_behind_m");
+    let behind = num(&v, "decoy_cg_behind_connection_m");
     assert!(behind > 70.0 && behind < 81.0, "{behind}");
 
     let bad = config_copy("bad", |t| t.replacen("mass = 4.0 ", "mass = -4.0 ", 1));
@@ -599,6 +601,94 @@ fn simulate_human_output_lists_the_files() {
         assert!(text.contains(expected), "`{expected}` missing in:\n{text}");
     }
     assert!(!text.contains("tensions.png"), "--no-plots drew plots");
+}
+
+#[test]
+fn simulate_text_shows_the_condition_flown() {
+    let out = sim_out("steady-overridden");
+    let args = |extra: &[&str]| {
+        let mut v = vec![
+            "simulate",
+            "--scenario",
+            "steady",
+            "--segments",
+            "16",
+            "--grading",
+            "1.3",
+            "--no-plots",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        v.extend_from_slice(extra);
+        v.into_iter().map(str::to_owned).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str]| {
+        let owned = args(extra);
+        let refs: Vec<&str> = owned.iter().map(String::as_str).collect();
+        stdout_of(&refs)
+    };
+    let text = run(&["--mach", "0.6", "--altitude", "5000", "--t-end", "0.2"]);
+    assert!(
+        !text.contains("Mach 0.8, 9 km"),
+        "the scenario's condition:\n{text}"
+    );
+    assert!(
+        text.contains("initial flight condition: Mach 0.600 at 5000 m"),
+        "{text}"
+    );
+    // Without overrides the description stays, beside the same condition.
+    let text = run(&["--dt", "0.005"]);
+    assert!(text.contains("Mach 0.8, 9 km"), "{text}");
+    assert!(
+        text.contains("initial flight condition: Mach 0.800 at 9000 m"),
+        "{text}"
+    );
+}
+
+/// One output contract: a key means the same quantity in `decoy trim` and in
+/// `decoy simulate`'s summary (a steady run from trim ends at the trim).
+#[test]
+fn trim_and_simulate_keys_mean_the_same() {
+    let layout = ["--segments", "16", "--grading", "1.3"];
+    let mut trim_args = vec!["trim", "--altitude", "9000", "--mach", "0.8", "--json"];
+    trim_args.extend_from_slice(&layout);
+    let trim = json(&trim_args);
+    let out = sim_out("contract");
+    let mut sim_args = vec![
+        "simulate",
+        "--scenario",
+        "steady",
+        "--t-end",
+        "0.01",
+        "--no-plots",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    sim_args.extend_from_slice(&layout);
+    let summary = json(&sim_args);
+    let last = summary["final"].as_object().unwrap();
+    let mut shared = 0;
+    for (key, value) in trim.as_object().unwrap() {
+        if let (Some(a), Some(b)) = (value.as_f64(), last.get(key).and_then(Value::as_f64)) {
+            assert!(
+                (a - b).abs() < 1e-3 * (1.0 + b.abs()),
+                "{key}: trim {a}, simulate {b}"
+            );
+            shared += 1;
+        }
+    }
+    assert!(
+        shared >= 4,
+        "trim and simulate share the CG and tension keys"
+    );
+    // The connection point is 4 m behind and 1 m below the reference point.
+    let behind = num(&trim, "decoy_cg_behind_m") - num(&trim, "decoy_cg_behind_connection_m");
+    let below = num(&trim, "decoy_cg_below_m") - num(&trim, "decoy_cg_below_connection_m");
+    assert!(
+        (behind - 4.0).abs() < 1e-9 && (below - 1.0).abs() < 1e-9,
+        "{behind}, {below}"
+    );
 }
 
 #[test]

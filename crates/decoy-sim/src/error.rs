@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use solver_core::{SolveError, TrimError};
 
+use crate::format::format_number;
+
 /// Why [`crate::simulate`] (or loading a scenario) failed. Every message is one
 /// line that names the file, the field, the line or the time concerned.
 ///
@@ -52,6 +54,24 @@ pub enum SimError {
         column: Option<String>,
         /// What is wrong.
         message: String,
+    },
+    /// A recorded flight implies an acceleration no aircraft flies (above
+    /// `recorded::MAX_RECORDED_ACCELERATION_MPS2`, 100 m/s²): a velocity or a time
+    /// of the row is wrong.
+    #[error("{file}{}: the acceleration implied between the samples at t = {} s and {} s is {} m/s², more than {limit_mps2} m/s² (about 10 g); is a velocity or a time wrong?", line_suffix(*line), format_number(*t0_s), format_number(*t1_s), format_number(*acceleration_mps2))]
+    RecordedAcceleration {
+        /// The CSV file.
+        file: String,
+        /// 1-based line of the later sample of the interval.
+        line: Option<usize>,
+        /// Time of the earlier sample, s.
+        t0_s: f64,
+        /// Time of the later sample, s.
+        t1_s: f64,
+        /// The largest acceleration on the interval, m/s².
+        acceleration_mps2: f64,
+        /// The bound, m/s².
+        limit_mps2: f64,
     },
     /// The system configuration is unusable for this run (for example the segment
     /// count exceeds the solver's capacity).
@@ -132,6 +152,7 @@ impl SimError {
                 | SimError::ScenarioSyntax { .. }
                 | SimError::InvalidInput { .. }
                 | SimError::RecordedFlight { .. }
+                | SimError::RecordedAcceleration { .. }
                 | SimError::Read { .. }
                 | SimError::Config(_)
         )

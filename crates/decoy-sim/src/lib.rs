@@ -31,6 +31,26 @@
 //! positive to the right, so that it is always positive toward the outside of the
 //! scenario's turn.
 //!
+//! ## Layering
+//!
+//! Each module uses only modules on the lines above its own, so the module graph
+//! has no cycle:
+//!
+//! 1. `error`, `format` (number and layout formats), `capacity` (the solver
+//!    capacity chosen from the segment count), `geometry`, `options`
+//!    ([`RunOptions`]);
+//! 2. `recorded` (recorded flights), `profile` ([`FlightProfile`]);
+//! 3. `scenario` (scenario files and [`RunPlan`]), `trim` (the steady trim of
+//!    one flight condition, `decoy trim`);
+//! 4. `record` (the probe, running statistics and CSV rows of a run), then
+//!    `summary` ([`Summary`], [`summarize`]);
+//! 5. `plots`;
+//! 6. `run` ([`simulate`]: the integration loop and the output directory);
+//! 7. `trace` (a run in memory);
+//! 8. `sweep` (`mod.rs`: ranges and table/plot helpers; `steady`, `settling`),
+//!    then `study`, then `report` (`mod.rs`: the entry point; `data`, `claims`,
+//!    `figures`, `render`).
+//!
 //! ```no_run
 //! use decoy_config::SystemConfig;
 //! use decoy_sim::{RunOptions, Scenario, simulate};
@@ -43,28 +63,35 @@
 //! ```
 #![deny(missing_docs)]
 
+mod capacity;
 pub mod error;
+pub mod format;
 pub mod geometry;
+pub mod options;
 mod plots;
 pub mod profile;
+pub mod record;
 pub mod recorded;
 pub mod report;
 pub mod run;
 pub mod scenario;
 pub mod study;
+pub mod summary;
 pub mod sweep;
 pub mod trace;
+pub mod trim;
 
 pub use error::SimError;
+pub use format::{describe_layout, format_time, format_value};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
+pub use options::{InitialState, RunOptions};
 pub use plots::{COMPARISON_PLOT_NAMES, PLOT_NAMES, write_comparison_plots};
 pub use profile::FlightProfile;
+pub use record::{CABLE_HEADER, Sample, Snapshot, TIMESERIES_HEADER};
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
-pub use run::{
-    CABLE_HEADER, FinalValues, InitialState, RunOptions, RunOutput, Sample, Snapshot, StoppedAt,
-    Summary, TIMESERIES_HEADER, describe_layout, format_time, format_value, simulate, summarize,
-};
+pub use run::{RunOutput, output_file_names, simulate};
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,
 };
+pub use summary::{FinalValues, StoppedAt, Summary, summarize};
 pub use trace::{Start, Trace, TraceOptions, pitched_attitude, trace};

@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use decoy_plots::{Aspect, Plot, PlotError, Series, write_plot, write_stacked};
 
 use crate::error::SimError;
-use crate::run::{PLOTTED_SNAPSHOTS, Recorded, Sample, Snapshot, format_time};
+use crate::format::format_time;
+use crate::record::{PLOTTED_SNAPSHOTS, Recorded, Sample, Snapshot};
 use crate::scenario::RunPlan;
 
 /// The plots' file stems, in the order they are written.

@@ -17,7 +17,11 @@
 //! positions must follow the velocities: over each interval the mean of the two
 //! recorded velocities must match the position difference over the time
 //! difference within 1 m/s + 1 % of the speed (this catches feet for metres, a
-//! sign or a column swap; smooth data match it to millimetres per second).
+//! sign or a column swap; smooth data match it to millimetres per second). The
+//! accelerations the interpolation implies must stay within
+//! [`MAX_RECORDED_ACCELERATION_MPS2`] (a typed error,
+//! [`crate::SimError::RecordedAcceleration`], naming the row), and a scenario
+//! checks that the airspeed stays within Mach 2 ([`RecordedFlight::check_mach`]).
 //!
 //! # Interpolation
 //!
@@ -38,7 +42,10 @@
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use solver_core::{AircraftState, FlightPath, Real};
 
+use decoy_config::SystemConfig;
+
 use crate::error::SimError;
+use crate::format::format_number;
 
 /// The recorded-flight CSV header, in order.
 pub const RECORDED_COLUMNS: [&str; 14] = [
@@ -54,6 +61,9 @@ const CONSISTENCY_ABSOLUTE_MPS: f64 = 1.0;
 const CONSISTENCY_RELATIVE: f64 = 0.01;
 /// Altitude range of the atmosphere model, m.
 const ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
+/// Largest acceleration a recording may imply, m/s² (about 10 g): the cubic
+/// Hermite interpolation's acceleration at either end of every interval.
+pub const MAX_RECORDED_ACCELERATION_MPS2: f64 = 100.0;
 
 /// One sample of a recorded flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -108,6 +118,10 @@ impl RecordedSample {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RecordedFlight {
     samples: Vec<RecordedSample>,
+    /// The file the samples came from, for messages.
+    file: String,
+    /// The line of each sample (the sample's index for samples from memory).
+    lines: Vec<usize>,
 }
 
 /// Where a row came from, for messages.
@@ -218,7 +232,11 @@ impl RecordedFlight {
             ));
         }
         Self::validate(&samples, |row| Some(lines[row]), &err)?;
-        Ok(RecordedFlight { samples })
+        Ok(RecordedFlight {
+            samples,
+            file: file.to_owned(),
+            lines,
+        })
     }
 
     /// A recording from samples already in memory (validated as a parsed file
@@ -231,7 +249,12 @@ impl RecordedFlight {
             }
         }
         Self::validate(&samples, Some, &err)?;
-        Ok(RecordedFlight { samples })
+        let lines = (0..samples.len()).collect();
+        Ok(RecordedFlight {
+            samples,
+            file: err.file.to_owned(),
+            lines,
+        })
     }
 
     fn validate(
@@ -282,6 +305,49 @@ impl RecordedFlight {
                         "the position does not follow the velocities: the change of position since the previous sample over its time is {mismatch:.3} m/s from the mean recorded velocity (more than {tolerance:.3} m/s); are positions in m, velocities in m/s, both NED?"
                     ),
                 ));
+            }
+            // The Hermite curve's acceleration is linear on the interval: its
+            // largest magnitude is at one of the ends,
+            // a(0) = (6 dp - h (4 v_a + 2 v_b)) / h², a(1) = (-6 dp + h (2 v_a + 4 v_b)) / h².
+            let dp = b.position - a.position;
+            let start = (dp * 6.0 - (a.velocity * 4.0 + b.velocity * 2.0) * h) / (h * h);
+            let end = (dp * -6.0 + (a.velocity * 2.0 + b.velocity * 4.0) * h) / (h * h);
+            let acceleration = start.norm().max(end.norm());
+            if acceleration.is_nan() || acceleration > MAX_RECORDED_ACCELERATION_MPS2 {
+                return Err(SimError::RecordedAcceleration {
+                    file: err.file.to_owned(),
+                    line: line(row),
+                    t0_s: a.time,
+                    t1_s: b.time,
+                    acceleration_mps2: acceleration,
+                    limit_mps2: MAX_RECORDED_ACCELERATION_MPS2,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that every sample flies within Mach `max_mach` through the air of
+    /// `config` (its atmosphere and wind), the envelope `--mach` and the scenario
+    /// files have; the error names the sample's line.
+    pub fn check_mach(&self, config: &SystemConfig, max_mach: f64) -> Result<(), SimError> {
+        let wind = Vector3::from(config.environment.wind_ned);
+        for (s, &line) in self.samples.iter().zip(&self.lines) {
+            let altitude = -s.position.z;
+            let airspeed = (s.velocity - wind).norm();
+            let mach = airspeed / config.speed_of_sound(altitude)?;
+            if mach.is_nan() || mach > max_mach {
+                return Err(SimError::RecordedFlight {
+                    file: self.file.clone(),
+                    line: Some(line),
+                    column: Some("vn_mps".to_owned()),
+                    message: format!(
+                        "the airspeed {} m/s at {} m is Mach {}, above Mach {max_mach} (the envelope of --mach and of the scenario files)",
+                        format_number(airspeed),
+                        format_number(altitude),
+                        format_number((mach * 1000.0).round() / 1000.0)
+                    ),
+                });
             }
         }
         Ok(())

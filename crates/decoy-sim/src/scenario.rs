@@ -34,9 +34,10 @@ use solver_core::SegmentLayout;
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 
 use crate::error::SimError;
+use crate::format::format_number;
+use crate::options::RunOptions;
 use crate::profile::FlightProfile;
 use crate::recorded::RecordedFlight;
-use crate::run::RunOptions;
 
 /// The shipped scenarios: name and TOML text (embedded from `scenarios/`).
 pub const BUILTIN_SCENARIOS: [(&str, &str); 5] = [
@@ -56,8 +57,7 @@ pub const RECORDED_EXAMPLE_CSV: &str = include_str!("../../../scenarios/recorded
 /// The file name the built-in `recorded` scenario refers to.
 pub const RECORDED_EXAMPLE_NAME: &str = "recorded-example.csv";
 
-/// Capacity of the solver's segment arrays: the largest segment count a run may use.
-pub const MAX_SEGMENTS: usize = 512;
+pub use crate::capacity::MAX_SEGMENTS;
 /// Altitude range accepted, m (the ISA 1976 model's range above sea level).
 pub const ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
 /// Largest Mach number accepted.
@@ -185,6 +185,41 @@ pub struct RunPlan {
     /// path, -1 when positive to the right (left turns, so that the outside of the
     /// turn is positive).
     pub lateral_sign: f64,
+}
+
+impl RunPlan {
+    /// The flight condition the run starts from, in words, as flown (after the
+    /// command line's overrides): `Mach 0.600 at 9000 m (182.31 m/s airspeed)`,
+    /// with the rotation rate for a pull-up or turn.
+    pub fn describe_initial_condition(&self, config: &SystemConfig) -> String {
+        let aircraft = self.profile.initial_condition();
+        let altitude = aircraft.altitude();
+        let wind = nalgebra::Vector3::from(config.environment.wind_ned);
+        let airspeed = (aircraft.velocity - wind).norm();
+        let mach = match config.speed_of_sound(altitude) {
+            Ok(a) => format!("Mach {:.3}", airspeed / a),
+            Err(_) => "Mach unknown".to_owned(),
+        };
+        let mut text = format!("{mach} at {altitude:.0} m ({airspeed:.2} m/s airspeed)");
+        match &self.profile {
+            FlightProfile::PullUp(p) => {
+                text.push_str(&format!(
+                    ", flight path rotating at {} rad/s from t = {} s",
+                    format_number(p.rate),
+                    format_number(p.start)
+                ));
+            }
+            FlightProfile::Turn(t) => {
+                text.push_str(&format!(
+                    ", turning at {} rad/s from t = {} s",
+                    format_number(t.rate),
+                    format_number(t.start)
+                ));
+            }
+            _ => {}
+        }
+        text
+    }
 }
 
 impl Scenario {
@@ -378,37 +413,55 @@ impl Scenario {
             ));
         }
 
-        // Values: overrides first (already checked), then the file's.
-        let t_end = options.t_end.unwrap_or(self.t_end_s);
-        check_positive(&invalid, "t_end_s", t_end)?;
-        let dt = match options.dt.or(self.dt_s) {
-            Some(dt) => dt,
-            None => config.solver.time_step_host,
+        // Values: overrides first (already checked), then the file's, then the
+        // configuration's; each error names where its value came from.
+        let from_file = |field: &str| Source::new(&origin, field);
+        let from_config = |field: &str| Source::new(&config.source, field);
+        let (t_end, t_end_source) = match options.t_end {
+            Some(t) => (t, Source::new(cli, "--t-end")),
+            None => (self.t_end_s, from_file("t_end_s")),
         };
-        check_positive(&invalid, "dt_s", dt)?;
+        t_end_source.check(check_positive, t_end)?;
+        let (dt, dt_source) = match (options.dt, self.dt_s) {
+            (Some(dt), _) => (dt, Source::new(cli, "--dt")),
+            (None, Some(dt)) => (dt, from_file("dt_s")),
+            (None, None) => (
+                config.solver.time_step_host,
+                from_config("solver.time_step_host"),
+            ),
+        };
+        dt_source.check(check_positive, dt)?;
         if dt > t_end {
-            return Err(SimError::invalid(
-                if options.dt.is_some() || options.t_end.is_some() {
-                    cli
-                } else {
-                    &origin
-                },
-                "time step",
-                format!("{dt} s is longer than the simulated time {t_end} s"),
-            ));
+            return Err(dt_source.invalid(format!(
+                "{} s is longer than the simulated time {} s ({})",
+                format_number(dt),
+                format_number(t_end),
+                t_end_source.describe()
+            )));
         }
         let steps = (t_end / dt * (1.0 - 1e-12)).ceil();
         if steps > MAX_STEPS {
-            return Err(invalid(
-                "t_end_s / dt_s",
-                format!("asks for {steps:e} steps, more than {MAX_STEPS:e}"),
-            ));
+            return Err(t_end_source.invalid(format!(
+                "{} s asks for {steps:.1e} steps of {} s ({}), more than {}",
+                format_number(t_end),
+                format_number(dt),
+                dt_source.describe(),
+                format_number(MAX_STEPS)
+            )));
         }
-        let segments = options
-            .segments
-            .or(self.segments)
-            .unwrap_or(config.solver.segments_host);
-        check_segments(&invalid, "segments", segments)?;
+        let (segments, segments_source) = match (options.segments, self.segments) {
+            (Some(n), _) => (n, Source::new(cli, "--segments")),
+            (None, Some(n)) => (n, from_file("segments")),
+            (None, None) => (
+                config.solver.segments_host,
+                from_config("solver.segments_host"),
+            ),
+        };
+        check_segments(
+            &|f, m| segments_source.invalid_as(f, m),
+            &segments_source.field,
+            segments,
+        )?;
         let grading = options.grading.or(self.grading).unwrap_or(1.0);
         check_grading(&invalid, "grading", grading)?;
         let layout = if grading == 1.0 {
@@ -488,6 +541,7 @@ impl Scenario {
             ScenarioKind::Recorded => {
                 let file = self.file.as_deref().unwrap_or_default();
                 let flight = self.load_recording(file)?;
+                flight.check_mach(config, MAX_MACH)?;
                 let duration = flight.duration();
                 if t_end > duration * (1.0 + 1e-12) {
                     return Err(SimError::invalid(
@@ -501,7 +555,11 @@ impl Scenario {
                         } else {
                             "t_end_s"
                         },
-                        format!("{t_end} s is longer than the recording `{file}` ({duration} s)"),
+                        format!(
+                            "{} s is longer than the recording `{file}` ({} s)",
+                            format_number(t_end),
+                            format_number(duration)
+                        ),
                     ));
                 }
                 FlightProfile::Recorded(flight)
@@ -550,6 +608,53 @@ impl Scenario {
     }
 }
 
+/// Where a value of a run comes from (the command line, a scenario file, the
+/// configuration) and under which name, for its error messages.
+struct Source {
+    /// `command line`, the scenario file, or the configuration file.
+    origin: String,
+    /// The flag, key or configuration field.
+    field: String,
+}
+
+impl Source {
+    fn new(origin: &str, field: &str) -> Self {
+        Source {
+            origin: origin.to_owned(),
+            field: field.to_owned(),
+        }
+    }
+
+    /// An [`SimError::InvalidInput`] about this value.
+    fn invalid(&self, message: String) -> SimError {
+        SimError::invalid(&self.origin, &self.field, message)
+    }
+
+    /// The same, for a checker that passes the field back.
+    fn invalid_as(&self, _field: &str, message: String) -> SimError {
+        self.invalid(message)
+    }
+
+    /// Runs `check` on `v` with this source's origin and field.
+    fn check(
+        &self,
+        check: fn(&Invalid<'_>, &str, f64) -> Result<(), SimError>,
+        v: f64,
+    ) -> Result<(), SimError> {
+        check(&|f, m| self.invalid_as(f, m), &self.field, v)
+    }
+
+    /// The field and where it is, in words (`--t-end on the command line`,
+    /// `t_end_s in steady.toml`).
+    fn describe(&self) -> String {
+        if self.origin == "command line" {
+            format!("{} on the command line", self.field)
+        } else {
+            format!("{} in {}", self.field, self.origin)
+        }
+    }
+}
+
 /// Checks the command-line overrides, naming the flags.
 fn check_options(o: &RunOptions) -> Result<(), SimError> {
     let cli = |field: &str, message: String| SimError::invalid("command line", field, message);
@@ -583,7 +688,10 @@ pub(crate) fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result
     if v.is_finite() {
         Ok(())
     } else {
-        Err(invalid(field, format!("must be a finite number, got {v}")))
+        Err(invalid(
+            field,
+            format!("must be a finite number, got {}", format_number(v)),
+        ))
     }
 }
 
@@ -592,7 +700,10 @@ pub(crate) fn check_positive(invalid: &Invalid<'_>, field: &str, v: f64) -> Resu
     if v > 0.0 {
         Ok(())
     } else {
-        Err(invalid(field, format!("must be positive, got {v}")))
+        Err(invalid(
+            field,
+            format!("must be positive, got {}", format_number(v)),
+        ))
     }
 }
 
@@ -601,7 +712,10 @@ fn check_non_negative(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), 
     if v >= 0.0 {
         Ok(())
     } else {
-        Err(invalid(field, format!("must not be negative, got {v}")))
+        Err(invalid(
+            field,
+            format!("must not be negative, got {}", format_number(v)),
+        ))
     }
 }
 
@@ -612,7 +726,7 @@ pub(crate) fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Resu
     } else {
         Err(invalid(
             field,
-            format!("must be between {lo} and {hi} m, got {h}"),
+            format!("must be between {lo} and {hi} m, got {}", format_number(h)),
         ))
     }
 }
@@ -623,7 +737,10 @@ pub(crate) fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(
     } else {
         Err(invalid(
             field,
-            format!("must be above 0 and at most {MAX_MACH}, got {m}"),
+            format!(
+                "must be above 0 and at most {MAX_MACH}, got {}",
+                format_number(m)
+            ),
         ))
     }
 }
@@ -634,7 +751,10 @@ fn check_rate(invalid: &Invalid<'_>, field: &str, w: f64) -> Result<(), SimError
     } else {
         Err(invalid(
             field,
-            format!("must be a rate between -{MAX_RATE_RADPS} and {MAX_RATE_RADPS} rad/s, got {w}"),
+            format!(
+                "must be a rate between -{MAX_RATE_RADPS} and {MAX_RATE_RADPS} rad/s, got {}",
+                format_number(w)
+            ),
         ))
     }
 }
@@ -657,7 +777,10 @@ pub(crate) fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Resul
     } else {
         Err(invalid(
             field,
-            format!("must be a length ratio between {lo} and {hi}, got {r}"),
+            format!(
+                "must be a length ratio between {lo} and {hi}, got {}",
+                format_number(r)
+            ),
         ))
     }
 }

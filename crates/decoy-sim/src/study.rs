@@ -23,7 +23,7 @@ use serde::Serialize;
 use solver_core::SegmentLayout;
 
 use crate::error::SimError;
-use crate::run::RunOptions;
+use crate::options::RunOptions;
 use crate::scenario::Scenario;
 use crate::sweep::{
     create_dir, csv_row, draw, layout_parts, plot, trim_number, trim_point, write_text,
@@ -490,7 +490,7 @@ pub fn discretisation_study(
         let row = acceleration_run(config, *l, spec.dt, spec.max_halvings, |f| {
             progress(done + weight * f.min(1.0))
         })
-        .map_err(|e| e.at(crate::run::describe_layout(l)))?;
+        .map_err(|e| e.at(crate::format::describe_layout(l)))?;
         done += weight;
         runs.push((*l, row));
     }
@@ -504,7 +504,7 @@ pub fn discretisation_study(
     let metrics = |l: &SegmentLayout<f64>| -> Result<ModelMetrics, SimError> {
         let row = find(l);
         let trimmed = trim_point(config, *l, spec.trim_altitude_m, spec.trim_mach)
-            .map_err(|e| e.at(crate::run::describe_layout(l)))?;
+            .map_err(|e| e.at(crate::format::describe_layout(l)))?;
         Ok(ModelMetrics {
             segments: row.segments,
             grading: row.grading,

@@ -13,14 +13,13 @@ use decoy_config::SystemConfig;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use solver_core::{Model, Solver, State, trim};
 
+use crate::capacity::with_capacity;
 use crate::error::SimError;
-use crate::run::{
-    Recorder, Sample, Snapshot, StoppedAt, integrate, probe, round_time, straight_state,
-};
-use crate::scenario::{MAX_SEGMENTS, RunPlan};
-
-/// Capacity of the model for small segment counts (as [`crate::simulate`]).
-const SMALL_CAPACITY: usize = 32;
+use crate::format::round_time;
+use crate::record::{Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample, Snapshot, probe};
+use crate::run::{integrate, straight_state};
+use crate::scenario::RunPlan;
+use crate::summary::StoppedAt;
 
 /// The state a traced run starts from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -57,8 +56,8 @@ impl Default for TraceOptions {
         TraceOptions {
             start: Start::Trim,
             pitch_offset_deg: 0.0,
-            sample_interval_s: crate::run::SAMPLE_INTERVAL_S,
-            snapshot_interval_s: crate::run::SNAPSHOT_INTERVAL_S,
+            sample_interval_s: SAMPLE_INTERVAL_S,
+            snapshot_interval_s: SNAPSHOT_INTERVAL_S,
         }
     }
 }
@@ -114,11 +113,7 @@ pub fn trace(
     options: &TraceOptions,
     progress: impl FnMut(f64),
 ) -> Result<Trace, SimError> {
-    if plan.layout.count() <= SMALL_CAPACITY {
-        trace_with::<SMALL_CAPACITY>(config, plan, options, progress)
-    } else {
-        trace_with::<MAX_SEGMENTS>(config, plan, options, progress)
-    }
+    with_capacity!(plan.layout.count(), N => trace_with::<N>(config, plan, options, progress))
 }
 
 /// The decoy attitude `[w, x, y, z]` pitched nose-up by `pitch_deg` about its body

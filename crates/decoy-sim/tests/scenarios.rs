@@ -708,3 +708,240 @@ fn straight_initial_state_trails_behind_the_connection_point() {
         assert!((below - 1.0).abs() < 1e-9, "{line}");
     }
 }
+
+/// The rows of `cable.csv` (header checked) as numbers.
+fn cable_rows(dir: &Path) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(dir.join("cable.csv")).expect("cable.csv");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some(decoy_sim::CABLE_HEADER));
+    lines
+        .map(|line| line.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn a_run_that_cannot_start_replaces_the_previous_summary() {
+    let steady = Scenario::builtin("steady").unwrap();
+    let options = RunOptions {
+        t_end: Some(0.2),
+        ..reduced("cannot-start")
+    };
+    simulate(&config(), &steady, &options, |_| {}).unwrap();
+    assert!(summary_json(options.out_dir.as_ref().unwrap())["stopped"].is_null());
+
+    // The same directory, a flight condition without a trim.
+    let slow = RunOptions {
+        mach: Some(0.001),
+        ..options.clone()
+    };
+    let e = simulate(&config(), &steady, &slow, |_| {}).unwrap_err();
+    assert!(matches!(e, SimError::NoTrim(_)), "{e:?}");
+    let dir = slow.out_dir.unwrap();
+    let summary = summary_json(&dir);
+    assert_eq!(summary["stopped"]["t_s"].as_f64(), Some(0.0), "{summary}");
+    let reason = summary["stopped"]["reason"].as_str().unwrap();
+    assert!(reason.contains("no trim"), "{reason}");
+    assert!(
+        summary["final"]["tension_connection_N"].is_null(),
+        "{summary}"
+    );
+    assert!(timeseries(&dir).is_empty() && cable_rows(&dir).is_empty());
+}
+
+#[test]
+fn a_rerun_leaves_only_its_own_outputs() {
+    let steady = Scenario::builtin("steady").unwrap();
+    let with_plots = RunOptions {
+        t_end: Some(0.2),
+        plots: true,
+        ..reduced("rerun")
+    };
+    simulate(&config(), &steady, &with_plots, |_| {}).unwrap();
+    let dir = with_plots.out_dir.clone().unwrap();
+    assert!(dir.join("tensions.png").is_file());
+    std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+
+    let without_plots = RunOptions {
+        plots: false,
+        ..with_plots
+    };
+    let run = simulate(&config(), &steady, &without_plots, |_| {}).unwrap();
+    let mut left: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["cable.csv", "notes.txt", "summary.json", "timeseries.csv"],
+        "the old plots are gone, the unknown file stays"
+    );
+    assert_eq!(run.files.len(), 3);
+}
+
+#[test]
+fn a_stopped_run_ends_cable_csv_at_its_last_good_state() {
+    let options = RunOptions {
+        dt: Some(0.3),
+        t_end: Some(10.0),
+        ..reduced("stopped-cable")
+    };
+    let e = simulate(
+        &config(),
+        &Scenario::builtin("steady").unwrap(),
+        &options,
+        |_| {},
+    )
+    .unwrap_err();
+    let SimError::Stopped { t_s, .. } = e else {
+        panic!("expected a stopped run, got {e:?}");
+    };
+    let dir = options.out_dir.unwrap();
+    let rows = cable_rows(&dir);
+    let last = rows.last().unwrap();
+    assert_eq!(last[0], t_s, "the last snapshot is the last good state");
+    assert_eq!(last[1], 16.0, "a whole snapshot, joints 0 to 16");
+    assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
+}
+
+/// `(origin, field, message)` of an [`SimError::InvalidInput`].
+fn invalid_parts(e: &SimError) -> (&str, &str, &str) {
+    match e {
+        SimError::InvalidInput {
+            origin,
+            field,
+            message,
+        } => (origin, field, message),
+        other => panic!("expected an invalid input, got {other:?}"),
+    }
+}
+
+#[test]
+fn errors_name_the_source_of_the_value() {
+    let steady = Scenario::builtin("steady").unwrap();
+    // A flag.
+    let options = RunOptions {
+        t_end: Some(1e9),
+        ..reduced("source-flag")
+    };
+    let e = plan_error(&steady, &options);
+    let (origin, field, message) = invalid_parts(&e);
+    assert_eq!((origin, field), ("command line", "--t-end"), "{e}");
+    assert!(message.starts_with("1e9 s asks for 1.0e12 steps"), "{e}");
+
+    // A configuration field.
+    let mut config = config();
+    config.solver.time_step_host = 20.0;
+    let options = RunOptions {
+        dt: None,
+        ..reduced("source-config")
+    };
+    let e = steady.plan(&config, &options).unwrap_err();
+    let (origin, field, message) = invalid_parts(&e);
+    assert_eq!(
+        (origin, field),
+        (config.source.as_str(), "solver.time_step_host"),
+        "{e}"
+    );
+    assert!(
+        message.contains("t_end_s in built-in scenario steady.toml"),
+        "{e}"
+    );
+
+    // A scenario file's key.
+    let file = Scenario::from_toml(
+        "name = \"x\"\nkind = \"steady\"\naltitude_m = 9000.0\nmach = 0.8\nt_end_s = 1.0\ndt_s = 2.0\n",
+    )
+    .unwrap();
+    let e = plan_error(
+        &file,
+        &RunOptions {
+            dt: None,
+            ..reduced("source-file")
+        },
+    );
+    assert_eq!(invalid_parts(&e).1, "dt_s", "{e}");
+}
+
+#[test]
+fn huge_numbers_are_short_in_messages() {
+    let options = RunOptions {
+        mach: Some(f64::MAX),
+        ..reduced("huge")
+    };
+    let e = plan_error(&Scenario::builtin("steady").unwrap(), &options);
+    let text = e.to_string();
+    assert!(text.ends_with("got 1.7976931348623157e308"), "{text}");
+}
+
+/// A recorded-flight CSV of level flight north at 9 km: `(t, speed)` per row,
+/// positions following the velocities exactly (trapezoidal).
+fn level_recording(rows: &[(f64, f64)]) -> String {
+    let mut text = format!("{}\n", RECORDED_COLUMNS.join(","));
+    let mut north = 0.0;
+    for (k, &(t, v)) in rows.iter().enumerate() {
+        if k > 0 {
+            let (t0, v0) = rows[k - 1];
+            north += 0.5 * (v0 + v) * (t - t0);
+        }
+        text.push_str(&format!("{t},{north},0,-9000,{v},0,0,1,0,0,0,0,0,0\n"));
+    }
+    text
+}
+
+#[test]
+fn a_recorded_flight_beyond_mach_2_is_rejected() {
+    let dir = out_dir("mach-3");
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = config();
+    let speed = config.mach_to_speed(9000.0, 3.0).unwrap();
+    let csv = dir.join("fast.csv");
+    std::fs::write(&csv, level_recording(&[(0.0, speed), (1.0, speed)])).unwrap();
+    let toml = dir.join("fast.toml");
+    std::fs::write(
+        &toml,
+        "name = \"fast\"\nkind = \"recorded\"\nfile = \"fast.csv\"\nt_end_s = 1.0\n",
+    )
+    .unwrap();
+    let scenario = Scenario::from_file(&toml).unwrap();
+    let e = scenario.plan(&config, &reduced("mach-3-run")).unwrap_err();
+    let SimError::RecordedFlight {
+        line,
+        column,
+        message,
+        ..
+    } = &e
+    else {
+        panic!("expected a recorded-flight error, got {e:?}");
+    };
+    assert_eq!((*line, column.as_deref()), (Some(2), Some("vn_mps")), "{e}");
+    assert!(
+        message.contains("Mach 3") && message.contains("Mach 2"),
+        "{e}"
+    );
+    assert!(e.is_usage());
+}
+
+#[test]
+fn a_velocity_step_in_a_nanosecond_is_rejected() {
+    let text = level_recording(&[(0.0, 200.0), (1.0, 200.0), (1.000_000_001, 250.0)]);
+    let e = RecordedFlight::parse("step.csv", &text).unwrap_err();
+    let SimError::RecordedAcceleration {
+        line,
+        acceleration_mps2,
+        limit_mps2,
+        ..
+    } = e
+    else {
+        panic!("expected an acceleration error, got {e:?}");
+    };
+    assert_eq!(line, Some(4), "the row of the step");
+    assert!(acceleration_mps2 > 1e9 && limit_mps2 == 100.0);
+    assert!(
+        e.to_string()
+            .starts_with("step.csv, line 4: the acceleration"),
+        "{e}"
+    );
+    // The shipped example stays within the bound.
+    RecordedFlight::parse("example", decoy_sim::RECORDED_EXAMPLE_CSV).unwrap();
+}

@@ -173,3 +173,31 @@ fn discretisation_study_runs_and_chooses() {
     assert!(!choice.candidates[0].within_tolerances);
     assert_eq!(choice.chosen, Some(1));
 }
+
+/// The configuration's time step, too long for the sweep's runs: the error names
+/// the configuration's field, a flag's value the flag.
+#[test]
+fn settling_errors_name_the_source_of_the_time_step() {
+    let mut config = config();
+    config.solver.time_step_host = 20.0;
+    let spec = SettlingSpec::paper(StationVariable::Cg, &config);
+    let e = spec.plan(&config).unwrap_err();
+    let decoy_sim::SimError::InvalidInput { origin, field, .. } = &e else {
+        panic!("expected an invalid input, got {e:?}");
+    };
+    assert_eq!(
+        (origin.as_str(), field.as_str()),
+        (config.source.as_str(), "solver.time_step_host"),
+        "{e}"
+    );
+    let flagged = SettlingSpec { dt: 30.0, ..spec };
+    let e = flagged.plan(&config).unwrap_err();
+    let decoy_sim::SimError::InvalidInput { origin, field, .. } = &e else {
+        panic!("expected an invalid input, got {e:?}");
+    };
+    assert_eq!(
+        (origin.as_str(), field.as_str()),
+        ("command line", "--dt"),
+        "{e}"
+    );
+}

@@ -1,0 +1,577 @@
+//! The recorder: what a run measures at every step (the probe, the running
+//! statistics) and keeps or writes (`timeseries.csv` rows, `cable.csv` snapshots).
+
+use std::fs::File;
+use std::io::Write as _;
+use std::path::PathBuf;
+
+use decoy_config::SystemConfig;
+use nalgebra::Vector3;
+use solver_core::{AircraftState, Model, Outputs, SolveError};
+
+use crate::error::SimError;
+use crate::format::{format_time, format_value};
+use crate::geometry::{
+    Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance, envelope_from_config,
+    plume_from_config,
+};
+use crate::profile::FlightProfile;
+use crate::scenario::RunPlan;
+
+/// Interval between the rows of `timeseries.csv`, s (every step when `dt` is longer).
+pub const SAMPLE_INTERVAL_S: f64 = 0.01;
+/// Interval between the cable snapshots of `cable.csv`, s.
+pub const SNAPSHOT_INTERVAL_S: f64 = 1.0;
+/// Settling band: the connection tension is settled once it stays within this
+/// fraction of its final value.
+pub const SETTLING_BAND: f64 = 0.02;
+/// A settling time is reported only if the tension then stayed in the band for at
+/// least this long before the end of the run, s (otherwise it is `null`).
+pub const SETTLING_HOLD_S: f64 = 1.0;
+/// Most cable snapshots drawn in the `cable-*` and `tension-profile` plots (evenly
+/// chosen among those in `cable.csv`, always with the first and the last).
+pub const PLOTTED_SNAPSHOTS: usize = 6;
+
+/// The header of `timeseries.csv` (units in the names; see `docs/outputs.md`).
+pub const TIMESERIES_HEADER: &str = "t_s,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,cable_exhaust_closest_along_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m";
+/// The header of `cable.csv`.
+pub const CABLE_HEADER: &str = "t_s,joint,along_m,behind_m,lateral_m,below_m,tension_N";
+
+/// The quantities measured at every step (one row of `timeseries.csv`; frames and
+/// signs in `docs/outputs.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Simulation time, s.
+    pub t: f64,
+    /// Connection-point tension (joint 0), N.
+    pub tension_connection: f64,
+    /// Towing-point tension (joint N), N.
+    pub tension_tow: f64,
+    /// Decoy CG from the aircraft reference point, flight-path frame: behind,
+    /// lateral (positive toward the outside of the scenario's turn, else left),
+    /// below, m.
+    pub cg: [f64; 3],
+    /// Decoy roll, pitch, yaw (unwrapped), deg, relative to NED.
+    pub euler_deg: [f64; 3],
+    /// Decoy total angle of attack, deg.
+    pub aoa_deg: f64,
+    /// Smallest distance from the cable to the exhaust plume's surface, m
+    /// (negative inside).
+    pub exhaust_clearance: f64,
+    /// Where on the cable that closest point is, m from the connection point.
+    pub exhaust_along: f64,
+    /// Decoy CG to the aircraft's collision envelope, m (negative inside).
+    pub decoy_clearance: f64,
+    /// Aircraft ground speed, m/s.
+    pub speed: f64,
+    /// Aircraft reference point altitude, m.
+    pub altitude: f64,
+}
+
+impl Sample {
+    /// A sample of no state (a run that did not start): every value NaN, t = 0.
+    pub(crate) fn unknown() -> Sample {
+        Sample {
+            t: 0.0,
+            tension_connection: f64::NAN,
+            tension_tow: f64::NAN,
+            cg: [f64::NAN; 3],
+            euler_deg: [f64::NAN; 3],
+            aoa_deg: f64::NAN,
+            exhaust_clearance: f64::NAN,
+            exhaust_along: f64::NAN,
+            decoy_clearance: f64::NAN,
+            speed: f64::NAN,
+            altitude: f64::NAN,
+        }
+    }
+
+    fn csv_row(&self) -> String {
+        let values = [
+            self.tension_connection,
+            self.tension_tow,
+            self.cg[0],
+            self.cg[1],
+            self.cg[2],
+            self.euler_deg[0],
+            self.euler_deg[1],
+            self.euler_deg[2],
+            self.aoa_deg,
+            self.exhaust_clearance,
+            self.exhaust_along,
+            self.decoy_clearance,
+            self.speed,
+            self.altitude,
+        ];
+        let mut row = format_time(self.t);
+        for v in values {
+            row.push(',');
+            row.push_str(&format_value(v));
+        }
+        row.push('\n');
+        row
+    }
+}
+
+/// One cable snapshot (the rows of `cable.csv` at one time).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Snapshot {
+    /// Snapshot time, s.
+    pub t: f64,
+    /// Per joint, 0 (connection point) to N (towing point): distance along the
+    /// cable from the connection point, then behind, lateral and below the
+    /// aircraft reference point (flight-path frame), m, and the tension, N.
+    pub joints: Vec<[f64; 5]>,
+}
+
+/// What the plots are drawn from.
+pub(crate) struct Recorded<'a> {
+    pub samples: &'a [Sample],
+    pub snapshots: &'a [Snapshot],
+}
+
+/// The fixed geometry every measurement needs.
+pub(crate) struct Probe {
+    plume: ExhaustPlume,
+    envelope: Envelope,
+    lateral_sign: f64,
+    /// Distance along the cable of joint j, m.
+    pub joint_along: Vec<f64>,
+}
+
+impl Probe {
+    /// Measures one evaluated state. `previous_yaw` unwraps the yaw angle.
+    fn sample<const N: usize>(
+        &self,
+        out: &Outputs<'_, f64, N>,
+        aircraft: &AircraftState<f64>,
+        previous_yaw: Option<f64>,
+    ) -> Sample {
+        let n = out.segment_count();
+        let frame = FlightPathFrame::of(aircraft);
+        let rotation = aircraft.rotation();
+        let to_body =
+            |p: &Vector3<f64>| rotation.inverse_transform_vector(&(p - aircraft.position));
+        // Joints and segment midpoints, in the order decoy-link numbers them.
+        let (exhaust_clearance, at) = cable_plume_clearance(
+            &self.plume,
+            aircraft,
+            (0..=n).map(|j| out.joint_position(j)),
+        );
+        let exhaust_along = if at % 2 == 0 {
+            self.joint_along[at / 2]
+        } else {
+            0.5 * (self.joint_along[at / 2] + self.joint_along[at / 2 + 1])
+        };
+        let (cg, euler, aoa, decoy_clearance) = match out.decoy() {
+            Some(d) => {
+                let c = frame.components(&(d.cg_position - aircraft.position));
+                let (roll, pitch, yaw) = d.euler;
+                (
+                    [-c.x, self.lateral_sign * -c.y + 0.0, c.z],
+                    [roll, pitch, yaw],
+                    d.angle_of_attack,
+                    self.envelope.clearance(&to_body(&d.cg_position)),
+                )
+            }
+            None => ([f64::NAN; 3], [f64::NAN; 3], f64::NAN, f64::NAN),
+        };
+        let mut yaw = euler[2].to_degrees();
+        if let Some(prev) = previous_yaw {
+            yaw += 360.0 * ((prev - yaw) / 360.0).round();
+        }
+        Sample {
+            t: out.time(),
+            tension_connection: out.connection_tension(),
+            tension_tow: out.tow_tension(),
+            cg,
+            euler_deg: [euler[0].to_degrees(), euler[1].to_degrees(), yaw],
+            aoa_deg: aoa.to_degrees(),
+            exhaust_clearance,
+            exhaust_along,
+            decoy_clearance,
+            speed: aircraft.velocity.norm(),
+            altitude: aircraft.altitude(),
+        }
+    }
+
+    /// Writes the cable in the flight-path frame, relative to the aircraft
+    /// reference point, into `snapshot` (reusing its storage).
+    fn snapshot_into<const N: usize>(
+        &self,
+        out: &Outputs<'_, f64, N>,
+        aircraft: &AircraftState<f64>,
+        snapshot: &mut Snapshot,
+    ) {
+        let frame = FlightPathFrame::of(aircraft);
+        snapshot.t = out.time();
+        snapshot.joints.clear();
+        snapshot.joints.extend((0..=out.segment_count()).map(|j| {
+            let c = frame.components(&(out.joint_position(j) - aircraft.position));
+            [
+                self.joint_along[j],
+                -c.x,
+                self.lateral_sign * -c.y + 0.0,
+                c.z,
+                out.tension(j),
+            ]
+        }));
+    }
+}
+
+/// Running statistics for the summary.
+pub(crate) struct Statistics {
+    manoeuvre_start: f64,
+    pub max_tension: f64,
+    pub t_at_max: f64,
+    pitch_range: Option<(f64, f64)>,
+    pitch_range_all: Option<(f64, f64)>,
+    pub min_exhaust: f64,
+    pub min_decoy: f64,
+}
+
+impl Statistics {
+    pub(crate) fn new(manoeuvre_start: f64) -> Self {
+        Statistics {
+            manoeuvre_start,
+            max_tension: f64::NEG_INFINITY,
+            t_at_max: 0.0,
+            pitch_range: None,
+            pitch_range_all: None,
+            min_exhaust: f64::INFINITY,
+            min_decoy: f64::INFINITY,
+        }
+    }
+
+    pub(crate) fn add(&mut self, s: &Sample) {
+        if s.tension_connection > self.max_tension {
+            self.max_tension = s.tension_connection;
+            self.t_at_max = s.t;
+        }
+        let widen = |range: Option<(f64, f64)>, v: f64| {
+            Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))))
+        };
+        let pitch = s.euler_deg[1];
+        self.pitch_range_all = widen(self.pitch_range_all, pitch);
+        if s.t >= self.manoeuvre_start - 1e-9 {
+            self.pitch_range = widen(self.pitch_range, pitch);
+        }
+        self.min_exhaust = self.min_exhaust.min(s.exhaust_clearance);
+        self.min_decoy = self.min_decoy.min(s.decoy_clearance);
+    }
+
+    pub(crate) fn pitch_amplitude(&self) -> f64 {
+        self.pitch_range
+            .or(self.pitch_range_all)
+            .map_or(f64::NAN, |(lo, hi)| 0.5 * (hi - lo))
+    }
+}
+
+/// A CSV file written row by row, each row with one `write` so that the file
+/// stays valid (whole rows) if the run stops.
+pub(crate) struct CsvFile {
+    file: File,
+    path: PathBuf,
+}
+
+impl CsvFile {
+    pub(crate) fn create(path: PathBuf, header: &str) -> Result<Self, SimError> {
+        let file = File::create(&path).map_err(|source| SimError::Io {
+            action: "create",
+            path: path.clone(),
+            source,
+        })?;
+        let mut csv = CsvFile { file, path };
+        csv.write(&format!("{header}\n"))?;
+        Ok(csv)
+    }
+
+    fn write(&mut self, text: &str) -> Result<(), SimError> {
+        self.file
+            .write_all(text.as_bytes())
+            .map_err(|source| SimError::Io {
+                action: "write",
+                path: self.path.clone(),
+                source,
+            })
+    }
+}
+
+/// Time from which the connection tension of `samples` (the rows of
+/// `timeseries.csv`) stays within the settling band about its last value; `None`
+/// unless it then stayed there for [`SETTLING_HOLD_S`].
+pub(crate) fn settling_time(samples: &[Sample]) -> Option<f64> {
+    let last = samples.last()?;
+    let final_tension = last.tension_connection;
+    let band = SETTLING_BAND * final_tension.abs();
+    let outside = samples
+        .iter()
+        .rposition(|s| (s.tension_connection - final_tension).abs() > band);
+    let settled = match outside {
+        None => samples[0].t,
+        Some(i) => samples[i + 1].t,
+    };
+    (last.t - settled >= SETTLING_HOLD_S - 1e-9).then_some(settled)
+}
+
+/// Writes the snapshot's rows to `cable.csv` (one write).
+fn write_snapshot(csv: &mut CsvFile, snapshot: &Snapshot) -> Result<(), SimError> {
+    let t = format_time(snapshot.t);
+    let mut text = String::with_capacity(snapshot.joints.len() * 64);
+    for (j, [along, behind, lateral, below, tension]) in snapshot.joints.iter().enumerate() {
+        text.push_str(&format!(
+            "{t},{j},{},{},{},{},{}\n",
+            format_value(*along),
+            format_value(*behind),
+            format_value(*lateral),
+            format_value(*below),
+            format_value(*tension)
+        ));
+    }
+    csv.write(&text)
+}
+
+/// Everything measured and written from the evaluated states, in step order.
+///
+/// It is fed the outputs of RK4's first stage ([`Solver::step_observed`]), which
+/// evaluates the dynamics at the state before each step anyway, so measuring every
+/// step costs no extra evaluation. The CSV files are optional: an in-memory run
+/// (`trace`) keeps only the samples and snapshots.
+pub(crate) struct Recorder<'a> {
+    pub path: &'a FlightProfile,
+    pub probe: Probe,
+    pub timeseries: Option<CsvFile>,
+    pub cable: Option<CsvFile>,
+    pub statistics: Statistics,
+    pub samples: Vec<Sample>,
+    pub snapshots: Vec<Snapshot>,
+    /// The last good sample.
+    pub last: Sample,
+    /// The cable at the last good state (kept every step, so that a run that
+    /// stops can still end `cable.csv` with it).
+    pub last_cable: Snapshot,
+    /// Scratch for the cable of the state being recorded.
+    candidate_cable: Snapshot,
+    /// True once a state has been recorded.
+    pub recorded_any: bool,
+    pub last_written: bool,
+    pub sample_every: u64,
+    pub snapshot_every: u64,
+    pub steps: u64,
+    pub dt: f64,
+}
+
+/// Why a run stopped early: the reason in words and the solver's error.
+pub(crate) type Stop = (String, Option<SolveError>);
+
+impl<'a> Recorder<'a> {
+    /// A recorder for `plan` keeping a sample every `sample_interval` s and a
+    /// snapshot every `snapshot_interval` s (both at least every step), writing
+    /// the CSV files given.
+    pub(crate) fn new(
+        plan: &'a RunPlan,
+        probe: Probe,
+        files: Option<(CsvFile, CsvFile)>,
+        sample_interval: f64,
+        snapshot_interval: f64,
+    ) -> Self {
+        let (timeseries, cable) = match files {
+            Some((t, c)) => (Some(t), Some(c)),
+            None => (None, None),
+        };
+        Recorder {
+            path: &plan.profile,
+            probe,
+            timeseries,
+            cable,
+            statistics: Statistics::new(plan.profile.manoeuvre_start()),
+            samples: Vec::new(),
+            snapshots: Vec::new(),
+            last: Sample::default(),
+            last_cable: Snapshot {
+                t: 0.0,
+                joints: Vec::new(),
+            },
+            candidate_cable: Snapshot {
+                t: 0.0,
+                joints: Vec::new(),
+            },
+            recorded_any: false,
+            last_written: false,
+            sample_every: ((sample_interval / plan.dt).round() as u64).max(1),
+            snapshot_every: ((snapshot_interval / plan.dt).round() as u64).max(1),
+            steps: plan.steps,
+            dt: plan.dt,
+        }
+    }
+
+    /// Records the evaluation `out` of the state after step `k`. `Ok(Some)` when the
+    /// state cannot be used (the run stops at the previous one).
+    pub(crate) fn record<const N: usize>(
+        &mut self,
+        k: u64,
+        out: &Outputs<'_, f64, N>,
+    ) -> Result<Option<Stop>, SimError> {
+        let t = out.time();
+        let aircraft = self.path.state_at(t);
+        let write_row = k == 0 || k.is_multiple_of(self.sample_every) || k == self.steps;
+        let take_snapshot = k == 0 || k.is_multiple_of(self.snapshot_every) || k == self.steps;
+        let previous_yaw = (k > 0).then_some(self.last.euler_deg[2]);
+        let sample = self.probe.sample(out, &aircraft, previous_yaw);
+        self.probe
+            .snapshot_into(out, &aircraft, &mut self.candidate_cable);
+        if !(sample.tension_connection.is_finite() && sample.tension_tow.is_finite()) {
+            return Ok(Some((
+                format!(
+                    "the cable tension became non-finite at t = {} s: the state diverged (is the time step {} s too long?)",
+                    format_time(t),
+                    self.dt
+                ),
+                None,
+            )));
+        }
+        self.last = sample;
+        std::mem::swap(&mut self.last_cable, &mut self.candidate_cable);
+        self.recorded_any = true;
+        self.statistics.add(&sample);
+        self.last_written = write_row;
+        if write_row {
+            if let Some(csv) = &mut self.timeseries {
+                csv.write(&sample.csv_row())?;
+            }
+            self.samples.push(sample);
+        }
+        if take_snapshot {
+            self.keep_last_cable()?;
+        }
+        Ok(None)
+    }
+
+    /// Keeps (and writes) the snapshot of the last good state.
+    fn keep_last_cable(&mut self) -> Result<(), SimError> {
+        if let Some(csv) = &mut self.cable {
+            write_snapshot(csv, &self.last_cable)?;
+        }
+        self.snapshots.push(self.last_cable.clone());
+        Ok(())
+    }
+
+    /// Keeps (and writes) the last good state's row if it fell between rows, and
+    /// its cable snapshot if it fell between snapshots (a run that stopped).
+    pub(crate) fn finish(&mut self) -> Result<(), SimError> {
+        if !self.recorded_any {
+            return Ok(());
+        }
+        if self.snapshots.last().map(|s| s.t) != Some(self.last.t) {
+            self.keep_last_cable()?;
+        }
+        if !self.last_written {
+            if let Some(csv) = &mut self.timeseries {
+                csv.write(&self.last.csv_row())?;
+            }
+            self.samples.push(self.last);
+            self.last_written = true;
+        }
+        Ok(())
+    }
+}
+
+/// The measuring geometry of a run of `model` (plume, envelope, distances along
+/// the cable).
+pub(crate) fn probe<const N: usize>(
+    config: &SystemConfig,
+    model: &Model<f64, N>,
+    lateral_sign: f64,
+) -> Probe {
+    let mut joint_along = Vec::with_capacity(model.segment_count() + 1);
+    joint_along.push(0.0);
+    for l in model.lengths() {
+        joint_along.push(joint_along[joint_along.len() - 1] + l);
+    }
+    Probe {
+        plume: plume_from_config(&config.aircraft),
+        envelope: envelope_from_config(&config.aircraft),
+        lateral_sign,
+        joint_along,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use solver_core::{Solver, trim};
+
+    #[test]
+    fn settling_needs_the_hold() {
+        let sample = |t: f64, tension_connection: f64| Sample {
+            t,
+            tension_connection,
+            ..Sample::default()
+        };
+        let mut samples = vec![
+            sample(0.0, 100.0),
+            sample(1.0, 150.0),
+            sample(2.0, 101.0),
+            sample(3.5, 100.0),
+        ];
+        assert_eq!(settling_time(&samples), Some(2.0));
+        samples.push(sample(3.6, 120.0));
+        assert_eq!(settling_time(&samples), None);
+    }
+
+    /// The onboard controller (decoy-link, f64) and `decoy simulate`'s probe report
+    /// the same tensions, decoy position and clearances for the same trimmed state.
+    #[test]
+    fn the_controller_and_the_probe_agree() {
+        use decoy_controller::{Controller, NoCounter};
+        use decoy_link::{AircraftStateFrame, DeviceMessage, HostMessage};
+        let config = SystemConfig::builtin().unwrap();
+        let layout = config.embedded_layout();
+        let model = config.model::<f64, 16>(layout).unwrap();
+        for mach in [0.5, 0.6, 0.8] {
+            let speed = config.mach_to_speed(9000.0, mach).unwrap();
+            let aircraft = AircraftState::<f64>::level(9000.0, speed);
+            let mut solver = Solver::new(model, trim(&model, &aircraft).unwrap()).unwrap();
+            let path = solver_core::Uniform { initial: aircraft };
+            let probe = probe(&config, &model, 1.0);
+            let sample = probe.sample(&solver.outputs(&path).unwrap(), &aircraft, None);
+
+            let mut controller: Controller<f64, 16> =
+                Controller::new(config.controller_config(layout).unwrap()).unwrap();
+            let frame = AircraftStateFrame {
+                seq: 1,
+                time_s: 0.0,
+                position_ned_m: [0.0, 0.0, -9000.0],
+                velocity_ned_mps: [speed as f32, 0.0, 0.0],
+                acceleration_ned_mps2: [0.0; 3],
+                attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
+                body_rate_radps: [0.0; 3],
+                body_angular_acceleration_radps2: [0.0; 3],
+            };
+            let DeviceMessage::Output(o) =
+                controller.handle(HostMessage::State(frame), &mut NoCounter)
+            else {
+                panic!("no output at Mach {mach}");
+            };
+            // The frame carries the speed in f32: agreement to that rounding.
+            let close = |a: f32, b: f64, tol: f64| {
+                assert!(
+                    (f64::from(a) - b).abs() <= tol * (1.0 + b.abs()),
+                    "Mach {mach}: {a} vs {b}"
+                )
+            };
+            close(o.connection_tension_n, sample.tension_connection, 1e-5);
+            close(o.tow_tension_n, sample.tension_tow, 1e-5);
+            close(o.cable_clearance_exhaust_m, sample.exhaust_clearance, 1e-5);
+            close(o.decoy_clearance_aircraft_m, sample.decoy_clearance, 1e-5);
+            // The probe reports "behind" and "below"; the frame x forward, z down.
+            close(o.decoy_position_fp_m[0], -sample.cg[0], 1e-5);
+            close(o.decoy_position_fp_m[2], sample.cg[2], 1e-5);
+            close(
+                o.decoy_euler_rel_rad[1],
+                sample.euler_deg[1].to_radians(),
+                1e-5,
+            );
+        }
+    }
+}
