@@ -29,6 +29,7 @@
 //! `eval_breakdown/{f64,f32}_{graded16,uniform300}/{pass}` (criterion; the gungraun
 //! names are listed in `benches/instructions.rs`).
 
+pub mod names;
 pub mod passes;
 pub mod report;
 pub mod stepper;

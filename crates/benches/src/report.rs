@@ -23,6 +23,15 @@ use std::path::Path;
 
 use decoy_plots::{Aspect, Plot, Series};
 
+pub use crate::names::{
+    BREAKDOWN_CASES, INSTRUCTION_DENSE_STEP_SIZES, INSTRUCTION_STEP_SIZES, System, TENSION_METHODS,
+    TENSION_SIZES, Variant, WALL_DENSE_STEP_SIZES, WALL_STEP_SIZES, instr_step_key, wall_step_key,
+};
+use crate::names::{
+    instr_breakdown_key, instr_graded_key, instr_tension_key, wall_breakdown_key, wall_graded_key,
+    wall_tension_key,
+};
+
 /// The command that generates the report (quoted in it).
 pub const COMMAND: &str = "cargo xtask bench-report";
 /// The criterion command the report runs (quoted in it).
@@ -32,19 +41,6 @@ pub const CRITERION_COMMAND: &str =
 pub const GUNGRAUN_COMMAND: &str =
     "cargo bench -p benches --bench instructions -- --save-summary=json";
 
-/// Sizes of the criterion RK4-step series with O(N) derivatives (two-sweep f64 and
-/// f32, shooting), pendulum and towed.
-pub const WALL_STEP_SIZES: [u32; 6] = [16, 64, 300, 1024, 2048, 4096];
-/// Sizes of the criterion RK4-step series with the dense derivatives.
-pub const WALL_DENSE_STEP_SIZES: [u32; 3] = [16, 64, 300];
-/// Sizes of the gungraun RK4-step series with O(N) derivatives.
-pub const INSTRUCTION_STEP_SIZES: [u32; 5] = [8, 64, 300, 1024, 4096];
-/// Sizes of the gungraun RK4-step series with the dense derivatives.
-pub const INSTRUCTION_DENSE_STEP_SIZES: [u32; 3] = [8, 64, 300];
-/// Sizes of the tension-solve benchmarks (both harnesses).
-pub const TENSION_SIZES: [u32; 3] = [16, 64, 300];
-/// Tension-solve methods, as named in both harnesses.
-pub const TENSION_METHODS: [&str; 3] = ["two_sweep", "shooting", "dense"];
 /// Segment counts of the firmware runs.
 pub const FIRMWARE_SEGMENTS: [usize; 4] = [8, 16, 32, 64];
 
@@ -160,6 +156,65 @@ fn json_file(path: &Path) -> Result<serde_json::Value, String> {
     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// The results the report expects and did not get, and the results it got and does
+/// not know (a renamed benchmark shows up in both), for [`check_complete`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Incomplete {
+    /// Expected keys (criterion, then gungraun) without a result.
+    pub missing: Vec<String>,
+    /// Result keys that no table reads.
+    pub unknown: Vec<String>,
+}
+
+impl std::fmt::Display for Incomplete {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the benchmark results do not match the report's names \
+             (crates/benches/src/names.rs): missing {:?}; unknown {:?} (an unknown result \
+             can be a stale one of a renamed benchmark: remove target/criterion and \
+             target/gungraun and rerun)",
+            self.missing, self.unknown
+        )
+    }
+}
+
+/// Checks that the criterion and gungraun results hold exactly the keys the report
+/// reads ([`crate::names::expected_wall_keys`],
+/// [`crate::names::expected_instruction_keys`]). `bench-report` refuses to write
+/// the document otherwise, so that no cell silently reads "n/a".
+pub fn check_complete(wall: &WallClock, instructions: &Instructions) -> Result<(), Incomplete> {
+    let mut incomplete = Incomplete::default();
+    for (expected, present) in [
+        (
+            crate::names::expected_wall_keys(),
+            wall.keys().collect::<Vec<_>>(),
+        ),
+        (
+            crate::names::expected_instruction_keys(),
+            instructions.keys().collect(),
+        ),
+    ] {
+        incomplete.missing.extend(
+            expected
+                .iter()
+                .filter(|key| !present.contains(key))
+                .cloned(),
+        );
+        incomplete.unknown.extend(
+            present
+                .into_iter()
+                .filter(|key| !expected.contains(key))
+                .cloned(),
+        );
+    }
+    if incomplete == Incomplete::default() {
+        Ok(())
+    } else {
+        Err(incomplete)
+    }
+}
+
 /// The machine the numbers come from.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Machine {
@@ -241,110 +296,6 @@ impl Default for Inputs {
             pinocchio: Err("not run".into()),
         }
     }
-}
-
-/// The system an RK4-step series runs on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum System {
-    /// The compound pendulum on a fixed anchor (`pendulum_rk4_step`, `steps/pendulum_*`).
-    Pendulum,
-    /// The trimmed reference towed system, uniform segments (`towed_rk4_step/*/uniform{N}`).
-    Towed,
-}
-
-/// How the derivatives of an RK4-step series are computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Variant {
-    /// The two-sweep recurrence in f64 (`Solver::step`).
-    F64,
-    /// The two-sweep recurrence in f32 (`Solver::step`).
-    F32,
-    /// The shooting form (f64), which diverges with N.
-    Shooting,
-    /// The dense Kane reference (f64), O(N³).
-    Dense,
-}
-
-impl Variant {
-    /// Every variant, in table order.
-    pub const ALL: [Variant; 4] = [
-        Variant::F64,
-        Variant::F32,
-        Variant::Shooting,
-        Variant::Dense,
-    ];
-
-    /// The variant's part of the benchmark names.
-    pub fn name(self) -> &'static str {
-        match self {
-            Variant::F64 => "f64",
-            Variant::F32 => "f32",
-            Variant::Shooting => "shooting",
-            Variant::Dense => "dense",
-        }
-    }
-
-    /// A short label for tables and the figure.
-    pub fn label(self) -> &'static str {
-        match self {
-            Variant::F64 => "two-sweep f64",
-            Variant::F32 => "two-sweep f32",
-            Variant::Shooting => "shooting f64",
-            Variant::Dense => "dense f64",
-        }
-    }
-
-    fn wall_sizes(self) -> &'static [u32] {
-        match self {
-            Variant::Dense => &WALL_DENSE_STEP_SIZES,
-            _ => &WALL_STEP_SIZES,
-        }
-    }
-
-    fn instruction_sizes(self) -> &'static [u32] {
-        match self {
-            Variant::Dense => &INSTRUCTION_DENSE_STEP_SIZES,
-            _ => &INSTRUCTION_STEP_SIZES,
-        }
-    }
-}
-
-impl System {
-    /// Both systems, in table order.
-    pub const ALL: [System; 2] = [System::Pendulum, System::Towed];
-
-    fn label(self) -> &'static str {
-        match self {
-            System::Pendulum => "pendulum",
-            System::Towed => "towed system",
-        }
-    }
-}
-
-/// Criterion key of one RK4 step of a series.
-pub fn wall_step_key(system: System, variant: Variant, n: u32) -> String {
-    match system {
-        System::Pendulum => format!("pendulum_rk4_step/{}/{n}", variant.name()),
-        System::Towed => format!("towed_rk4_step/{}/uniform{n}", variant.name()),
-    }
-}
-
-/// Gungraun key of one RK4 step of a series.
-pub fn instr_step_key(system: System, variant: Variant, n: u32) -> String {
-    match system {
-        System::Pendulum => format!("steps/pendulum_{}/n{n}", variant.name()),
-        System::Towed => format!("steps/towed_{}/uniform{n}", variant.name()),
-    }
-}
-
-/// Criterion key of one tension solve.
-fn wall_tension(method: &str, n: u32) -> String {
-    format!("tension_solve/{method}/{n}")
-}
-
-/// Gungraun key of one tension solve.
-fn instr_tension(method: &str, n: u32) -> String {
-    format!("tension/{method}/n{n}")
 }
 
 /// Cost per segment (`cost(N) / N`) normalised to its value at [`REFERENCE_N`], for
@@ -443,14 +394,6 @@ pub fn step_costs(inputs: &Inputs, system: System, variant: Variant) -> (Costs, 
         .collect();
     (wall, instr)
 }
-
-/// The towed configurations of the evaluation breakdown (benchmark-name parts).
-pub const BREAKDOWN_CASES: [&str; 4] = [
-    "f64_graded16",
-    "f32_graded16",
-    "f64_uniform300",
-    "f32_uniform300",
-];
 
 /// One evaluation split into its parts, in one unit (ns or instructions).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -703,11 +646,11 @@ fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     }
 
     let speedup = |get: &dyn Fn(&str) -> Option<f64>| Some(get("dense")? / get("two_sweep")?);
-    let wall_speedup = speedup(&|m| inputs.wall.get(&wall_tension(m, 300)).copied());
+    let wall_speedup = speedup(&|m| inputs.wall.get(&wall_tension_key(m, 300)).copied());
     let instr_speedup = speedup(&|m| {
         inputs
             .instructions
-            .get(&instr_tension(m, 300))
+            .get(&instr_tension_key(m, 300))
             .map(|&c| c as f64)
     });
     match wall_speedup {
@@ -970,20 +913,20 @@ fn render_ratios(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
             s,
             "| {n} | {} | {} | {} | {} |",
             ratio(
-                wall(wall_tension("dense", n)),
-                wall(wall_tension("two_sweep", n))
+                wall(wall_tension_key("dense", n)),
+                wall(wall_tension_key("two_sweep", n))
             ),
             ratio(
-                instr(instr_tension("dense", n)),
-                instr(instr_tension("two_sweep", n))
+                instr(instr_tension_key("dense", n)),
+                instr(instr_tension_key("two_sweep", n))
             ),
             ratio(
-                wall(wall_tension("shooting", n)),
-                wall(wall_tension("two_sweep", n))
+                wall(wall_tension_key("shooting", n)),
+                wall(wall_tension_key("two_sweep", n))
             ),
             ratio(
-                instr(instr_tension("shooting", n)),
-                instr(instr_tension("two_sweep", n))
+                instr(instr_tension_key("shooting", n)),
+                instr(instr_tension_key("two_sweep", n))
             ),
         )?;
     }
@@ -1002,13 +945,10 @@ fn render_ratios(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     writeln!(
         s,
         "| towed, 16 graded segments | {} | {} |",
+        ratio(wall(wall_graded_key("f64")), wall(wall_graded_key("f32"))),
         ratio(
-            wall("towed_rk4_step/f64/graded16".into()),
-            wall("towed_rk4_step/f32/graded16".into())
-        ),
-        ratio(
-            instr("steps/towed_f64/graded16".into()),
-            instr("steps/towed_f32/graded16".into())
+            instr(instr_graded_key("f64")),
+            instr(instr_graded_key("f32"))
         )
     )?;
     for system in System::ALL {
@@ -1165,14 +1105,11 @@ fn render_breakdown(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
             .map(|case| {
                 let cost = |pass: &str| -> Option<f64> {
                     if unit_is_wall {
-                        inputs
-                            .wall
-                            .get(&format!("eval_breakdown/{case}/{pass}"))
-                            .copied()
+                        inputs.wall.get(&wall_breakdown_key(case, pass)).copied()
                     } else {
                         inputs
                             .instructions
-                            .get(&format!("breakdown/{case}/{pass}"))
+                            .get(&instr_breakdown_key(case, pass))
                             .map(|&c| c as f64)
                     }
                 };
@@ -1247,15 +1184,11 @@ fn render_other(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
         )
     };
     for precision in ["f32", "f64"] {
-        row(
-            format!("towed_rk4_step/{precision}/graded16"),
-            format!("steps/towed_{precision}/graded16"),
-            16,
-        )?;
+        row(wall_graded_key(precision), instr_graded_key(precision), 16)?;
     }
     for method in TENSION_METHODS {
         for n in TENSION_SIZES {
-            row(wall_tension(method, n), instr_tension(method, n), n)?;
+            row(wall_tension_key(method, n), instr_tension_key(method, n), n)?;
         }
     }
     writeln!(s)?;
@@ -1403,7 +1336,12 @@ pub fn scaling_plot(inputs: &Inputs) -> Vec<Plot> {
             ] {
                 let points: Vec<(u32, f64)> = TENSION_SIZES
                     .iter()
-                    .filter_map(|&n| inputs.wall.get(&wall_tension(method, n)).map(|&t| (n, t)))
+                    .filter_map(|&n| {
+                        inputs
+                            .wall
+                            .get(&wall_tension_key(method, n))
+                            .map(|&t| (n, t))
+                    })
                     .collect();
                 if points.len() >= 2 {
                     series.push(log_log(label.into(), &points));
@@ -1480,26 +1418,6 @@ mod tests {
     }
 
     #[test]
-    fn keys_match_the_benchmark_names() {
-        assert_eq!(
-            wall_step_key(System::Pendulum, Variant::F32, 4096),
-            "pendulum_rk4_step/f32/4096"
-        );
-        assert_eq!(
-            wall_step_key(System::Towed, Variant::Dense, 300),
-            "towed_rk4_step/dense/uniform300"
-        );
-        assert_eq!(
-            instr_step_key(System::Pendulum, Variant::Shooting, 64),
-            "steps/pendulum_shooting/n64"
-        );
-        assert_eq!(
-            instr_step_key(System::Towed, Variant::F64, 8),
-            "steps/towed_f64/uniform8"
-        );
-    }
-
-    #[test]
     fn breakdown_derives_kinematics_and_assembly() {
         let costs = [
             ("evaluate", 1000.0),
@@ -1518,7 +1436,7 @@ mod tests {
         for (pass, c) in costs {
             inputs
                 .instructions
-                .insert(format!("breakdown/f64_graded16/{pass}"), c as u64);
+                .insert(instr_breakdown_key("f64_graded16", pass), c as u64);
         }
         let md = render(&inputs);
         assert!(
@@ -1555,8 +1473,8 @@ mod tests {
             wall_step_key(System::Towed, Variant::Dense, 300),
             47_000.0 * 1.5 * 800.0,
         );
-        inputs.wall.insert(wall_tension("dense", 300), 5e6);
-        inputs.wall.insert(wall_tension("two_sweep", 300), 1e4);
+        inputs.wall.insert(wall_tension_key("dense", 300), 5e6);
+        inputs.wall.insert(wall_tension_key("two_sweep", 300), 1e4);
         inputs.firmware.push(FirmwareRow {
             segments: 16,
             grading: 1.3,
@@ -1666,5 +1584,68 @@ mod tests {
             m7.contains("| 16, 1.3 | 20,000 | 18,000 | 2 to 3 | 9,000 | 8,000 | 562 |"),
             "{md}"
         );
+    }
+
+    /// Every result the report reads, with made-up costs that grow with N.
+    fn complete_results() -> (WallClock, Instructions) {
+        let cost = |key: &str| 1000 + key.len() as u64;
+        let wall = crate::names::expected_wall_keys()
+            .into_iter()
+            .map(|k| {
+                let c = cost(&k) as f64;
+                (k, c)
+            })
+            .collect();
+        let instructions = crate::names::expected_instruction_keys()
+            .into_iter()
+            .map(|k| {
+                let c = cost(&k);
+                (k, c)
+            })
+            .collect();
+        (wall, instructions)
+    }
+
+    #[test]
+    fn complete_results_render_every_cell() {
+        let (wall, instructions) = complete_results();
+        assert_eq!(check_complete(&wall, &instructions), Ok(()));
+        let inputs = Inputs {
+            wall,
+            instructions,
+            ..Inputs::default()
+        };
+        let md = render(&inputs);
+        assert!(!md.contains(MISSING), "{md}");
+    }
+
+    #[test]
+    fn a_renamed_or_missing_benchmark_is_an_error() {
+        let (mut wall, mut instructions) = complete_results();
+        // A criterion benchmark renamed: its result arrives under a name no table reads.
+        let key = wall_step_key(System::Towed, Variant::Dense, 300);
+        let cost = wall.remove(&key).unwrap();
+        wall.insert("towed_rk4_step/kane/uniform300".into(), cost);
+        // A gungraun benchmark that did not run.
+        let gone = instr_tension_key("shooting", 64);
+        instructions.remove(&gone);
+        let error = check_complete(&wall, &instructions).unwrap_err();
+        assert_eq!(error.missing, vec![key.clone(), gone.clone()]);
+        assert_eq!(
+            error.unknown,
+            vec!["towed_rk4_step/kane/uniform300".to_owned()]
+        );
+        let message = error.to_string();
+        assert!(
+            message.contains(&key) && message.contains(&gone),
+            "{message}"
+        );
+        // Rendered anyway (as the tests above do with partial inputs), the cell says so.
+        let md = render(&Inputs {
+            wall,
+            instructions,
+            ..Inputs::default()
+        });
+        assert!(md.contains(MISSING), "{md}");
     }
 }
