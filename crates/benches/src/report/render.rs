@@ -131,17 +131,17 @@ pub(super) fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
     )?;
     writeln!(
         s,
-        "- Two-sweep RK4 steps are `Solver::step`. Shooting and dense RK4 steps use the \
-         same RK4 scheme written in the benches crate (`crates/benches/src/stepper.rs`, \
-         bit-identical to `Solver::step` with the two-sweep derivatives, checked by a \
-         test), with `dynamics::solve_tensions_shooting` or `dense::evaluate_dense` for \
-         the derivatives. The shooting form diverges numerically with N (round-off grows \
-         about 3.7x per segment): beyond a few tens of segments its results are garbage \
-         or not finite and the step fails, but its cost is still measurable: the \
-         stepper runs all four stages whatever the numbers, so a failed step does the \
-         same work as a successful one (`Solver::step` would stop at the first failed \
-         stage). The dense derivatives allocate their matrices on every call and are \
-         measured up to N = 300 only."
+        "- Two-sweep RK4 steps are `Solver::step`. Shooting and dense RK4 steps are the \
+         same RK4 (`solver_core::rk4::Rk4`) with another derivative source \
+         (`crates/benches/src/stepper.rs`, bit-identical to `Solver::step` with the \
+         two-sweep derivatives, checked by a test): `dynamics::solve_tensions_shooting` \
+         or `dense::evaluate_dense`. The shooting form diverges numerically with N \
+         (round-off grows about 3.7x per segment): beyond a few tens of segments its \
+         results are garbage or not finite and the step fails, but its cost is still \
+         measurable: the stepper's source records a failed evaluation and carries on, so \
+         a failed step runs all four stages and does the same work as a successful one \
+         (`Solver::step` would stop at the first failed stage). The dense derivatives \
+         allocate their matrices on every call and are measured up to N = 300 only."
     )?;
     writeln!(
         s,
