@@ -4,7 +4,9 @@
 //! functions with these constants; the gungraun benchmarks (`benches/instructions.rs`)
 //! are named by Rust identifiers in attribute macros, which cannot take constants, so
 //! a test here reads that file and checks that it defines exactly
-//! [`expected_instruction_keys`]. The report reads its cells with the key functions
+//! [`expected_instruction_keys`]. The criterion sizes are const-generic literals in
+//! macro calls; a test checks them against [`WALL_STEP_SIZES`],
+//! [`WALL_DENSE_STEP_SIZES`] and [`TENSION_SIZES`]. The report reads its cells with the key functions
 //! below, and `bench-report` fails when a result it expects is missing or a result it
 //! does not know appears ([`crate::report::check_complete`]): a renamed benchmark is
 //! an error, not a table cell reading "n/a".
@@ -362,5 +364,50 @@ mod tests {
         let defined = gungraun_keys(&renamed_id);
         assert!(!defined.contains(&instr_step_key(System::Pendulum, Variant::F64, 300)));
         assert!(defined.contains("steps/pendulum_f64/m300"));
+    }
+
+    /// The literal sizes after `marker` up to `end` on every line of `source` that
+    /// holds `marker` (skipping the macro's own pattern, which has no digits).
+    fn literal_sizes(source: &str, marker: &str, end: char) -> Vec<Vec<u32>> {
+        source
+            .lines()
+            .filter_map(|line| line.split_once(marker).map(|(_, rest)| rest))
+            .map(|rest| {
+                rest.split(end)
+                    .next()
+                    .unwrap_or_default()
+                    .split(',')
+                    .filter_map(|n| n.trim().parse().ok())
+                    .collect::<Vec<u32>>()
+            })
+            .filter(|sizes| !sizes.is_empty())
+            .collect()
+    }
+
+    #[test]
+    fn the_criterion_benchmarks_register_the_expected_sizes() {
+        let source = include_str!("../benches/rk4_step.rs");
+        // The pendulum and the towed scaling series.
+        assert_eq!(
+            literal_sizes(source, "o_n:", ';'),
+            vec![WALL_STEP_SIZES.to_vec(); 2]
+        );
+        assert_eq!(
+            literal_sizes(source, "dense:", ')'),
+            vec![WALL_DENSE_STEP_SIZES.to_vec(); 2]
+        );
+        assert_eq!(
+            literal_sizes(source, "tension_solve!(group,", ')'),
+            vec![TENSION_SIZES.to_vec()]
+        );
+        // A changed size is noticed.
+        let changed = source.replace(
+            "o_n: 16, 64, 300, 1024, 2048, 4096",
+            "o_n: 16, 64, 300, 1024, 4096",
+        );
+        assert_ne!(
+            literal_sizes(&changed, "o_n:", ';'),
+            vec![WALL_STEP_SIZES.to_vec(); 2]
+        );
     }
 }
