@@ -115,9 +115,10 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         self.states = [state; 2];
     }
 
-    /// The current state, mutably (for the caller that sets its time).
-    pub fn state_mut(&mut self) -> &mut State<T, N> {
-        &mut self.states[self.current]
+    /// Sets the current state's time, s, and nothing else (the caller checks it is
+    /// finite).
+    pub fn set_time(&mut self, time: f64) {
+        self.states[self.current].time = time;
     }
 
     /// The derivative of the last evaluation: the last stage of a step (k4), or what

@@ -169,7 +169,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// can land an ulp away from t1. A non-finite `time` is ignored.
     pub fn set_time(&mut self, time: f64) {
         if time.is_finite() {
-            self.rk4.state_mut().time = time;
+            self.rk4.set_time(time);
         }
     }
 
