@@ -10,12 +10,12 @@
 //! ```
 //!
 //! where f is a [`DerivativeSource`]: the product's O(N) passes ([`crate::Solver`]),
-//! the dense Kane reference ([`crate::dense::DenseDerivative`], `std` only) or the
+//! the dense Kane reference (`dense::DenseDerivative`, `std` only) or the
 //! benchmarks' reference derivatives. The renormalisation restores the state's
 //! invariants: unit directions, rates perpendicular to them, a unit quaternion.
 //!
-//! Invariants of the arithmetic, which every source shares and which make the
-//! results bit-identical whoever evaluates f:
+//! Invariants of the arithmetic, which every source shares, so that two sources
+//! giving the same derivatives give the same states bit for bit:
 //!
 //! - the stage factors come from dt rounded to `T` once: `h = T(dt)`, `h/2 = h 0.5`,
 //!   `h/6 = h (1/6)` (on the Cortex-M4F every f64 operation is a library call);
