@@ -337,4 +337,34 @@ mod tests {
         });
         assert!(md.contains(MISSING), "{md}");
     }
+
+    /// The headings and table header rows of a Markdown document, in order.
+    fn structure(markdown: &str) -> Vec<&str> {
+        let lines: Vec<&str> = markdown.lines().collect();
+        let is_rule = |line: &str| {
+            line.starts_with('|') && line.chars().all(|c| matches!(c, '|' | '-' | ':' | ' '))
+        };
+        (0..lines.len())
+            .filter(|&i| {
+                lines[i].starts_with('#')
+                    || (lines[i].starts_with('|') && lines.get(i + 1).is_some_and(|l| is_rule(l)))
+            })
+            .map(|i| lines[i])
+            .collect()
+    }
+
+    #[test]
+    fn complete_results_render_the_sections_and_tables_of_the_document() {
+        let (wall, instructions) = complete_results();
+        let md = render(&Inputs {
+            wall,
+            instructions,
+            ..Inputs::default()
+        });
+        let document = include_str!("../../../../docs/benchmarks.md");
+        assert_eq!(structure(&md), structure(document));
+        // The check can fail: a renamed section is noticed.
+        let renamed = md.replace("## Machine", "## Host");
+        assert_ne!(structure(&renamed), structure(document));
+    }
 }
