@@ -7,7 +7,9 @@
 //! setup functions, outside the counted region; the counted region is exactly one
 //! call.
 //!
-//! Benchmarks (`<group>::<function> <id>`, parsed by the report):
+//! Benchmarks (`<group>::<function> <id>`, read by the report). The names are Rust
+//! identifiers, which cannot come from constants: a test in `benches::names` reads
+//! this file and checks that it defines exactly the keys the report expects.
 //!
 //! - `steps::pendulum_f64 n{8,64,300,1024,4096}`: one `Solver::step(&fixed_anchor,
 //!   1e-4)` on the compound pendulum with N rods (capacity N), from its initial state.

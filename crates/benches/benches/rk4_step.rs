@@ -1,7 +1,8 @@
 //! Criterion wall-clock benchmarks of one RK4 step, of one tension solve and of the
 //! passes of one derivative evaluation.
 //!
-//! Groups (names are stable, they are quoted in the docs and parsed by the report):
+//! Groups (names are stable, they are quoted in the docs and read by the report; the
+//! names come from `benches::names`, which the report uses too):
 //!
 //! - `pendulum_rk4_step/{f64,f32}/{N}`: one `Solver::step(&fixed_anchor, 1e-4)` on the
 //!   compound pendulum with N rods (capacity N), N = 16, 64, 300, 1024, 2048, 4096.
@@ -36,6 +37,7 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
+use benches::names::{self, System, Variant};
 use benches::passes::{Pass, Passes};
 use benches::stepper::{Derivatives, ReferenceStepper};
 use benches::{
@@ -140,26 +142,28 @@ fn time_steps<T: Real, const N: usize, S: Stepper<T, N> + ?Sized>(
     total
 }
 
-/// Registers `{group}/{f64,f32,shooting}/{prefix}{N}` for the O(N) steps of `make(N)`
-/// and `{group}/dense/{prefix}{N}` for the dense ones, capacity N.
+/// Registers `{group}/{f64,f32,shooting}/{size}` for the O(N) steps of `make(N)`
+/// and `{group}/dense/{size}` for the dense ones, capacity N, `size` the system's
+/// name of N (`names::System::wall_size`).
 macro_rules! step_series {
-    ($group:expr, $make:ident, $prefix:literal, $path:ident, $dt:expr; o_n: $($n:literal),+; dense: $($d:literal),+) => {
+    ($group:expr, $system:expr, $make:ident, $path:ident, $dt:expr; o_n: $($n:literal),+; dense: $($d:literal),+) => {
         $({
+            let size = $system.wall_size($n);
             let mut solver = $make::<f64, $n>($n);
             let path = $path::<f64>();
-            let restart = finite_steps(&mut *solver, &path, $dt, concat!("f64/", $prefix, $n));
-            $group.bench_function(BenchmarkId::new("f64", concat!($prefix, $n)), |b| {
+            let restart = finite_steps(&mut *solver, &path, $dt, &format!("f64/{size}"));
+            $group.bench_function(BenchmarkId::new(Variant::F64.name(), &size), |b| {
                 b.iter_custom(|iters| time_steps(&mut *solver, &path, $dt, (restart, false), iters))
             });
             let mut shooting = ReferenceStepper::from_solver(&solver, Derivatives::Shooting);
-            $group.bench_function(BenchmarkId::new("shooting", concat!($prefix, $n)), |b| {
+            $group.bench_function(BenchmarkId::new(Variant::Shooting.name(), &size), |b| {
                 b.iter_custom(|iters| time_steps(&mut *shooting, &path, $dt, (RESTART_STEPS, true), iters))
             });
             drop((solver, shooting));
             let mut solver = $make::<f32, $n>($n);
             let path = $path::<f32>();
-            let restart = finite_steps(&mut *solver, &path, $dt, concat!("f32/", $prefix, $n));
-            $group.bench_function(BenchmarkId::new("f32", concat!($prefix, $n)), |b| {
+            let restart = finite_steps(&mut *solver, &path, $dt, &format!("f32/{size}"));
+            $group.bench_function(BenchmarkId::new(Variant::F32.name(), &size), |b| {
                 b.iter_custom(|iters| time_steps(&mut *solver, &path, $dt, (restart, false), iters))
             });
         })+
@@ -170,7 +174,7 @@ macro_rules! step_series {
             let solver = $make::<f64, $d>($d);
             let path = $path::<f64>();
             let mut dense = ReferenceStepper::from_solver(&solver, Derivatives::Dense);
-            $group.bench_function(BenchmarkId::new("dense", concat!($prefix, $d)), |b| {
+            $group.bench_function(BenchmarkId::new(Variant::Dense.name(), $system.wall_size($d)), |b| {
                 b.iter_custom(|iters| time_steps(&mut *dense, &path, $dt, (RESTART_STEPS, false), iters))
             });
         })+
@@ -179,8 +183,8 @@ macro_rules! step_series {
 
 /// `pendulum_rk4_step/{f64,f32,shooting}/{N}` and `pendulum_rk4_step/dense/{N}`.
 fn pendulum_rk4_step(c: &mut Criterion) {
-    let mut group = c.benchmark_group("pendulum_rk4_step");
-    step_series!(group, pendulum_solver, "", fixed_anchor, PENDULUM_DT;
+    let mut group = c.benchmark_group(names::PENDULUM_RK4_STEP);
+    step_series!(group, System::Pendulum, pendulum_solver, fixed_anchor, PENDULUM_DT;
         o_n: 16, 64, 300, 1024, 2048, 4096; dense: 16, 64, 300);
     group.finish();
 }
@@ -204,10 +208,11 @@ fn towed_step<T: Real, const N: usize>(
 /// `towed_rk4_step/{f32,f64}/graded16` and the uniform scaling series
 /// `towed_rk4_step/{f64,f32,shooting,dense}/uniform{N}`.
 fn towed_rk4_step(c: &mut Criterion) {
-    let mut group = c.benchmark_group("towed_rk4_step");
-    towed_step::<f32, GRADED_COUNT>(&mut group, "f32", "graded16", graded_layout());
-    towed_step::<f64, GRADED_COUNT>(&mut group, "f64", "graded16", graded_layout());
-    step_series!(group, towed_uniform_solver, "uniform", cruise_path, TOWED_SCALING_DT;
+    let mut group = c.benchmark_group(names::TOWED_RK4_STEP);
+    let [f32_name, f64_name] = names::GRADED_PRECISIONS;
+    towed_step::<f32, GRADED_COUNT>(&mut group, f32_name, names::GRADED16, graded_layout());
+    towed_step::<f64, GRADED_COUNT>(&mut group, f64_name, names::GRADED16, graded_layout());
+    step_series!(group, System::Towed, towed_uniform_solver, cruise_path, TOWED_SCALING_DT;
         o_n: 16, 64, 300, 1024, 2048, 4096; dense: 16, 64, 300);
     group.finish();
 }
@@ -221,14 +226,15 @@ macro_rules! tension_solve {
     ($group:expr, $($n:literal),+) => {$({
         let anchor = fixed_anchor::<f64>();
         let mut solver = pendulum_solver::<f64, $n>($n);
-        for (name, method) in [("two_sweep", TensionMethod::TwoSweep), ("shooting", TensionMethod::Shooting)] {
+        let [two_sweep, shooting, dense] = names::TENSION_METHODS;
+        for (name, method) in [(two_sweep, TensionMethod::TwoSweep), (shooting, TensionMethod::Shooting)] {
             solver.set_method(method);
             $group.bench_function(BenchmarkId::new(name, $n), |b| b.iter(|| black_box(solver.derivative(black_box(&anchor)))));
         }
         let (connection, air) =
             connection_and_air(solver.model(), &AircraftState::fixed(Vec3::zeros())).expect("valid fixed anchor");
         let (model, state) = (solver.model(), solver.state());
-        $group.bench_function(BenchmarkId::new("dense", $n), |b| {
+        $group.bench_function(BenchmarkId::new(dense, $n), |b| {
             b.iter(|| black_box(evaluate_dense(black_box(model), black_box(state), &connection, &air)))
         });
     })+};
@@ -236,7 +242,7 @@ macro_rules! tension_solve {
 
 /// `tension_solve/{two_sweep,shooting,dense}/{16,64,300}`.
 fn tension_solve(c: &mut Criterion) {
-    let mut group = c.benchmark_group("tension_solve");
+    let mut group = c.benchmark_group(names::TENSION_SOLVE);
     // The dense O(N^3) solve takes milliseconds at N = 300: flat sampling keeps the
     // run within the measurement time; it changes nothing for the fast cases.
     group.sampling_mode(SamplingMode::Flat);
@@ -260,25 +266,26 @@ fn breakdown<T: Real, const N: usize>(
 
 /// `eval_breakdown/{f64,f32}_{graded16,uniform300}/{pass}`.
 fn eval_breakdown(c: &mut Criterion) {
-    let mut group = c.benchmark_group("eval_breakdown");
+    let mut group = c.benchmark_group(names::EVAL_BREAKDOWN);
+    let [f64_graded16, f32_graded16, f64_uniform300, f32_uniform300] = names::BREAKDOWN_CASES;
     breakdown(
         &mut group,
-        "f64_graded16",
+        f64_graded16,
         &*towed_solver::<f64, GRADED_COUNT>(graded_layout()),
     );
     breakdown(
         &mut group,
-        "f32_graded16",
+        f32_graded16,
         &*towed_solver::<f32, GRADED_COUNT>(graded_layout()),
     );
     breakdown(
         &mut group,
-        "f64_uniform300",
+        f64_uniform300,
         &*towed_uniform_solver::<f64, 300>(300),
     );
     breakdown(
         &mut group,
-        "f32_uniform300",
+        f32_uniform300,
         &*towed_uniform_solver::<f32, 300>(300),
     );
     group.finish();

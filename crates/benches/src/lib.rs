@@ -11,7 +11,8 @@
 //!   ([`towed_solver`], [`cruise_path`]), stepped with [`TOWED_DT`]; and its
 //!   scaling series with N uniform segments ([`towed_uniform_solver`]), stepped with
 //!   [`TOWED_SCALING_DT`];
-//! - RK4 steps with the reference derivatives, shooting and dense ([`stepper`]), and
+//! - RK4 steps with the reference derivatives, shooting and dense ([`stepper`]:
+//!   solver-core's `Rk4` with another derivative source), and
 //!   one derivative evaluation taken apart into its passes ([`passes`]).
 //!
 //! Run the benchmarks with
@@ -21,7 +22,8 @@
 //! [`report`] turns the results of one run into `docs/benchmarks.md` (the
 //! `bench-report` binary, run by `cargo xtask bench-report`).
 //!
-//! Benchmark names (stable, quoted in the docs):
+//! Benchmark names (stable, quoted in the docs; defined once in [`names`], which
+//! the benchmarks and the report share):
 //! `pendulum_rk4_step/{f64,f32,shooting,dense}/{N}`,
 //! `towed_rk4_step/{f32,f64}/graded16`,
 //! `towed_rk4_step/{f64,f32,shooting,dense}/uniform{N}`,
@@ -29,6 +31,7 @@
 //! `eval_breakdown/{f64,f32}_{graded16,uniform300}/{pass}` (criterion; the gungraun
 //! names are listed in `benches/instructions.rs`).
 
+pub mod names;
 pub mod passes;
 pub mod report;
 pub mod stepper;

@@ -1,22 +1,28 @@
-//! RK4 steps with the reference derivatives (shooting form, dense Kane solution),
-//! written here because `solver-core` steps only with its own O(N) passes.
+//! RK4 steps with the reference derivatives (shooting form, dense Kane solution):
+//! `solver_core::rk4::Rk4`, the solver's own RK4, with a [`DerivativeSource`] that
+//! evaluates the derivative of choice.
 //!
-//! [`ReferenceStepper::step`] is the same scheme as `Solver::step`, operation for
-//! operation: stages at y, y + dt/2 k1, y + dt/2 k2 and y + dt k3 (flight path sampled
-//! at t, t + dt/2, t + dt/2, t + dt), then y + dt/6 (k1 + 2 k2 + 2 k3 + k4),
-//! renormalised. With [`Derivatives::TwoSweep`] it gives bit-identical states to
-//! `Solver::step` (a test in this file checks it), so the cost of the other two
-//! variants differs from the solver's only by their derivative evaluation.
+//! [`ReferenceStepper::step`] is therefore the scheme of `Solver::step`, operation
+//! for operation: stages at y, y + dt/2 k1, y + dt/2 k2 and y + dt k3 (flight path
+//! sampled at t, t + dt/2 and t + dt), then y + dt/6 (k1 + 2 k2 + 2 k3 + k4),
+//! renormalised, the state and stage buffers swapped. With [`Derivatives::TwoSweep`]
+//! it gives bit-identical states to `Solver::step` (a test in this file checks it),
+//! so the cost of the other two variants differs from the solver's only by their
+//! derivative evaluation.
 //!
 //! Differences from `Solver::step`, all for the benchmarks:
 //!
+//! - The flight path is sampled without the solver's air column cache and the first
+//!   stage never reuses an earlier evaluation (`connection_and_air` per distinct
+//!   time: three times per step).
 //! - The shooting form's round-off grows about 3.7x per segment: beyond a few tens of
 //!   segments its tensions are garbage or not finite. `Solver::step` stops at the first
 //!   evaluation that fails, so it would time one or two evaluations instead of four.
-//!   Here a failed shooting evaluation still runs pass 3 (the accelerations) and the
-//!   step carries on through all four stages; the step then reports the first error
-//!   and leaves the state unchanged, as `Solver::step` does. The work per step is
-//!   therefore the same whatever the numbers are.
+//!   Here a failed evaluation is recorded, a failed shooting evaluation still runs
+//!   pass 3 (the accelerations), and the step carries on through all four stages; the
+//!   step then reports the first error and leaves the state unchanged, as
+//!   `Solver::step` does. The work per step is therefore the same whatever the
+//!   numbers are.
 //! - The dense derivatives come from `solver_core::dense::evaluate_dense`, which
 //!   allocates its matrices on every call (it is a host-only reference).
 
@@ -24,7 +30,10 @@ use crate::on_large_stack;
 use solver_core::dense::evaluate_dense;
 use solver_core::dynamics::{self, accelerations, prepare};
 use solver_core::solver::connection_and_air;
-use solver_core::{Derivative, FlightPath, Model, Real, SolveError, Solver, State, Workspace};
+use solver_core::{
+    AirColumn, Derivative, DerivativeSource, FlightPath, Model, PointKinematics, Real, Rk4,
+    SolveError, Solver, State, Workspace,
+};
 
 /// Where [`ReferenceStepper`] takes the state derivative from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,12 +50,9 @@ pub enum Derivatives {
 #[derive(Clone, Debug)]
 pub struct ReferenceStepper<T: Real, const N: usize> {
     model: Model<T, N>,
-    state: State<T, N>,
     derivatives: Derivatives,
     ws: Workspace<T, N>,
-    stage: State<T, N>,
-    slope: Derivative<T, N>,
-    sum: Derivative<T, N>,
+    rk4: Rk4<T, N>,
 }
 
 impl<T: Real, const N: usize> ReferenceStepper<T, N> {
@@ -56,168 +62,97 @@ impl<T: Real, const N: usize> ReferenceStepper<T, N> {
         on_large_stack(|| {
             Box::new(ReferenceStepper {
                 model: *solver.model(),
-                state: *solver.state(),
                 derivatives,
                 ws: Workspace::default(),
-                stage: State::default(),
-                slope: Derivative::default(),
-                sum: Derivative::default(),
+                rk4: Rk4::new(*solver.state()),
             })
         })
     }
 
     /// The current state.
     pub fn state(&self) -> &State<T, N> {
-        &self.state
+        self.rk4.state()
     }
 
     /// Replaces the state (the caller keeps it finite: it is a copy of an earlier one).
     pub fn set_state(&mut self, state: State<T, N>) {
-        self.state = state;
+        self.rk4.set_state(state);
     }
 
     /// One RK4 step of `dt` seconds along `path`; on error the state is unchanged and
     /// the first error is returned, after all four stages were evaluated anyway.
     pub fn step<P: FlightPath<T> + ?Sized>(&mut self, path: &P, dt: f64) -> Result<(), SolveError> {
-        let n = self.model.segment_count();
-        let t0 = self.state.time;
-        let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
-        // The stage factors as `Solver::step` forms them.
-        let full = T::lit(dt);
-        let half = full * T::lit(0.5);
-        let sixth = full * T::lit(1.0 / 6.0);
-        let two = T::lit(2.0);
-        let mut first_error = None;
-        let mut note = |result: Result<(), SolveError>| {
-            if let Err(e) = result {
-                first_error.get_or_insert(e);
-            }
+        let mut source = Reference {
+            model: &self.model,
+            path,
+            derivatives: self.derivatives,
+            ws: &mut self.ws,
+            first_error: None,
         };
+        self.rk4.step(&mut source, dt, |_, _, _| {})
+    }
+}
 
-        // k1 at y.
-        self.stage = self.state;
-        note(self.evaluate(path, t0));
-        assign(&mut self.sum, &self.slope, n);
-        // k2 at y + dt/2 k1.
-        set_stage(&mut self.stage, &self.state, &self.slope, half, n);
-        note(self.evaluate(path, t_half));
-        add_scaled(&mut self.sum, &self.slope, two, n);
-        // k3 at y + dt/2 k2.
-        set_stage(&mut self.stage, &self.state, &self.slope, half, n);
-        note(self.evaluate(path, t_half));
-        add_scaled(&mut self.sum, &self.slope, two, n);
-        // k4 at y + dt k3.
-        set_stage(&mut self.stage, &self.state, &self.slope, full, n);
-        note(self.evaluate(path, t_end));
-        add_scaled(&mut self.sum, &self.slope, T::one(), n);
-        // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
-        set_stage(&mut self.stage, &self.state, &self.sum, sixth, n);
-        self.stage.time = t_end;
-        renormalise(&mut self.stage, n);
-        if !self.stage.is_finite(n) {
-            note(Err(SolveError::NonFinite { joint: n }));
-        }
-        match first_error {
-            Some(e) => Err(e),
-            None => {
-                self.state = self.stage;
-                Ok(())
-            }
-        }
+/// The derivative of [`Derivatives`] along `path`, recording the first failed
+/// evaluation instead of stopping at it (see the module documentation).
+struct Reference<'a, T: Real, const N: usize, P: ?Sized> {
+    model: &'a Model<T, N>,
+    path: &'a P,
+    derivatives: Derivatives,
+    ws: &'a mut Workspace<T, N>,
+    first_error: Option<SolveError>,
+}
+
+impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
+    for Reference<'_, T, N, P>
+{
+    type Inputs = (PointKinematics<T>, AirColumn<T>);
+
+    fn segment_count(&self) -> usize {
+        self.model.segment_count()
     }
 
-    /// The derivative at `self.stage` and time `t` into `self.slope`.
-    fn evaluate<P: FlightPath<T> + ?Sized>(&mut self, path: &P, t: f64) -> Result<(), SolveError> {
-        let (connection, air) = connection_and_air(&self.model, &path.state_at(t))?;
-        match self.derivatives {
+    fn inputs_at(&mut self, time: f64) -> Result<Self::Inputs, SolveError> {
+        Ok(connection_and_air(self.model, &self.path.state_at(time))?)
+    }
+
+    /// Always `Ok`: a failure is kept for [`DerivativeSource::finish`].
+    fn evaluate(
+        &mut self,
+        state: &State<T, N>,
+        (connection, air): &Self::Inputs,
+        out: &mut Derivative<T, N>,
+    ) -> Result<(), SolveError> {
+        let result = match self.derivatives {
             Derivatives::TwoSweep => dynamics::evaluate(
-                &self.model,
-                &self.stage,
-                &connection,
-                &air,
+                self.model,
+                state,
+                connection,
+                air,
                 solver_core::TensionMethod::TwoSweep,
-                &mut self.ws,
-                &mut self.slope,
+                self.ws,
+                out,
             ),
             Derivatives::Shooting => {
-                prepare(&self.model, &self.stage, &connection, &air, &mut self.ws);
-                let solved =
-                    dynamics::solve_tensions_shooting(&self.model, &self.stage, &mut self.ws);
+                prepare(self.model, state, connection, air, self.ws);
+                let solved = dynamics::solve_tensions_shooting(self.model, state, self.ws);
                 // Pass 3 runs on failure too: the same work whatever the round-off did.
-                accelerations(&self.model, &self.stage, &self.ws, &mut self.slope);
+                accelerations(self.model, state, self.ws, out);
                 solved
             }
-            Derivatives::Dense => {
-                let solution = evaluate_dense(&self.model, &self.stage, &connection, &air)?;
-                self.slope = solution.derivative;
-                Ok(())
-            }
+            Derivatives::Dense => evaluate_dense(self.model, state, connection, air)
+                .map(|solution| *out = solution.derivative),
+        };
+        if let Err(e) = result {
+            self.first_error.get_or_insert(e);
         }
+        Ok(())
     }
-}
 
-// The RK4 helpers of `solver-core`'s `State`/`Derivative` are crate-private; these
-// are the same loops, in the same order (bit-identical results).
-
-/// `stage = base + h d` over the first `count` segments.
-fn set_stage<T: Real, const N: usize>(
-    stage: &mut State<T, N>,
-    base: &State<T, N>,
-    d: &Derivative<T, N>,
-    h: T,
-    count: usize,
-) {
-    for i in 0..count {
-        stage.directions[i] = base.directions[i] + d.directions[i] * h;
-        stage.rates[i] = base.rates[i] + d.rates[i] * h;
+    /// The first failed evaluation rejects the step.
+    fn finish(&mut self) -> Result<(), SolveError> {
+        self.first_error.map_or(Ok(()), Err)
     }
-    for k in 0..4 {
-        stage.decoy_attitude[k] = base.decoy_attitude[k] + d.decoy_attitude[k] * h;
-    }
-    stage.decoy_rate = base.decoy_rate + d.decoy_rate * h;
-}
-
-/// Unit directions, rates perpendicular to them, unit quaternion.
-fn renormalise<T: Real, const N: usize>(state: &mut State<T, N>, count: usize) {
-    for i in 0..count {
-        let e = state.directions[i] / state.directions[i].norm();
-        state.directions[i] = e;
-        let w = state.rates[i];
-        state.rates[i] = w - e * w.dot(&e);
-    }
-    let n = state
-        .decoy_attitude
-        .iter()
-        .fold(T::zero(), |a, q| a + *q * *q)
-        .sqrt();
-    for q in &mut state.decoy_attitude {
-        *q /= n;
-    }
-}
-
-/// `sum = d`.
-fn assign<T: Real, const N: usize>(sum: &mut Derivative<T, N>, d: &Derivative<T, N>, count: usize) {
-    sum.directions[..count].copy_from_slice(&d.directions[..count]);
-    sum.rates[..count].copy_from_slice(&d.rates[..count]);
-    sum.decoy_attitude = d.decoy_attitude;
-    sum.decoy_rate = d.decoy_rate;
-}
-
-/// `sum += w d`.
-fn add_scaled<T: Real, const N: usize>(
-    sum: &mut Derivative<T, N>,
-    d: &Derivative<T, N>,
-    w: T,
-    count: usize,
-) {
-    for i in 0..count {
-        sum.directions[i] += d.directions[i] * w;
-        sum.rates[i] += d.rates[i] * w;
-    }
-    for k in 0..4 {
-        sum.decoy_attitude[k] += d.decoy_attitude[k] * w;
-    }
-    sum.decoy_rate += d.decoy_rate * w;
 }
 
 #[cfg(test)]

@@ -37,11 +37,11 @@ use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use progress::Progress;
 use serde::Serialize;
-use solver_core::dense::evaluate_dense;
+use solver_core::dense::{DenseDerivative, evaluate_dense};
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
 use solver_core::solver::connection_and_air;
 use solver_core::{
-    AircraftState, Derivative, Model, Solver, State, Uniform, Vec3, pendulum_energy,
+    AircraftState, Model, Rk4, Solver, State, Uniform, Vec3, pendulum_energy,
     pendulum_initial_state, reference_pendulum,
 };
 
@@ -825,55 +825,9 @@ fn integrate_recurrence(
     )
 }
 
-/// `base + h d` over the first `n` segments (and the decoy entries).
-fn stage(
-    base: &PendulumState,
-    d: &Derivative<f64, PENDULUM_CAPACITY>,
-    h: f64,
-    n: usize,
-) -> PendulumState {
-    let mut s = *base;
-    for i in 0..n {
-        s.directions[i] = base.directions[i] + d.directions[i] * h;
-        s.rates[i] = base.rates[i] + d.rates[i] * h;
-    }
-    for k in 0..4 {
-        s.decoy_attitude[k] = base.decoy_attitude[k] + d.decoy_attitude[k] * h;
-    }
-    s.decoy_rate = base.decoy_rate + d.decoy_rate * h;
-    s
-}
-
-/// `acc += w d` over the first `n` segments (and the decoy entries).
-fn accumulate(
-    acc: &mut Derivative<f64, PENDULUM_CAPACITY>,
-    d: &Derivative<f64, PENDULUM_CAPACITY>,
-    w: f64,
-    n: usize,
-) {
-    for i in 0..n {
-        acc.directions[i] += d.directions[i] * w;
-        acc.rates[i] += d.rates[i] * w;
-    }
-    for k in 0..4 {
-        acc.decoy_attitude[k] += d.decoy_attitude[k] * w;
-    }
-    acc.decoy_rate += d.decoy_rate * w;
-}
-
-/// Unit directions, rates perpendicular to them, unit quaternion (as the solver does after each step).
-fn renormalise(s: &mut PendulumState, n: usize) {
-    for i in 0..n {
-        let e = s.directions[i] / s.directions[i].norm();
-        s.directions[i] = e;
-        s.rates[i] -= e * s.rates[i].dot(&e);
-    }
-    let norm = s.decoy_attitude.iter().map(|q| q * q).sum::<f64>().sqrt();
-    for q in &mut s.decoy_attitude {
-        *q /= norm;
-    }
-}
-
+/// The dense reference stepped by the solver's RK4 (`solver_core::rk4::Rk4` with
+/// `dense::DenseDerivative`): the same stages, weights and renormalisation as the
+/// recurrence's solver; only the derivative differs.
 fn integrate_dense(
     model: &PendulumModel,
     initial: PendulumState,
@@ -881,48 +835,30 @@ fn integrate_dense(
     steps: &[u64],
 ) -> Result<Vec<SampleValues>, Failure> {
     let n = model.segment_count();
-    let (connection, air) = connection_and_air(model, &fixed_anchor().initial)
+    let anchor = fixed_anchor();
+    let (connection, air) = connection_and_air(model, &anchor.initial)
         .map_err(|e| solver_failure("anchor rejected", e))?;
-    let evaluate = |s: &PendulumState| evaluate_dense(model, s, &connection, &air);
-    let state = std::cell::RefCell::new(Box::new(initial));
+    let rk4 = std::cell::RefCell::new(Box::new(Rk4::new(initial)));
     sample_run(
         steps,
         || {
-            let mut y = state.borrow_mut();
-            let (half, sixth) = (0.5 * dt, dt / 6.0);
-            let slope = |s: &PendulumState| {
-                evaluate(s)
-                    .map(|d| d.derivative)
-                    .map_err(|e| step_failure(y.time, e))
-            };
-            let k1 = slope(&y)?;
-            let mut sum = k1;
-            let k2 = slope(&stage(&y, &k1, half, n))?;
-            accumulate(&mut sum, &k2, 2.0, n);
-            let k3 = slope(&stage(&y, &k2, half, n))?;
-            accumulate(&mut sum, &k3, 2.0, n);
-            let k4 = slope(&stage(&y, &k3, dt, n))?;
-            accumulate(&mut sum, &k4, 1.0, n);
-            let mut next = stage(&y, &sum, sixth, n);
-            next.time = y.time + dt;
-            renormalise(&mut next, n);
-            if !next.is_finite(n) {
-                return Err(step_failure(y.time, "non-finite state"));
-            }
-            **y = next;
-            Ok(())
+            let mut rk4 = rk4.borrow_mut();
+            let t = rk4.state().time;
+            rk4.step(&mut DenseDerivative::new(model, &anchor), dt, |_, _, _| {})
+                .map_err(|e| step_failure(t, e))
         },
         || {
-            let y = state.borrow();
-            let solution =
-                evaluate(&y).map_err(|e| solver_failure("dense evaluation failed", e))?;
+            let rk4 = rk4.borrow();
+            let y = rk4.state();
+            let solution = evaluate_dense(model, y, &connection, &air)
+                .map_err(|e| solver_failure("dense evaluation failed", e))?;
             let tip = (0..n).fold(connection.position, |p, i| {
                 p + y.directions[i] * model.lengths()[i]
             });
             Ok((
                 pendulum_point(&tip),
                 solution.joint_forces[0].norm(),
-                pendulum_energy(model, &y),
+                pendulum_energy(model, y),
             ))
         },
     )

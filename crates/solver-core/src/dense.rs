@@ -14,6 +14,9 @@
 //! recovered afterwards from each body's Newton equation, from the free end up.
 //! It shares only the kinematics and load models with the O(N) solver (pass 1 of
 //! [`crate::dynamics`]), not the tension recurrence.
+//!
+//! [`DenseDerivative`] steps it with the solver's RK4 ([`crate::rk4::Rk4`]): the
+//! same stages, weights and renormalisation, only the derivative differs.
 
 extern crate std;
 use std::vec::Vec;
@@ -24,8 +27,10 @@ use crate::atmosphere::AirColumn;
 use crate::dynamics::{Workspace, prepare};
 use crate::error::SolveError;
 use crate::model::Model;
-use crate::motion::PointKinematics;
+use crate::motion::{FlightPath, PointKinematics};
+use crate::rk4::DerivativeSource;
 use crate::scalar::{Real, Vec3};
+use crate::solver::connection_and_air;
 use crate::state::{Derivative, State};
 
 /// Result of a dense evaluation.
@@ -231,4 +236,44 @@ pub fn evaluate_dense<T: Real, const N: usize>(
         derivative,
         joint_forces,
     })
+}
+
+/// The dense Kane derivative along a flight path, as a [`DerivativeSource`] for
+/// [`crate::rk4::Rk4`]: each stage samples the path ([`connection_and_air`], no
+/// cache) and evaluates [`evaluate_dense`] (which allocates its matrices).
+#[derive(Clone, Copy, Debug)]
+pub struct DenseDerivative<'a, T: Real, const N: usize, P: ?Sized> {
+    model: &'a Model<T, N>,
+    path: &'a P,
+}
+
+impl<'a, T: Real, const N: usize, P: FlightPath<T> + ?Sized> DenseDerivative<'a, T, N, P> {
+    /// The dense derivative of `model` hanging from the aircraft flying `path`.
+    pub fn new(model: &'a Model<T, N>, path: &'a P) -> Self {
+        DenseDerivative { model, path }
+    }
+}
+
+impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
+    for DenseDerivative<'_, T, N, P>
+{
+    type Inputs = (PointKinematics<T>, AirColumn<T>);
+
+    fn segment_count(&self) -> usize {
+        self.model.segment_count()
+    }
+
+    fn inputs_at(&mut self, time: f64) -> Result<Self::Inputs, SolveError> {
+        Ok(connection_and_air(self.model, &self.path.state_at(time))?)
+    }
+
+    fn evaluate(
+        &mut self,
+        state: &State<T, N>,
+        (connection, air): &Self::Inputs,
+        out: &mut Derivative<T, N>,
+    ) -> Result<(), SolveError> {
+        *out = evaluate_dense(self.model, state, connection, air)?.derivative;
+        Ok(())
+    }
 }

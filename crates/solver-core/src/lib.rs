@@ -45,6 +45,7 @@ pub mod model;
 pub mod motion;
 pub mod pendulum;
 pub mod profiles;
+pub mod rk4;
 pub mod scalar;
 pub mod solver;
 pub mod state;
@@ -59,6 +60,7 @@ pub use model::{
 };
 pub use motion::{AircraftState, FlightPath, PointKinematics, Uniform};
 pub use pendulum::{pendulum_energy, pendulum_initial_state, reference_pendulum};
+pub use rk4::{DerivativeSource, Rk4};
 pub use scalar::{Mat3, Real, Vec3};
 pub use solver::{DecoyOutputs, Outputs, Solver};
 pub use state::{Derivative, State};

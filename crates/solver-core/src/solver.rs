@@ -7,6 +7,7 @@ use crate::dynamics::{self, TensionMethod, Workspace};
 use crate::error::{InputError, SolveError};
 use crate::model::Model;
 use crate::motion::{AircraftState, FlightPath, PointKinematics};
+use crate::rk4::{DerivativeSource, Rk4};
 use crate::scalar::{Real, Vec3};
 use crate::state::{Derivative, State};
 
@@ -18,24 +19,19 @@ use crate::state::{Derivative, State};
 #[derive(Clone, Debug)]
 pub struct Solver<T: Real, const N: usize> {
     model: Model<T, N>,
-    /// The state (`states[current]`) and the RK4 stage buffer (the other one): a
-    /// step writes its result into the stage buffer and swaps the two, rather
-    /// than copying it. Their unused entries (beyond the model's segments) are
-    /// always equal, so the swap changes none of them.
-    states: [State<T, N>; 2],
-    current: usize,
+    /// The state and RK4's buffers (the stage buffer is swapped with the state after
+    /// a step rather than copied).
+    rk4: Rk4<T, N>,
     method: TensionMethod,
     ws: Workspace<T, N>,
-    slope: Derivative<T, N>,
-    sum: Derivative<T, N>,
     /// The last air column built (a cache: [`AirColumn::about`] is a pure function
     /// of the altitude, so a column reused while it [`AirColumn::serves`] is the one
     /// that would be built).
     air: Option<AirColumn<T>>,
-    /// When `ws` and `slope` hold the evaluation at the current state: the
-    /// connection-point kinematics and air reference it was evaluated with. The next
-    /// step's first stage reuses it if its inputs are the same bits (see
-    /// [`Solver::step_observed`]).
+    /// When `ws` and the last derivative of `rk4` hold the evaluation at the current
+    /// state: the connection-point kinematics and air reference it was evaluated
+    /// with. The next step's first stage reuses it if its inputs are the same bits
+    /// (see [`Solver::step_observed`]).
     evaluated: Option<EvaluationKey<T>>,
 }
 
@@ -71,6 +67,60 @@ impl<T: Real> EvaluationKey<T> {
     }
 }
 
+/// The product's derivative for [`Rk4`]: the three passes of
+/// [`dynamics::evaluate`] along a flight path, with the solver's air column cache
+/// and its last output evaluation as the first stage's candidate.
+struct Towed<'a, T: Real, const N: usize, P: ?Sized> {
+    model: &'a Model<T, N>,
+    path: &'a P,
+    method: TensionMethod,
+    ws: &'a mut Workspace<T, N>,
+    air: &'a mut Option<AirColumn<T>>,
+    evaluated: &'a mut Option<EvaluationKey<T>>,
+}
+
+impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
+    for Towed<'_, T, N, P>
+{
+    type Inputs = (PointKinematics<T>, AirColumn<T>);
+
+    #[inline(always)]
+    fn segment_count(&self) -> usize {
+        self.model.segment_count()
+    }
+
+    #[inline(always)]
+    fn inputs_at(&mut self, time: f64) -> Result<Self::Inputs, SolveError> {
+        Ok(inputs_at(self.model, self.air, &self.path.state_at(time))?)
+    }
+
+    #[inline(always)]
+    fn evaluate(
+        &mut self,
+        state: &State<T, N>,
+        (connection, air): &Self::Inputs,
+        out: &mut Derivative<T, N>,
+    ) -> Result<(), SolveError> {
+        dynamics::evaluate(
+            self.model,
+            state,
+            connection,
+            air,
+            self.method,
+            self.ws,
+            out,
+        )
+    }
+
+    /// The evaluation [`Solver::outputs`] left is the first stage when its inputs are
+    /// the same bits (it is forgotten either way: the step overwrites it).
+    #[inline(always)]
+    fn holds_first_stage(&mut self, (connection, air): &Self::Inputs) -> bool {
+        let key = EvaluationKey::new(connection, air, self.method);
+        matches!(self.evaluated.take(), Some(last) if last.same(&key))
+    }
+}
+
 impl<T: Real, const N: usize> Solver<T, N> {
     /// A solver for `model` starting from `state`.
     ///
@@ -78,12 +128,9 @@ impl<T: Real, const N: usize> Solver<T, N> {
     pub fn new(model: Model<T, N>, state: State<T, N>) -> Result<Self, SolveError> {
         let mut solver = Solver {
             model,
-            states: [State::default(); 2],
-            current: 0,
+            rk4: Rk4::new(State::default()),
             method: TensionMethod::TwoSweep,
             ws: Workspace::default(),
-            slope: Derivative::default(),
-            sum: Derivative::default(),
             air: None,
             evaluated: None,
         };
@@ -104,7 +151,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
 
     /// The current state (copy it to save; restore with [`Solver::set_state`]).
     pub fn state(&self) -> &State<T, N> {
-        &self.states[self.current]
+        self.rk4.state()
     }
 
     /// Replaces the state after checking it is finite; on error the old state stays.
@@ -112,7 +159,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         if !state.is_finite(self.model.segment_count()) {
             return Err(SolveError::NonFinite { joint: 0 });
         }
-        self.states = [state; 2];
+        self.rk4.set_state(state);
         self.evaluated = None;
         Ok(())
     }
@@ -122,7 +169,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// can land an ulp away from t1. A non-finite `time` is ignored.
     pub fn set_time(&mut self, time: f64) {
         if time.is_finite() {
-            self.states[self.current].time = time;
+            self.rk4.set_time(time);
         }
     }
 
@@ -142,76 +189,34 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// step. RK4's first stage evaluates the dynamics there anyway, so recording every
     /// step this way costs no extra evaluation (calling [`Solver::outputs`] after each
     /// step would cost a fifth one). `observe` is not called if that evaluation fails.
+    ///
+    /// The step is [`Rk4::step`] with the product's passes. The flight path is
+    /// sampled once per distinct time (k2 and k3 share t + dt/2); the first stage
+    /// reuses the evaluation [`Solver::outputs`] left at this state when its inputs
+    /// (connection-point kinematics, air column, method) are the same bits (the
+    /// outputs a caller read after the previous step, on a path that continues
+    /// through them).
     pub fn step_observed<P, F>(&mut self, path: &P, dt: f64, observe: F) -> Result<(), SolveError>
     where
         P: FlightPath<T> + ?Sized,
         F: FnOnce(&Outputs<'_, T, N>),
     {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(InputError::BadTimeStep.into());
-        }
-        let n = self.model.segment_count();
-        let model = &self.model;
-        let method = self.method;
-        let ws = &mut self.ws;
-        let (sum, slope) = (&mut self.sum, &mut self.slope);
-        let air = &mut self.air;
-        let (state, stage) = halves(&mut self.states, self.current);
-        let t0 = state.time;
-        let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
-        // The stage factors from dt rounded to T once (on the Cortex-M4F every f64
-        // operation is a library call).
-        let full = T::lit(dt);
-        let half = full * T::lit(0.5);
-        let sixth = full * T::lit(1.0 / 6.0);
-        let two = T::lit(2.0);
-
-        // The flight path is sampled once per distinct time: k2 and k3 both evaluate
-        // at t0 + dt/2.
-        let (start, start_air) = inputs_at(model, air, &path.state_at(t0))?;
-        // k1 at the current state, straight into the weighted sum (sum = k1); or, when
-        // the last evaluation was at this state with the same inputs (the outputs a
-        // caller read after the previous step, on a path that continues through
-        // them), a copy of it: the same bits without evaluating again.
-        let key = EvaluationKey::new(&start, &start_air, method);
-        match self.evaluated.take() {
-            Some(last) if last.same(&key) => sum.copy_used(slope, n),
-            _ => dynamics::evaluate(model, state, &start, &start_air, method, ws, sum)?,
-        }
-        observe(&Outputs {
-            model,
-            state,
-            ws,
-            derivative: sum,
-        });
-        let (middle, middle_air) = inputs_at(model, air, &path.state_at(t_half))?;
-        // k2 at y + dt/2 k1.
-        stage.set_stage(state, sum, half, n);
-        dynamics::evaluate(model, stage, &middle, &middle_air, method, ws, slope)?;
-        // k3 at y + dt/2 k2 (sum += 2 k2).
-        stage.set_stage_accumulating(state, slope, half, sum, two, n);
-        dynamics::evaluate(model, stage, &middle, &middle_air, method, ws, slope)?;
-        // k4 at y + dt k3 (sum += 2 k3).
-        let (end, end_air) = inputs_at(model, air, &path.state_at(t_end))?;
-        stage.set_stage_accumulating(state, slope, full, sum, two, n);
-        dynamics::evaluate(model, stage, &end, &end_air, method, ws, slope)?;
-        // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
-        let probe = stage.set_final(state, sum, slope, sixth, n);
-        stage.time = t_end;
-        // The probe is finite only if every value is; the full check runs only when it is not.
-        let probe_finite = probe.finite() && t_end.is_finite();
-        if !probe_finite && !stage.is_finite(n) {
-            let joint = (0..n)
-                .find(|&i| {
-                    !(crate::scalar::vec_finite(&stage.directions[i])
-                        && crate::scalar::vec_finite(&stage.rates[i]))
-                })
-                .map_or(n, |i| i + 1);
-            return Err(SolveError::NonFinite { joint });
-        }
-        // The stage buffer holds the new state: swap the roles.
-        self.current = 1 - self.current;
-        Ok(())
+        let mut towed = Towed {
+            model: &self.model,
+            path,
+            method: self.method,
+            ws: &mut self.ws,
+            air: &mut self.air,
+            evaluated: &mut self.evaluated,
+        };
+        self.rk4.step(&mut towed, dt, |towed, state, k1| {
+            observe(&Outputs {
+                model: towed.model,
+                state,
+                ws: towed.ws,
+                derivative: k1,
+            })
+        })
     }
 
     /// Evaluates the dynamics at the current state and returns the outputs
@@ -221,12 +226,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         path: &P,
     ) -> Result<Outputs<'_, T, N>, SolveError> {
         self.evaluate_here(path)?;
-        Ok(Outputs {
-            model: &self.model,
-            state: &self.states[self.current],
-            ws: &self.ws,
-            derivative: &self.slope,
-        })
+        Ok(self.last_outputs())
     }
 
     /// The outputs of the most recent evaluation (the last RK4 stage of a step, or
@@ -236,9 +236,9 @@ impl<T: Real, const N: usize> Solver<T, N> {
     pub fn last_outputs(&self) -> Outputs<'_, T, N> {
         Outputs {
             model: &self.model,
-            state: &self.states[self.current],
+            state: self.rk4.state(),
             ws: &self.ws,
-            derivative: &self.slope,
+            derivative: self.rk4.last_derivative(),
         }
     }
 
@@ -248,14 +248,14 @@ impl<T: Real, const N: usize> Solver<T, N> {
         path: &P,
     ) -> Result<Derivative<T, N>, SolveError> {
         self.evaluate_here(path)?;
-        Ok(self.slope)
+        Ok(*self.rk4.last_derivative())
     }
 
-    /// Evaluates the dynamics at the current state and time into `ws` and `slope`,
-    /// and remembers the inputs for the next step's first stage.
+    /// Evaluates the dynamics at the current state and time into `ws` and the last
+    /// derivative, and remembers the inputs for the next step's first stage.
     fn evaluate_here<P: FlightPath<T> + ?Sized>(&mut self, path: &P) -> Result<(), SolveError> {
         self.evaluated = None;
-        let state = &self.states[self.current];
+        let (state, slope) = self.rk4.state_and_last_derivative();
         let (connection, air) = inputs_at(&self.model, &mut self.air, &path.state_at(state.time))?;
         dynamics::evaluate(
             &self.model,
@@ -264,21 +264,11 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &air,
             self.method,
             &mut self.ws,
-            &mut self.slope,
+            slope,
         )?;
         self.evaluated = Some(EvaluationKey::new(&connection, &air, self.method));
         Ok(())
     }
-}
-
-/// The state and the stage buffer of [`Solver::states`], `current` first.
-#[inline(always)]
-fn halves<T: Real, const N: usize>(
-    states: &mut [State<T, N>; 2],
-    current: usize,
-) -> (&State<T, N>, &mut State<T, N>) {
-    let [a, b] = states;
-    if current == 0 { (a, b) } else { (b, a) }
 }
 
 /// [`connection_and_air`] with the solver's air column cache `air` (the same result).

@@ -62,6 +62,8 @@ fn run() -> Result<(), String> {
     let instructions = read_gungraun(&target.join("gungraun"))
         .map_err(|e| format!("{e} (run `{}` first)", report::GUNGRAUN_COMMAND))?;
     println!("gungraun: {} results", instructions.len());
+    // A renamed or missing benchmark is an error here, not an "n/a" in the document.
+    report::check_complete(&wall, &instructions).map_err(|e| e.to_string())?;
 
     let (firmware, firmware_m7) = if firmware_runs {
         (

@@ -1,0 +1,342 @@
+//! The one fixed-step RK4 of the workspace (DESIGN §4), generic over where the
+//! state's time derivative comes from.
+//!
+//! [`Rk4::step`] advances y(t) by dt:
+//!
+//! ```text
+//!   k1 = f(y, t)                 k2 = f(y + dt/2 k1, t + dt/2)
+//!   k3 = f(y + dt/2 k2, t + dt/2)  k4 = f(y + dt k3, t + dt)
+//!   y(t + dt) = y + dt/6 (k1 + 2 k2 + 2 k3 + k4), renormalised
+//! ```
+//!
+//! where f is a [`DerivativeSource`]: the product's O(N) passes ([`crate::Solver`]),
+//! the dense Kane reference (`dense::DenseDerivative`, `std` only) or the
+//! benchmarks' reference derivatives. The renormalisation restores the state's
+//! invariants: unit directions, rates perpendicular to them, a unit quaternion.
+//!
+//! Invariants of the arithmetic, which every source shares, so that two sources
+//! giving the same derivatives give the same states bit for bit:
+//!
+//! - the stage factors come from dt rounded to `T` once: `h = T(dt)`, `h/2 = h 0.5`,
+//!   `h/6 = h (1/6)` (on the Cortex-M4F every f64 operation is a library call);
+//! - the source's inputs are sampled once per distinct time (k2 and k3 share
+//!   t + dt/2);
+//! - the weighted sum is formed in the stage passes (`sum = k1`, `sum += 2 k2`,
+//!   `sum += 2 k3`) and the result as `y + dt/6 (sum + k4)`, renormalised in the same
+//!   pass (`State::set_final`);
+//! - the state and the stage buffer are swapped after a successful step rather than
+//!   copied; on any error the state is left exactly as it was.
+//!
+//! No heap, no dynamic dispatch: the step is generic over the source and inlined
+//! into its caller.
+
+use crate::error::{InputError, SolveError};
+use crate::scalar::{Real, vec_finite};
+use crate::state::{Derivative, State};
+
+/// Where the state's time derivative comes from: f(y, t) for [`Rk4::step`].
+///
+/// A source holds whatever the derivative needs besides the state (a model, a
+/// flight path, scratch space). It is asked for its time-dependent inputs once per
+/// distinct time of a step and evaluates the derivative at a state with them.
+pub trait DerivativeSource<T: Real, const N: usize> {
+    /// The inputs of an evaluation at one time (for the towed system: the
+    /// connection-point kinematics and the air column).
+    type Inputs;
+
+    /// Number of used segments of the states this source evaluates.
+    fn segment_count(&self) -> usize;
+
+    /// The inputs at `time`, s; an error rejects the step.
+    fn inputs_at(&mut self, time: f64) -> Result<Self::Inputs, SolveError>;
+
+    /// Writes dy/dt at `state` with `inputs` into `out` (its first
+    /// [`DerivativeSource::segment_count`] segments and the decoy entries).
+    fn evaluate(
+        &mut self,
+        state: &State<T, N>,
+        inputs: &Self::Inputs,
+        out: &mut Derivative<T, N>,
+    ) -> Result<(), SolveError>;
+
+    /// True when [`Rk4::last_derivative`] already holds the derivative at the current
+    /// state with `inputs`, bit for bit: the first stage then copies it instead of
+    /// evaluating again. Called once per step, with the inputs at the step's start.
+    /// The default never reuses.
+    #[inline(always)]
+    fn holds_first_stage(&mut self, inputs: &Self::Inputs) -> bool {
+        let _ = inputs;
+        false
+    }
+
+    /// Called after the four stages, before the new state is accepted: an error
+    /// rejects the step and leaves the state as it was. For a source that records a
+    /// failed evaluation and carries on (so that every step does the same work).
+    /// The default accepts.
+    #[inline(always)]
+    fn finish(&mut self) -> Result<(), SolveError> {
+        Ok(())
+    }
+}
+
+/// The integrated state and RK4's buffers: the state (`states[current]`), the stage
+/// buffer (the other one), the last stage's derivative and the weighted sum.
+///
+/// A step writes its result into the stage buffer and swaps the two, rather than
+/// copying it. Their unused entries (beyond the source's segments) are always
+/// equal, so the swap changes none of them.
+#[derive(Clone, Debug)]
+pub struct Rk4<T: Real, const N: usize> {
+    states: [State<T, N>; 2],
+    current: usize,
+    slope: Derivative<T, N>,
+    sum: Derivative<T, N>,
+}
+
+impl<T: Real, const N: usize> Rk4<T, N> {
+    /// An integrator starting from `state` (the caller checks it is finite).
+    pub fn new(state: State<T, N>) -> Self {
+        Rk4 {
+            states: [state; 2],
+            current: 0,
+            slope: Derivative::default(),
+            sum: Derivative::default(),
+        }
+    }
+
+    /// The current state.
+    #[inline(always)]
+    pub fn state(&self) -> &State<T, N> {
+        &self.states[self.current]
+    }
+
+    /// Replaces the state (the caller checks it is finite).
+    pub fn set_state(&mut self, state: State<T, N>) {
+        self.states = [state; 2];
+    }
+
+    /// Sets the current state's time, s, and nothing else (the caller checks it is
+    /// finite).
+    pub fn set_time(&mut self, time: f64) {
+        self.states[self.current].time = time;
+    }
+
+    /// The derivative of the last evaluation: the last stage of a step (k4), or what
+    /// the caller wrote through [`Rk4::state_and_last_derivative`].
+    #[inline(always)]
+    pub fn last_derivative(&self) -> &Derivative<T, N> {
+        &self.slope
+    }
+
+    /// The current state and the last derivative's buffer, for an evaluation at the
+    /// current state that a later step's first stage may reuse
+    /// ([`DerivativeSource::holds_first_stage`]).
+    #[inline(always)]
+    pub fn state_and_last_derivative(&mut self) -> (&State<T, N>, &mut Derivative<T, N>) {
+        (&self.states[self.current], &mut self.slope)
+    }
+
+    /// Advances the state by one RK4 step of `dt` seconds with the derivatives of
+    /// `source`, then renormalises (unit directions, rates perpendicular to them,
+    /// unit quaternion).
+    ///
+    /// `observe` is called with the source, the state before the step and k1 (the
+    /// source's scratch then holds that evaluation), unless the first stage fails.
+    ///
+    /// On any error (a bad `dt`, the source's inputs or evaluation, a non-finite
+    /// result) the state is left exactly as it was. A non-finite result names the
+    /// first segment (1-based joint) holding a non-finite value, or the last joint.
+    ///
+    /// `dt` is f64 in every precision so that time advances identically for f32 and
+    /// f64; the stage arithmetic uses `dt` rounded to `T`.
+    #[inline(always)]
+    pub fn step<S, F>(&mut self, source: &mut S, dt: f64, observe: F) -> Result<(), SolveError>
+    where
+        S: DerivativeSource<T, N> + ?Sized,
+        F: FnOnce(&S, &State<T, N>, &Derivative<T, N>),
+    {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(InputError::BadTimeStep.into());
+        }
+        let n = source.segment_count();
+        let (sum, slope) = (&mut self.sum, &mut self.slope);
+        let (state, stage) = halves(&mut self.states, self.current);
+        let t0 = state.time;
+        let (t_half, t_end) = (t0 + 0.5 * dt, t0 + dt);
+        // The stage factors from dt rounded to T once.
+        let full = T::lit(dt);
+        let half = full * T::lit(0.5);
+        let sixth = full * T::lit(1.0 / 6.0);
+        let two = T::lit(2.0);
+
+        // The inputs are sampled once per distinct time: k2 and k3 both evaluate at
+        // t0 + dt/2.
+        let start = source.inputs_at(t0)?;
+        // k1 at the current state, straight into the weighted sum (sum = k1); or, when
+        // the source says the last evaluation was at this state with the same inputs,
+        // a copy of it: the same bits without evaluating again.
+        if source.holds_first_stage(&start) {
+            sum.copy_used(slope, n);
+        } else {
+            source.evaluate(state, &start, sum)?;
+        }
+        observe(source, state, sum);
+        let middle = source.inputs_at(t_half)?;
+        // k2 at y + dt/2 k1.
+        stage.set_stage(state, sum, half, n);
+        source.evaluate(stage, &middle, slope)?;
+        // k3 at y + dt/2 k2 (sum += 2 k2).
+        stage.set_stage_accumulating(state, slope, half, sum, two, n);
+        source.evaluate(stage, &middle, slope)?;
+        // k4 at y + dt k3 (sum += 2 k3).
+        let end = source.inputs_at(t_end)?;
+        stage.set_stage_accumulating(state, slope, full, sum, two, n);
+        source.evaluate(stage, &end, slope)?;
+        // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
+        let probe = stage.set_final(state, sum, slope, sixth, n);
+        stage.time = t_end;
+        source.finish()?;
+        // The probe is finite only if every value is; the full check runs only when it is not.
+        let probe_finite = probe.finite() && t_end.is_finite();
+        if !probe_finite && !stage.is_finite(n) {
+            let joint = (0..n)
+                .find(|&i| !(vec_finite(&stage.directions[i]) && vec_finite(&stage.rates[i])))
+                .map_or(n, |i| i + 1);
+            return Err(SolveError::NonFinite { joint });
+        }
+        // The stage buffer holds the new state: swap the roles.
+        self.current = 1 - self.current;
+        Ok(())
+    }
+}
+
+/// The state and the stage buffer of [`Rk4::states`], `current` first.
+#[inline(always)]
+fn halves<T: Real, const N: usize>(
+    states: &mut [State<T, N>; 2],
+    current: usize,
+) -> (&State<T, N>, &mut State<T, N>) {
+    let [a, b] = states;
+    if current == 0 { (a, b) } else { (b, a) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::Vec3;
+
+    /// A rod spinning at a constant rate about z: dy/dt = (w x e, 0), recording the
+    /// times it was asked for and how often it evaluated.
+    struct Spin {
+        times: [f64; 4],
+        sampled: usize,
+        evaluations: usize,
+        reuse: bool,
+        reject: bool,
+    }
+
+    impl Spin {
+        fn new(reuse: bool, reject: bool) -> Self {
+            Spin {
+                times: [f64::NAN; 4],
+                sampled: 0,
+                evaluations: 0,
+                reuse,
+                reject,
+            }
+        }
+    }
+
+    impl DerivativeSource<f64, 1> for Spin {
+        type Inputs = ();
+        fn segment_count(&self) -> usize {
+            1
+        }
+        fn inputs_at(&mut self, time: f64) -> Result<(), SolveError> {
+            self.times[self.sampled] = time;
+            self.sampled += 1;
+            Ok(())
+        }
+        fn evaluate(
+            &mut self,
+            state: &State<f64, 1>,
+            _: &(),
+            out: &mut Derivative<f64, 1>,
+        ) -> Result<(), SolveError> {
+            self.evaluations += 1;
+            out.directions[0] = state.rates[0].cross(&state.directions[0]);
+            out.rates[0] = Vec3::zeros();
+            Ok(())
+        }
+        fn holds_first_stage(&mut self, _: &()) -> bool {
+            self.reuse
+        }
+        fn finish(&mut self) -> Result<(), SolveError> {
+            if self.reject {
+                Err(SolveError::NonFinite { joint: 1 })
+            } else {
+                Ok(())
+            }
+        }
+    }
+
+    fn spinning_rod() -> State<f64, 1> {
+        let mut state = State::default();
+        state.directions[0] = Vec3::x();
+        state.rates[0] = Vec3::new(0.0, 0.0, 2.0);
+        state
+    }
+
+    #[test]
+    fn a_step_samples_three_times_and_follows_the_rotation() {
+        let mut rk4 = Rk4::new(spinning_rod());
+        let mut spin = Spin::new(false, false);
+        let mut observed = None;
+        rk4.step(&mut spin, 0.01, |_, state, k1| {
+            observed = Some((state.time, k1.directions[0]));
+        })
+        .unwrap();
+        assert_eq!(spin.times[..3], [0.0, 0.005, 0.01]);
+        assert_eq!(spin.evaluations, 4);
+        assert_eq!(observed, Some((0.0, Vec3::new(0.0, 2.0, 0.0))));
+        let e = rk4.state().directions[0];
+        // RK4's rotation by 0.02 rad, renormalised: within its local error of the exact one.
+        let exact = Vec3::new(0.02f64.cos(), 0.02f64.sin(), 0.0);
+        assert!((e - exact).amax() < 1e-10, "{e:?}");
+        assert!((e.norm() - 1.0).abs() < 1e-15);
+        assert_eq!(rk4.state().time, 0.01);
+    }
+
+    #[test]
+    fn a_held_first_stage_is_copied_not_evaluated() {
+        let mut rk4 = Rk4::new(spinning_rod());
+        let mut spin = Spin::new(false, false);
+        let (state, slope) = rk4.state_and_last_derivative();
+        spin.evaluate(state, &(), slope).unwrap();
+        let mut fresh = rk4.clone();
+        let mut reusing = Spin::new(true, false);
+        rk4.step(&mut reusing, 0.01, |_, _, _| {}).unwrap();
+        assert_eq!(reusing.evaluations, 3);
+        fresh.step(&mut spin, 0.01, |_, _, _| {}).unwrap();
+        assert_eq!(rk4.state(), fresh.state());
+    }
+
+    #[test]
+    fn a_rejected_step_or_time_step_leaves_the_state_as_it_was() {
+        let mut rk4 = Rk4::new(spinning_rod());
+        assert!(
+            rk4.step(&mut Spin::new(false, true), 0.01, |_, _, _| {})
+                .is_err()
+        );
+        assert_eq!(*rk4.state(), spinning_rod());
+        let mut spin = Spin::new(false, false);
+        for dt in [0.0, -0.01, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                rk4.step(&mut spin, dt, |_, _, _| {}),
+                Err(SolveError::Input(InputError::BadTimeStep))
+            );
+        }
+        assert_eq!(spin.sampled, 0);
+        assert_eq!(*rk4.state(), spinning_rod());
+    }
+}
