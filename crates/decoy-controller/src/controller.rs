@@ -698,7 +698,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
             (0..=n).map(|j| out.joint_position(j)),
         );
         let narrow = |v: T| v.to_f64() as f32;
-        let (position, euler, aoa, decoy_clearance) = match out.decoy() {
+        let (position, euler, aoa, decoy_clearance, has_decoy) = match out.decoy() {
             Some(d) => {
                 let c = fp.components(&(d.cg_position - aircraft.position));
                 let (roll, pitch, yaw) = fp.relative_euler(&d.attitude);
@@ -709,6 +709,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
                     geometry
                         .envelope
                         .clearance(&to_body(&aircraft, &d.cg_position)),
+                    true,
                 )
             }
             None => (
@@ -716,9 +717,9 @@ impl<T: Real, const N: usize> Controller<T, N> {
                 [f32::NAN; 3],
                 f32::NAN,
                 T::lit(f64::INFINITY),
+                false,
             ),
         };
-        let has_decoy = out.decoy().is_some();
         let connection_tension = out.connection_tension();
         let mut flags = StatusFlags::TRIMMED;
         if builtin.is_some() {

@@ -221,12 +221,24 @@ impl<T: Real, const N: usize> Solver<T, N> {
 
     /// Evaluates the dynamics at the current state and returns the outputs
     /// (forces at every joint, positions, decoy attitude, rates, aerodynamics).
+    /// [`SolveError::NonFinite`] names the first joint whose force is not finite:
+    /// `Ok` outputs never carry an infinite or NaN tension.
     pub fn outputs<P: FlightPath<T> + ?Sized>(
         &mut self,
         path: &P,
     ) -> Result<Outputs<'_, T, N>, SolveError> {
         self.evaluate_here(path)?;
-        Ok(self.last_outputs())
+        let outputs = self.last_outputs();
+        // Every tension finite (|T_j| from its square, which overflows f32 first: at
+        // 1.8e19 N, for accelerations far beyond any aircraft's), or a typed error
+        // naming the first joint where it is not.
+        let segments = self.model.segment_count();
+        if let Some(joint) =
+            (0..=segments).find(|&j| !outputs.joint_force(j).norm_squared().finite())
+        {
+            return Err(SolveError::NonFinite { joint });
+        }
+        Ok(outputs)
     }
 
     /// The outputs of the most recent evaluation (the last RK4 stage of a step, or

@@ -320,3 +320,56 @@ fn reusing_the_output_evaluation_changes_no_bit() {
     reuse_changes_nothing::<f32>();
     reuse_changes_nothing::<f64>();
 }
+
+#[test]
+fn outputs_are_never_ok_with_a_non_finite_force() {
+    // f32 overflows in the hinge forces for accelerations, body rates or angular
+    // accelerations far beyond any aircraft's: a typed error naming a joint, never
+    // Ok with an infinite tension.
+    let model = Model::<f32, 16>::new(reference_params(SegmentLayout::Graded {
+        count: 16,
+        ratio: 1.3,
+    }))
+    .unwrap();
+    let steady = AircraftState::level(9000.0, 200.0);
+    let mut solver = Solver::new(model, trim(&model, &steady).unwrap()).unwrap();
+    let mut errors = 0;
+    for magnitude in [1e19f32, 1e20, 1e25, 1e30, f32::MAX] {
+        for (kind, axis, sign) in (0..3).flat_map(|kind| {
+            (0..3).flat_map(move |axis| [(kind, axis, 1.0f32), (kind, axis, -1.0)])
+        }) {
+            let mut violent = steady;
+            let field = match kind {
+                0 => &mut violent.acceleration,
+                1 => &mut violent.angular_rate,
+                _ => &mut violent.angular_acceleration,
+            };
+            field[axis] = sign * magnitude;
+            let path = Uniform { initial: violent };
+            match solver.outputs(&path) {
+                Ok(out) => {
+                    for j in 0..=16 {
+                        let tension = out.joint_force(j).norm();
+                        assert!(
+                            tension.is_finite(),
+                            "Ok with the tension {tension} at joint {j} ({kind}, {axis}, {})",
+                            sign * magnitude
+                        );
+                    }
+                }
+                Err(SolveError::NonFinite { joint } | SolveError::NonPositivePivot { joint }) => {
+                    assert!(joint <= 16);
+                    errors += 1;
+                }
+                Err(other) => panic!("{other:?}"),
+            }
+        }
+    }
+    assert!(
+        errors > 0,
+        "no acceleration overflowed f32: the check is not exercised"
+    );
+    // The steady flight's outputs are still finite and Ok.
+    let out = solver.outputs(&Uniform { initial: steady }).unwrap();
+    assert!(out.connection_tension().is_finite());
+}
