@@ -8,6 +8,7 @@
 //! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
 //!   [`bench_report`]).
 
+mod layering;
 mod process;
 mod setup;
 
@@ -94,6 +95,8 @@ struct Stage {
 /// What a [`Stage`] does.
 enum Action {
     Run(Command),
+    /// A check done by the xtask itself, on the repository root.
+    Check(fn(&Path) -> Result<()>),
     Skip(String),
 }
 
@@ -109,16 +112,16 @@ fn test(root: &Path) -> Result<()> {
     for (i, stage) in stages.into_iter().enumerate() {
         println!();
         println!("==> stage {}/{total}: {}", i + 1, stage.name);
-        let mut cmd = match stage.action {
+        let start = Instant::now();
+        let outcome = match stage.action {
             Action::Skip(reason) => {
                 println!("<== {}: skipped ({reason})", stage.name);
                 skipped.push(stage.name);
                 continue;
             }
-            Action::Run(cmd) => cmd,
+            Action::Run(mut cmd) => process::run(&mut cmd),
+            Action::Check(check) => check(root),
         };
-        let start = Instant::now();
-        let outcome = process::run(&mut cmd);
         let secs = start.elapsed().as_secs_f64();
         if let Err(e) = outcome {
             println!("<== {}: FAILED after {secs:.1} s", stage.name);
@@ -156,6 +159,14 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
         }
     };
     let firmware = firmware_build(&["build", "--release"]);
+    let firmware_clippy = firmware_build(&[
+        "clippy",
+        "--release",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ]);
     // The Cortex-M7 f64 profile (alias in firmware/.cargo/config.toml).
     let firmware_m7 = firmware_build(&["build-m7"]);
 
@@ -179,6 +190,18 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
             )),
         },
         Stage {
+            name: "unused dependencies (cargo machete: workspace and firmware)",
+            action: Action::Run({
+                let mut cmd = Command::new(setup::CARGO_MACHETE.0);
+                cmd.current_dir(root);
+                cmd
+            }),
+        },
+        Stage {
+            name: "layering (cargo tree, sources)",
+            action: Action::Check(layering::check),
+        },
+        Stage {
             name: "host tests",
             action: Action::Run(cargo(root, &["test", "--workspace"])),
         },
@@ -198,8 +221,28 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
             )),
         },
         Stage {
+            name: "protocol and controller no_std cross build",
+            action: Action::Run(toolchain.cargo(
+                root,
+                &[
+                    "build",
+                    "-p",
+                    "decoy-link",
+                    "-p",
+                    "decoy-controller",
+                    "--target",
+                    TARGET,
+                    "--release",
+                ],
+            )),
+        },
+        Stage {
             name: "firmware build",
             action: firmware,
+        },
+        Stage {
+            name: "firmware clippy",
+            action: firmware_clippy,
         },
         Stage {
             name: "firmware build (Cortex-M7, f64)",

@@ -186,6 +186,7 @@ pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
             let toolchain = target(root, &mut report, &mut apt)?;
             qemu(&mut report, &mut apt)?;
             defmt_print(&mut report)?;
+            cargo_machete(&mut report)?;
             Some(toolchain)
         }
     };
@@ -375,29 +376,40 @@ fn qemu(report: &mut Report, apt: &mut Apt) -> Result<()> {
 /// and `decoy hil` pipe QEMU's semihosting output through it.
 pub const DEFMT_PRINT: &str = "defmt-print";
 
-/// Time limit of `cargo install defmt-print` (about 2 to 4 minutes cold).
-const DEFMT_PRINT_INSTALL_TIMEOUT: Duration = Duration::from_secs(1800);
+/// Time limit of a `cargo install` of a tool (defmt-print: about 2 to 4 minutes cold).
+const INSTALL_TIMEOUT: Duration = Duration::from_secs(1800);
+
+/// The unused-dependency checker the test stage runs: binary and crate.
+pub const CARGO_MACHETE: (&str, &str) = ("cargo-machete", "cargo-machete@0.9.1");
 
 /// Makes sure `defmt-print` runs, installing it with `cargo install defmt-print
 /// --locked` when missing (and saying so).
 fn defmt_print(report: &mut Report) -> Result<()> {
-    if let Some(v) = version(DEFMT_PRINT, &["--version"]) {
+    cargo_tool(report, DEFMT_PRINT, DEFMT_PRINT, "about 3 minutes")
+}
+
+/// Makes sure `cargo-machete` runs (the unused-dependency stage of `test`).
+fn cargo_machete(report: &mut Report) -> Result<()> {
+    let (binary, krate) = CARGO_MACHETE;
+    cargo_tool(report, binary, krate, "about 2 minutes")
+}
+
+/// Makes sure `binary --version` runs, installing `krate` with `cargo install
+/// --locked` when it does not (and saying so).
+fn cargo_tool(report: &mut Report, binary: &str, krate: &str, duration: &str) -> Result<()> {
+    if let Some(v) = version(binary, &["--version"]) {
         println!("found: {v}");
-        report
-            .present
-            .push(format!("{DEFMT_PRINT} (cargo install)"));
+        report.present.push(format!("{binary} (cargo install)"));
         return Ok(());
     }
-    println!(
-        "missing: {DEFMT_PRINT}; installing it with `cargo install {DEFMT_PRINT} --locked` (about 3 minutes)"
-    );
+    println!("missing: {binary}; installing it with `cargo install {krate} --locked` ({duration})");
     process::run_with_timeout(
-        Command::new("cargo").args(["install", DEFMT_PRINT, "--locked"]),
-        DEFMT_PRINT_INSTALL_TIMEOUT,
+        Command::new("cargo").args(["install", krate, "--locked"]),
+        INSTALL_TIMEOUT,
     )
-    .map_err(|e| format!("cannot install {DEFMT_PRINT}: {e}"))?;
-    let now = version(DEFMT_PRINT, &["--version"]).ok_or_else(|| {
-        format!("{DEFMT_PRINT} was installed but does not run (is ~/.cargo/bin on PATH?)")
+    .map_err(|e| format!("cannot install {binary}: {e}"))?;
+    let now = version(binary, &["--version"]).ok_or_else(|| {
+        format!("{binary} was installed but does not run (is ~/.cargo/bin on PATH?)")
     })?;
     println!("installed: {now}");
     report.installed.push(format!("{now} (cargo install)"));

@@ -89,7 +89,7 @@ pub struct HilSummary {
     #[serde(rename = "max_tension_diff_vs_host_N")]
     pub max_tension_diff_vs_host_n: f64,
     /// Largest difference of either tension from the host reference in the
-    /// firmware's own precision with the target's maths (`hil-reference`; f32 on
+    /// firmware's own precision (the firmware's controller in this process; f32 on
     /// the M4), N: 0 when they agree bit for bit.
     #[serde(rename = "max_tension_diff_vs_host_same_precision_N")]
     pub max_tension_diff_vs_host_same_precision_n: f64,
@@ -133,7 +133,7 @@ pub enum HilError {
     Build(BuildError),
     /// The host reference could not be built.
     Host(HostSetupError),
-    /// The host reference with the target's maths (`hil-reference`) failed.
+    /// The host reference in the firmware's precision failed.
     Reference(ReferenceError),
     /// QEMU or the link failed.
     Link(LinkError),

@@ -1,24 +1,27 @@
-//! # hil-tests: the firmware in the loop
+//! # decoy-hil: the firmware in the loop
 //!
-//! Host-side tools that build the decoy controller firmware (`firmware/`, a
-//! workspace of its own), boot it under QEMU with deterministic instruction
-//! counting (`-icount`), talk the decoy link (`decoy_link`) to it over its UART,
-//! and compare its answers with the same controller run on the host. The
-//! integration tests in `tests/` assert that; `decoy hil` ([`hil_run`]) is the
-//! same run for people, with `decoy simulate`'s outputs.
+//! The library that builds (or is given) the decoy controller firmware
+//! (`firmware/`, a workspace of its own), boots it under QEMU with deterministic
+//! instruction counting (`-icount`), talks the decoy link (`decoy_link`) to it over
+//! its UART, and compares its answers with the same controller
+//! (`decoy_controller`) run on the host. `decoy hil` ([`hil_run`]), the benches'
+//! firmware rows and the HIL tests (`crates/hil-tests`, which holds only tests)
+//! use it.
 //!
 //! - [`qemu`]: run a program with a time limit, killed on timeout and on drop;
 //!   the QEMU command line of the boards ([`qemu::Board`]: M4, M7).
-//! - [`firmware`]: build the firmware (M4, M7, other segment counts), locate its
-//!   ELF, read its memory use.
+//! - [`firmware`]: find the firmware's source (the checkout `decoy` was built
+//!   from, or `$DECOY_SOURCE_DIR`), build it (M4, M7, other segment counts), locate
+//!   or check an ELF, read its memory use.
 //! - [`serial`]: the UART's TCP listener (ephemeral port, accept with a deadline).
 //! - [`link`]: [`link::Session`] (QEMU + link, killed on drop, defmt log shown
 //!   when a test fails) and [`link::Link`] (frames with deadlines).
 //! - [`defmt`]: decoding the firmware's defmt log with `defmt-print`.
 //! - [`flight`]: scenario frames every 10 ms, lock-step flying, the host replay
 //!   and the comparison.
-//! - [`host`], [`reference`]: the host controller's configuration, and
-//!   `hil-reference`, the host controller with the target's maths (bit for bit).
+//! - [`reference`]: the host reference, the firmware's controller in this process
+//!   in the firmware's precision; every build computes the target's maths (libm),
+//!   so its answers equal the firmware's bit for bit.
 //! - [`hil_run`]: `decoy hil`.
 //! - [`step_cost`]: the firmware's `examples/step_cost.rs`, the instructions of one
 //!   RK4 step on the target.
