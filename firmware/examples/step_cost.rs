@@ -30,7 +30,7 @@ use cortex_m as _;
 use cortex_m_rt::entry;
 use decoy_controller::{FramePath, InstructionCounter};
 use decoy_firmware::{SEGMENT_CAPACITY, Scalar, board, reference};
-use decoy_link::{AircraftStateFrame};
+use decoy_link::AircraftStateFrame;
 use solver_core::{AircraftState, FlightPath, Model, Solver, Vec3, trim};
 use static_cell::StaticCell;
 
@@ -61,7 +61,12 @@ fn frame(k: u32) -> AircraftStateFrame {
             (a * sp + v * w * cp) as f32,
             0.0,
         ],
-        attitude_wxyz: [libm::cos(psi / 2.0) as f32, 0.0, 0.0, libm::sin(psi / 2.0) as f32],
+        attitude_wxyz: [
+            libm::cos(psi / 2.0) as f32,
+            0.0,
+            0.0,
+            libm::sin(psi / 2.0) as f32,
+        ],
         body_rate_radps: [0.0, 0.0, w as f32],
         body_angular_acceleration_radps2: [0.0; 3],
     }
@@ -74,10 +79,7 @@ fn main() -> ! {
         board::fail()
     };
     let clock = board.clock;
-    let Ok(system) = reference::system() else {
-        defmt::error!("the embedded system parameters do not decode");
-        board::fail()
-    };
+    let system = &reference::SYSTEM;
     let Ok(params) = system.model_params::<Scalar>(system.embedded_layout()) else {
         defmt::error!("the aerodynamic table is unusable");
         board::fail()

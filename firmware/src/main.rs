@@ -22,7 +22,6 @@ use decoy_link::{DeviceMessage, FrameDecoder};
 use solver_core::Model;
 use static_cell::StaticCell;
 
-
 /// Log a line every this many accepted State frames.
 const LOG_EVERY_FRAMES: u32 = 100;
 
@@ -95,7 +94,7 @@ fn run(
 #[inline(never)]
 fn build_controller() -> &'static mut Result<EmbeddedController, BuildError> {
     CONTROLLER.init_with(|| {
-        let system = reference::system().map_err(|_| BuildError::Embedded)?;
+        let system = &reference::SYSTEM;
         let config = system
             .controller_config::<Scalar>(system.embedded_layout())
             .map_err(BuildError::AeroTable)?;
@@ -109,8 +108,6 @@ fn build_controller() -> &'static mut Result<EmbeddedController, BuildError> {
 /// Why the controller could not be built (a configuration the solver rejects).
 #[derive(Debug)]
 enum BuildError {
-    /// The embedded system parameters do not decode (a build script out of step).
-    Embedded,
     /// The aerodynamic table is unusable.
     AeroTable(solver_core::AeroTableError),
     /// The model parameters are invalid.
@@ -122,7 +119,6 @@ enum BuildError {
 impl core::fmt::Display for BuildError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            BuildError::Embedded => f.write_str("the embedded system parameters do not decode"),
             BuildError::AeroTable(e) => write!(f, "aerodynamic table: {e}"),
             BuildError::Model(e) => write!(f, "model: {e}"),
             BuildError::Controller(e) => write!(f, "controller: {e}"),

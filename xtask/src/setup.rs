@@ -380,7 +380,7 @@ pub const DEFMT_PRINT: &str = "defmt-print";
 const INSTALL_TIMEOUT: Duration = Duration::from_secs(1800);
 
 /// The unused-dependency checker the test stage runs: binary and crate.
-pub const CARGO_MACHETE: (&str, &str) = ("cargo-machete", "cargo-machete@0.9.1");
+pub const CARGO_MACHETE: (&str, &str) = ("cargo-machete", "cargo-machete@0.9.2");
 
 /// Makes sure `defmt-print` runs, installing it with `cargo install defmt-print
 /// --locked` when missing (and saying so).

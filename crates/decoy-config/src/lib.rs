@@ -28,6 +28,7 @@ use std::path::{Path, PathBuf};
 
 pub use decoy_controller::{AeroRows, ControllerConfig, SystemParams};
 use serde::{Deserialize, Serialize};
+use solver_core::aero::AERO_TABLE_CAPACITY;
 use solver_core::{
     AeroTable, AeroTableError, Atmosphere, AtmosphereError, Model, ModelParams, Real,
     SegmentLayout, Vec3,
@@ -393,17 +394,18 @@ impl SystemConfig {
             &self.decoy,
             &self.solver,
         );
-        let mut aero_rows = AeroRows::new();
-        for row in &self.aero_rows {
-            aero_rows.push(row.to_array()).map_err(|_| {
-                ConfigError::Solver(
-                    AeroTableError::TooManyRows {
-                        rows: self.aero_rows.len(),
-                        capacity: aero_rows.capacity(),
-                    }
-                    .into(),
-                )
-            })?;
+        let mut aero_rows: AeroRows = [[0.0; 4]; AERO_TABLE_CAPACITY];
+        if self.aero_rows.len() > aero_rows.len() {
+            return Err(ConfigError::Solver(
+                AeroTableError::TooManyRows {
+                    rows: self.aero_rows.len(),
+                    capacity: AERO_TABLE_CAPACITY,
+                }
+                .into(),
+            ));
+        }
+        for (slot, row) in aero_rows.iter_mut().zip(&self.aero_rows) {
+            *slot = row.to_array();
         }
         Ok(SystemParams {
             gravity: env.gravity,
@@ -435,6 +437,7 @@ impl SystemConfig {
             decoy_cm_q: d.cm_q,
             decoy_cl_p: d.cl_p,
             aero_rows,
+            aero_row_count: self.aero_rows.len(),
             segments_embedded: s.segments_embedded,
             grading_ratio_embedded: s.grading_ratio_embedded,
         })

@@ -4,14 +4,15 @@
 //! [`SystemParams`] holds the values of `config/reference-system.toml` and its
 //! aerodynamic table in f64 (SI units, the frames of docs/outputs.md), with no
 //! validation of its own: `decoy-config` reads and validates the files and fills
-//! it (on the host at run time, and in the firmware's build script at build time,
-//! which embeds it as postcard bytes). Everything else is derived here, once, in
+//! it (on the host at run time, and in the firmware's build script at build time).
+//! It is plain `Copy` data with public fields, so its derived `Debug` form is a
+//! Rust expression that rebuilds it exactly (floats print in their shortest
+//! round-trip form): the build script writes it as the firmware's `const`, with no
+//! parser or decoder on the target. Everything else is derived here, once, in
 //! the precision `T` the consumer runs: the solver's [`ModelParams`], the
 //! [`Geometry`] of the clearances and the [`ControllerConfig`]. The solver checks
 //! the model when it is built ([`solver_core::Model::new`]).
 
-use heapless::Vec as FixedVec;
-use serde::{Deserialize, Serialize};
 use solver_core::aero::AERO_TABLE_CAPACITY;
 use solver_core::{
     AeroTable, AeroTableError, Atmosphere, CableParams, DecoyParams, EndBody, Environment,
@@ -21,14 +22,14 @@ use solver_core::{
 use crate::controller::ControllerConfig;
 use crate::geometry::{Envelope, ExhaustPlume, Geometry};
 
-/// Rows `[alpha_deg, cl, cd, cm]` of the decoy's aerodynamic table (at most the
-/// solver's table capacity).
-pub type AeroRows = FixedVec<[f64; 4], AERO_TABLE_CAPACITY>;
+/// Rows `[alpha_deg, cl, cd, cm]` of the decoy's aerodynamic table, room for the
+/// solver's table capacity ([`SystemParams::aero_row_count`] of them are used).
+pub type AeroRows = [[f64; 4]; AERO_TABLE_CAPACITY];
 
 /// The towed system: environment, aircraft, cable, decoy and the embedded model's
 /// discretisation. Field by field the `[section] key` of the configuration file;
 /// units SI, vectors in the frame named on each field.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SystemParams {
     /// `environment.gravity`, m/s², along +z (NED).
     pub gravity: f64,
@@ -86,8 +87,11 @@ pub struct SystemParams {
     pub decoy_cm_q: f64,
     /// `decoy.cl_p`, per rad.
     pub decoy_cl_p: f64,
-    /// The table `decoy.aero_table` names.
+    /// The table `decoy.aero_table` names: its first
+    /// [`SystemParams::aero_row_count`] rows (the rest zero).
     pub aero_rows: AeroRows,
+    /// Rows of the table in use.
+    pub aero_row_count: usize,
     /// `solver.segments_embedded`: segments of the embedded (reduced) model.
     pub segments_embedded: usize,
     /// `solver.grading_ratio_embedded`: length ratio of consecutive segments.
@@ -121,7 +125,14 @@ impl SystemParams {
 
     /// The decoy's aerodynamic table in the solver's form.
     pub fn aero_table<T: Real>(&self) -> Result<AeroTable<T>, AeroTableError> {
-        AeroTable::from_degrees(&self.aero_rows)
+        let rows =
+            self.aero_rows
+                .get(..self.aero_row_count)
+                .ok_or(AeroTableError::TooManyRows {
+                    rows: self.aero_row_count,
+                    capacity: AERO_TABLE_CAPACITY,
+                })?;
+        AeroTable::from_degrees(rows)
     }
 
     /// The solver's parameters for this system with `layout` (the decoy at the end
