@@ -318,6 +318,18 @@ fn bench_report(root: &Path) -> Result<()> {
     setup::setup(root, Scope::Full)?;
     setup::gungraun_runner()?;
 
+    // The report takes every result it finds and refuses unknown ones: results of
+    // an earlier run (a renamed bench, say) must not be mixed with this run's.
+    for dir in ["criterion", "gungraun"] {
+        let stale = root.join("target").join(dir);
+        if stale.exists() {
+            std::fs::remove_dir_all(&stale).map_err(|e| {
+                format!("cannot remove the earlier results {}: {e}", stale.display())
+            })?;
+            println!("removed the earlier results in {}", stale.display());
+        }
+    }
+
     println!();
     println!("==> wall clock (criterion)");
     process::run(&mut cargo(root, BENCH_WALL))?;

@@ -387,12 +387,21 @@ fn encode_reports_a_short_buffer() {
     const { assert!(MAX_PAYLOAD_BYTES + CRC_BYTES < MAX_FRAME_BYTES) };
 }
 
-/// The example of docs/protocol.md, byte for byte.
+/// The example of docs/protocol.md and firmware/README.md, byte for byte: the
+/// ping and its answer (protocol version 2).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
     assert_eq!(
         wire(&ping),
         [0x00, 0x08, 0x01, 0x03, 0x07, 0x45, 0x75, 0xca, 0x4b, 0x00]
+    );
+    let pong = DeviceMessage::Pong {
+        nonce: 7,
+        protocol_version: decoy_link::PROTOCOL_VERSION,
+    };
+    assert_eq!(
+        wire(&pong),
+        [0x00, 0x08, 0x03, 0x07, 0x02, 0xa0, 0x90, 0x48, 0x5c, 0x00]
     );
 }
