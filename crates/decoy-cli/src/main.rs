@@ -33,26 +33,17 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use decoy_config::{ConfigError, SystemConfig};
 use decoy_hil::hil_run::{HilOptions, HilRun};
 use decoy_hil::qemu::Board;
+use decoy_sim::pendulum::{
+    PendulumError, PendulumMethod, PendulumReport, PendulumRequest, run_pendulum,
+};
 use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use progress::Progress;
 use serde::Serialize;
-use solver_core::dense::{DenseDerivative, evaluate_dense};
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
-use solver_core::solver::connection_and_air;
-use solver_core::{
-    AircraftState, Model, Rk4, Solver, State, Uniform, Vec3, pendulum_energy,
-    pendulum_initial_state, reference_pendulum,
-};
 
-/// Segment capacity of the pendulum solver.
-const PENDULUM_CAPACITY: usize = 512;
 /// Stack of the worker thread (the fixed-capacity solver types are large values).
 const WORKER_STACK_BYTES: usize = 64 << 20;
-/// Relative tolerance for a sample time to be a whole number of time steps.
-const TIME_MULTIPLE_TOLERANCE: f64 = 1e-9;
-/// Most time steps a pendulum run may take.
-const MAX_STEPS: f64 = 1e12;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -264,16 +255,6 @@ impl From<ConfigError> for Failure {
 
 fn usage(message: impl Into<String>) -> Failure {
     Failure::Usage(message.into())
-}
-
-fn solver_failure(context: &str, e: impl std::fmt::Display) -> Failure {
-    Failure::Solver(format!("{context}: {e}"))
-}
-
-fn step_failure(t: f64, e: impl std::fmt::Display) -> Failure {
-    Failure::Solver(format!(
-        "integration failed in the step from t = {t} s: {e} (is --dt too large?)"
-    ))
 }
 
 fn main() -> ExitCode {
@@ -635,233 +616,25 @@ fn hil_text(config: &SystemConfig, run: &HilRun) -> String {
 
 // ---------------------------------------------------------------- pendulum
 
-/// One pendulum sample, in the pendulum's frame (hinge at the origin, x horizontal, z up).
-#[derive(Serialize, Debug, Clone, Copy)]
-struct PendulumSample {
-    /// Time, s.
-    t: f64,
-    /// Position of the free end, `[x, z]`, m.
-    tip: [f64; 2],
-    /// Magnitude of the hinge force on rod 1, N.
-    #[serde(rename = "support_tension_N")]
-    support_tension_n: f64,
-    /// Kinetic plus potential energy (zero at hinge height), J.
-    #[serde(rename = "energy_J")]
-    energy_j: f64,
-}
-
-#[derive(Serialize, Debug)]
-struct PendulumReport {
-    segments: usize,
-    dt: f64,
-    samples: Vec<PendulumSample>,
-}
-
-type PendulumState = State<f64, PENDULUM_CAPACITY>;
-type PendulumModel = Model<f64, PENDULUM_CAPACITY>;
-
-/// Checks the arguments and returns the step count of each requested time.
-fn pendulum_steps(args: &PendulumArgs) -> Result<Vec<u64>, Failure> {
-    let n = args.segments;
-    if n == 0 {
-        return Err(usage("--segments must be at least 1"));
-    }
-    if n > PENDULUM_CAPACITY {
-        return Err(usage(format!(
-            "--segments {n}: the pendulum solver holds at most {PENDULUM_CAPACITY} segments"
-        )));
-    }
-    if !(args.dt.is_finite() && args.dt > 0.0) {
-        return Err(usage(format!(
-            "--dt must be a positive finite number of seconds, got {}",
-            args.dt
-        )));
-    }
-    if !(args.t_end.is_finite() && args.t_end > 0.0) {
-        return Err(usage(format!(
-            "--t-end must be a positive finite number of seconds, got {}",
-            args.t_end
-        )));
-    }
-    if args.t_end / args.dt > MAX_STEPS {
-        return Err(usage(format!(
-            "--t-end / --dt asks for more than {MAX_STEPS:e} steps"
-        )));
-    }
-    args.times
-        .iter()
-        .map(|&t| {
-            if !t.is_finite() {
-                return Err(usage(format!("--times: {t} is not a finite time")));
-            }
-            if t < 0.0 {
-                return Err(usage(format!("--times: {t} is negative")));
-            }
-            if t > args.t_end {
-                return Err(usage(format!(
-                    "--times: {t} is beyond --t-end {}",
-                    args.t_end
-                )));
-            }
-            let steps = (t / args.dt).round();
-            if (steps * args.dt - t).abs() > TIME_MULTIPLE_TOLERANCE * t.max(args.dt) {
-                return Err(usage(format!(
-                    "--times: {t} is not a whole number of time steps of --dt {}",
-                    args.dt
-                )));
-            }
-            Ok(steps as u64)
-        })
-        .collect()
-}
-
 fn pendulum(args: &PendulumArgs, json: bool) -> Result<String, Failure> {
-    let steps = pendulum_steps(args)?;
-    let n = args.segments;
-    let model: PendulumModel = reference_pendulum(n).map_err(|e| usage(e.to_string()))?;
-    let initial: PendulumState = pendulum_initial_state(n);
-    let values = match args.solver {
-        Method::Recurrence => integrate_recurrence(model, initial, args.dt, &steps)?,
-        Method::Dense => integrate_dense(&model, initial, args.dt, &steps)?,
-    };
-    let samples: Vec<PendulumSample> = args
-        .times
-        .iter()
-        .zip(values)
-        .map(|(&t, (tip, support_tension_n, energy_j))| PendulumSample {
-            t,
-            tip,
-            support_tension_n,
-            energy_j,
-        })
-        .collect();
-    let report = PendulumReport {
-        segments: n,
+    let request = PendulumRequest {
+        segments: args.segments,
+        t_end: args.t_end,
         dt: args.dt,
-        samples,
+        times: args.times.clone(),
+        method: match args.solver {
+            Method::Recurrence => PendulumMethod::Recurrence,
+            Method::Dense => PendulumMethod::Dense,
+        },
     };
+    let report = run_pendulum(&request).map_err(|e| match e {
+        PendulumError::Usage(m) => Failure::Usage(m),
+        PendulumError::Solver(m) => Failure::Solver(m),
+    })?;
     if json {
         return Ok(to_json(&report));
     }
     Ok(pendulum_text(&report, args.solver))
-}
-
-/// Tip, support tension, energy at a sample.
-type SampleValues = ([f64; 2], f64, f64);
-
-/// Distinct step counts in increasing order, and for each requested time its index among them.
-fn schedule(steps: &[u64]) -> (Vec<u64>, Vec<usize>) {
-    let mut distinct = steps.to_vec();
-    distinct.sort_unstable();
-    distinct.dedup();
-    let index = steps
-        .iter()
-        .map(|s| distinct.binary_search(s).unwrap_or(0))
-        .collect();
-    (distinct, index)
-}
-
-/// Runs `step` up to each distinct sample step count and records `sample` there;
-/// returns the samples in the order of `steps`.
-fn sample_run(
-    steps: &[u64],
-    mut step: impl FnMut() -> Result<(), Failure>,
-    mut sample: impl FnMut() -> Result<SampleValues, Failure>,
-) -> Result<Vec<SampleValues>, Failure> {
-    let (distinct, index) = schedule(steps);
-    let mut recorded = Vec::with_capacity(distinct.len());
-    let mut done = 0u64;
-    for &target in &distinct {
-        while done < target {
-            step()?;
-            done += 1;
-        }
-        recorded.push(sample()?);
-    }
-    Ok(index.iter().map(|&i| recorded[i]).collect())
-}
-
-fn fixed_anchor() -> Uniform<f64> {
-    Uniform {
-        initial: AircraftState::fixed(Vec3::zeros()),
-    }
-}
-
-/// The pendulum frame: x horizontal, z up (the solver's NED z is down).
-fn pendulum_point(p: &Vec3<f64>) -> [f64; 2] {
-    [p.x, -p.z]
-}
-
-fn integrate_recurrence(
-    model: PendulumModel,
-    initial: PendulumState,
-    dt: f64,
-    steps: &[u64],
-) -> Result<Vec<SampleValues>, Failure> {
-    let n = model.segment_count();
-    let anchor = fixed_anchor();
-    let solver = std::cell::RefCell::new(Box::new(
-        Solver::new(model, initial).map_err(|e| solver_failure("initial state rejected", e))?,
-    ));
-    sample_run(
-        steps,
-        || {
-            let mut solver = solver.borrow_mut();
-            let t = solver.state().time;
-            solver.step(&anchor, dt).map_err(|e| step_failure(t, e))
-        },
-        || {
-            let mut solver = solver.borrow_mut();
-            let energy = pendulum_energy(solver.model(), solver.state());
-            let out = solver
-                .outputs(&anchor)
-                .map_err(|e| solver_failure("evaluation failed", e))?;
-            Ok((
-                pendulum_point(&out.joint_position(n)),
-                out.joint_force(0).norm(),
-                energy,
-            ))
-        },
-    )
-}
-
-/// The dense reference stepped by the solver's RK4 (`solver_core::rk4::Rk4` with
-/// `dense::DenseDerivative`): the same stages, weights and renormalisation as the
-/// recurrence's solver; only the derivative differs.
-fn integrate_dense(
-    model: &PendulumModel,
-    initial: PendulumState,
-    dt: f64,
-    steps: &[u64],
-) -> Result<Vec<SampleValues>, Failure> {
-    let n = model.segment_count();
-    let anchor = fixed_anchor();
-    let (connection, air) = connection_and_air(model, &anchor.initial)
-        .map_err(|e| solver_failure("anchor rejected", e))?;
-    let rk4 = std::cell::RefCell::new(Box::new(Rk4::new(initial)));
-    sample_run(
-        steps,
-        || {
-            let mut rk4 = rk4.borrow_mut();
-            let t = rk4.state().time;
-            rk4.step(&mut DenseDerivative::new(model, &anchor), dt, |_, _, _| {})
-                .map_err(|e| step_failure(t, e))
-        },
-        || {
-            let rk4 = rk4.borrow();
-            let y = rk4.state();
-            let solution = evaluate_dense(model, y, &connection, &air)
-                .map_err(|e| solver_failure("dense evaluation failed", e))?;
-            let tip = (0..n).fold(connection.position, |p, i| {
-                p + y.directions[i] * model.lengths()[i]
-            });
-            Ok((
-                pendulum_point(&tip),
-                solution.joint_forces[0].norm(),
-                pendulum_energy(model, y),
-            ))
-        },
-    )
 }
 
 fn pendulum_text(report: &PendulumReport, method: Method) -> String {

@@ -68,6 +68,7 @@ pub mod error;
 pub mod format;
 pub mod geometry;
 pub mod options;
+pub mod pendulum;
 mod plots;
 pub mod profile;
 pub mod record;
