@@ -997,6 +997,27 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
         "--json",
     ]);
     assert_eq!(given["firmware_source"], "given with --firmware");
+    // The same ELF on the wrong board: its Hello names its own.
+    let wrong = decoy(&[
+        "hil",
+        "--scenario",
+        "steady",
+        "--t-end",
+        "0.1",
+        "--board",
+        "m7",
+        "--firmware",
+        &elf,
+        "--no-plots",
+        "--out",
+        out,
+    ]);
+    assert_eq!(wrong.status.code(), Some(2), "{wrong:?}");
+    let stderr = String::from_utf8_lossy(&wrong.stderr);
+    assert!(
+        stderr.contains("built for the board mps2-an386"),
+        "{stderr}"
+    );
     assert_eq!(given["elf"], elf.as_str());
     assert_eq!(
         num(&given, "max_tension_diff_vs_host_same_precision_N"),

@@ -267,6 +267,15 @@ pub fn run_hil(
     let messages = flight::scenario_messages(&frames);
     let mut session = Session::start(&elf, options.board).map_err(HilError::Link)?;
     let hello = session.hello;
+    let expected = options.board.info().name;
+    if hello.board != expected {
+        return Err(HilError::Usage(format!(
+            "the firmware {} is built for the board {}, not {expected} (--board {})",
+            elf.display(),
+            hello.board,
+            options.board.name()
+        )));
+    }
     if usize::from(hello.segments) != segments {
         return Err(HilError::Usage(format!(
             "the firmware {} runs {} segments, not {segments}: pass --segments {}",
