@@ -4,10 +4,10 @@
 //! firmware wraps it with a board (UART, clock), and the host runs the very same
 //! code as its bit-exact reference (`decoy hil`, the HIL tests, the host bridge).
 //!
-//! - [`params`]: [`SystemParams`], the reference system as plain numbers (no_std,
-//!   serde), and the one conversion from it to the solver's model, the geometry
-//!   and the [`ControllerConfig`]. The host fills it from `decoy-config`; the
-//!   firmware's build script does the same at build time and embeds it.
+//! - [`params`]: [`SystemParams`], the reference system as plain `Copy` numbers,
+//!   and the one conversion from it to the solver's model, the geometry and the
+//!   [`ControllerConfig`]. The host fills it from `decoy-config`; the firmware's
+//!   build script does the same at build time and writes it as a constant.
 //! - [`validate`]: the checks a State frame passes before it reaches the solver,
 //!   including the physical envelope of every input.
 //! - [`path`]: [`FramePath`], the flight path between two State frames.
