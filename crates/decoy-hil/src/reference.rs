@@ -1,5 +1,5 @@
 //! The host reference: the firmware's controller (`decoy_controller::Controller`,
-//! capacity [`CAPACITY`], the reference system's embedded model) run in this
+//! the firmware's capacity, the reference system's embedded model) run in this
 //! process, in the firmware's precision.
 //!
 //! Every transcendental function of the solver and the controller goes to the
@@ -15,8 +15,7 @@ use decoy_config::SystemConfig;
 use decoy_controller::{Controller, NoCounter};
 use decoy_link::{DeviceMessage, FrameDecoder, HostMessage};
 
-/// The firmware's solver capacity.
-pub const CAPACITY: usize = 64;
+use crate::flight::{CONTROLLER_CAPACITY as CAPACITY, HostSetupError, host_controller};
 
 /// Why the reference could not be built or used.
 #[derive(Debug)]
@@ -70,24 +69,10 @@ impl Reference {
 
     /// A controller of `precision_bits` for `config`'s embedded model.
     pub fn for_config(config: &SystemConfig, precision_bits: u8) -> Result<Self, ReferenceError> {
-        let bad = |e: &dyn fmt::Display| ReferenceError::Config(e.to_string());
+        let bad = |e: HostSetupError| ReferenceError::Config(e.to_string());
         let controller = match precision_bits {
-            32 => Precision::F32(Box::new(
-                Controller::new(
-                    config
-                        .controller_config(config.embedded_layout())
-                        .map_err(|e| bad(&e))?,
-                )
-                .map_err(|e| bad(&e))?,
-            )),
-            64 => Precision::F64(Box::new(
-                Controller::new(
-                    config
-                        .controller_config(config.embedded_layout())
-                        .map_err(|e| bad(&e))?,
-                )
-                .map_err(|e| bad(&e))?,
-            )),
+            32 => Precision::F32(host_controller(config).map_err(bad)?),
+            64 => Precision::F64(host_controller(config).map_err(bad)?),
             other => return Err(ReferenceError::Precision(other)),
         };
         Ok(Reference {
