@@ -41,7 +41,7 @@ static DECODER: StaticCell<FrameDecoder> = StaticCell::new();
 fn main() -> ! {
     board::paint_stack();
     let Some(board) = Board::take() else {
-        defmt::error!("core peripherals already taken");
+        defmt::error!("the board's peripherals are already taken or cannot be set up");
         board::fail()
     };
     #[cfg(not(feature = "board-stm32f405"))]
