@@ -78,12 +78,6 @@ impl Board {
             Board::Stm32f405 => "stm32f405",
         }
     }
-
-    /// Whether the board's firmware computes in f64 (the M7 profile); the others
-    /// run the f32 controller.
-    pub fn is_f64(self) -> bool {
-        matches!(self, Board::M7)
-    }
 }
 
 impl fmt::Display for Board {
@@ -436,6 +430,22 @@ impl Qemu {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_board_has_its_own_name_machine_and_hello() {
+        for (i, a) in Board::ALL.iter().enumerate() {
+            for b in &Board::ALL[i + 1..] {
+                assert_ne!(a.name(), b.name());
+                assert_ne!(a.qemu_args(), b.qemu_args());
+                assert_ne!(a.info().name, b.info().name);
+            }
+            assert_eq!(a.qemu_args()[0], "-M", "{a}");
+        }
+        // The Netduino Plus 2 fixes its CPU; the STM32F405 runs at 168 MHz.
+        assert_eq!(Board::Stm32f405.qemu_args(), ["-M", "netduinoplus2"]);
+        assert_eq!(Board::Stm32f405.info().core_clock_hz, 168_000_000);
+        assert_eq!(Board::Stm32f405.info().name.as_str(), "stm32f405");
+    }
 
     #[test]
     fn captures_output_and_status() {
