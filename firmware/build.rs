@@ -1,6 +1,7 @@
 //! Build script of the firmware.
 //!
-//! 1. Links the board's memory map: copies `memory-mps2.x` to `OUT_DIR` as
+//! 1. Links the board's memory map: copies `memory-mps2.x` (the MPS2 boards) or
+//!    `memory-stm32f405.x` (feature `board-stm32f405`) to `OUT_DIR` as
 //!    `memory.x`, where cortex-m-rt's `link.x` finds it. (A `memory.x` in the crate
 //!    root would silently win over `OUT_DIR`, so there is none.)
 //! 2. Passes the linker scripts (`-Tlink.x`, and `-Tdefmt.x` for defmt) from here
@@ -22,8 +23,11 @@ use std::path::{Path, PathBuf};
 
 use decoy_config::SystemConfig;
 
-/// The board's memory map (QEMU `mps2-an386`: 4 MiB flash at 0, 4 MiB RAM at 0x2000_0000).
-const MEMORY_MAP: &str = "memory-mps2.x";
+/// The memory map of the MPS2 boards (4 MiB flash at 0, 4 MiB RAM at 0x2000_0000).
+const MEMORY_MAP_MPS2: &str = "memory-mps2.x";
+/// The memory map of the STM32F405 (1 MiB flash at 0x0800_0000, 128 KiB SRAM at
+/// 0x2000_0000; the CCM is not used).
+const MEMORY_MAP_STM32F405: &str = "memory-stm32f405.x";
 /// The reference system, relative to this crate.
 const SYSTEM_TOML: &str = "../config/reference-system.toml";
 
@@ -32,10 +36,17 @@ type Result<T> = std::result::Result<T, Box<dyn Error>>;
 fn main() -> Result<()> {
     let out = PathBuf::from(env::var_os("OUT_DIR").ok_or("OUT_DIR is not set")?);
 
-    fs::copy(MEMORY_MAP, out.join("memory.x"))
-        .map_err(|e| format!("cannot copy {MEMORY_MAP}: {e}"))?;
+    // src/board/mod.rs rejects zero or several board features; this only picks.
+    let memory_map = if env::var_os("CARGO_FEATURE_BOARD_STM32F405").is_some() {
+        MEMORY_MAP_STM32F405
+    } else {
+        MEMORY_MAP_MPS2
+    };
+    println!("cargo:rerun-if-changed={MEMORY_MAP_MPS2}");
+    println!("cargo:rerun-if-changed={MEMORY_MAP_STM32F405}");
+    fs::copy(memory_map, out.join("memory.x"))
+        .map_err(|e| format!("cannot copy {memory_map}: {e}"))?;
     println!("cargo:rustc-link-search={}", out.display());
-    println!("cargo:rerun-if-changed={MEMORY_MAP}");
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
     // The same for the measurement examples (examples/step_cost.rs).

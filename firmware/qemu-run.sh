@@ -6,10 +6,12 @@
 #   ./qemu-run.sh ELF
 #
 # Environment:
-#   DECOY_BOARD        m4 (mps2-an386, Cortex-M4F) or m7 (mps2-an500, Cortex-M7).
+#   DECOY_BOARD        m4 (mps2-an386, Cortex-M4F), m7 (mps2-an500, Cortex-M7) or
+#                      stm32f405 (netduinoplus2, STM32F405, Cortex-M4F).
 #                      Default: m7 if the ELF is under a `m7/` target dir
-#                      (`cargo build-m7`), else m4.
-#   DECOY_LINK_PORT    the host link: UART0 connects as a TCP client to
+#                      (`cargo build-m7`), stm32f405 under a `stm32f405/` one
+#                      (`cargo build-stm32f405`), else m4.
+#   DECOY_LINK_PORT    the host link: UART0 (USART1 on the STM32F405) connects as a TCP client to
 #                      127.0.0.1:PORT, where the host must already listen (what
 #                      the HIL tests and `decoy hil` do).
 #   DECOY_LINK_LISTEN  for a person: QEMU listens on 127.0.0.1:PORT and boots
@@ -41,13 +43,16 @@ board="${DECOY_BOARD:-}"
 if [[ -z "$board" ]]; then
     case "$ELF" in
         */m7/*) board=m7 ;;
+        */stm32f405/*) board=stm32f405 ;;
         *) board=m4 ;;
     esac
 fi
 case "$board" in
     m4) machine=(-M mps2-an386 -cpu cortex-m4) ;;
     m7) machine=(-M mps2-an500 -cpu cortex-m7) ;;
-    *) echo "DECOY_BOARD must be m4 or m7, not '$board'" >&2; exit 2 ;;
+    # The machine fixes its CPU (a Cortex-M4F); USART1 is the first -serial.
+    stm32f405) machine=(-M netduinoplus2) ;;
+    *) echo "DECOY_BOARD must be m4, m7 or stm32f405, not '$board'" >&2; exit 2 ;;
 esac
 
 if [[ -n "${DECOY_LINK_PORT:-}" ]]; then

@@ -1,13 +1,14 @@
 //! # decoy-firmware: the decoy controller on a Cortex-M
 //!
 //! The library the firmware's binaries share: the board ([`board`], chosen by
-//! feature), the reference system embedded at build time ([`reference`]), the
+//! feature), the advisory line's logic ([`advisory`]), the reference system embedded at build time ([`reference`]), the
 //! solver's precision ([`Scalar`], feature `f64`) and capacity. The application
 //! itself is `decoy_controller` (the controller and its serve loop); the binaries
 //! (`src/main.rs`, `examples/step_cost.rs`) are thin.
 #![no_std]
 #![deny(missing_docs)]
 
+pub mod advisory;
 pub mod board;
 pub mod reference;
 

@@ -5,7 +5,9 @@
 //! `build.rs` (from `config/`), sends Hello, then runs the controller's serve loop
 //! (`decoy_controller::serve`): bytes from the UART go through the frame decoder
 //! into the controller, every answer is encoded and written back, and the link's
-//! silence is supervised with the millisecond clock. The solver lives inside the
+//! silence is supervised with the millisecond clock. On a board with the advisory
+//! line (the STM32F405), the line follows each Output's hazard flags
+//! (`decoy_firmware::advisory`), and each change is logged. The solver lives inside the
 //! controller in a `static`; nothing is allocated. Hardware is in the board
 //! module only (`src/board/`, chosen by feature); precision by feature `f64`.
 #![no_std]
@@ -16,6 +18,8 @@ use cortex_m as _;
 use cortex_m_rt::entry;
 use decoy_controller::Controller;
 use decoy_controller::serve::{self, Event};
+#[cfg(feature = "board-stm32f405")]
+use decoy_firmware::advisory::Advisory;
 use decoy_firmware::board::{self, Board};
 use decoy_firmware::{SEGMENT_CAPACITY, Scalar, reference};
 use decoy_link::{DeviceMessage, FrameDecoder};
@@ -37,10 +41,22 @@ static DECODER: StaticCell<FrameDecoder> = StaticCell::new();
 fn main() -> ! {
     board::paint_stack();
     let Some(board) = Board::take() else {
-        defmt::error!("core peripherals already taken");
+        defmt::error!("the board's peripherals are already taken or cannot be set up");
         board::fail()
     };
+    #[cfg(not(feature = "board-stm32f405"))]
     let Board { mut uart, clock } = board;
+    #[cfg(feature = "board-stm32f405")]
+    let Board {
+        mut uart,
+        clock,
+        advisory,
+    } = board;
+    #[cfg(feature = "board-stm32f405")]
+    let advisory = match Advisory::new(advisory) {
+        Ok(advisory) => advisory,
+        Err(never) => match never {},
+    };
     let controller = match build_controller() {
         Ok(controller) => controller,
         Err(e) => {
@@ -67,7 +83,14 @@ fn main() -> ! {
         defmt::warn!("uart: {}", defmt::Debug2Format(&e));
     }
 
-    run(controller, decoder, &mut uart, &clock)
+    run(
+        controller,
+        decoder,
+        &mut uart,
+        &clock,
+        #[cfg(feature = "board-stm32f405")]
+        advisory,
+    )
 }
 
 /// The serve loop, logging what it does. Not inlined into `main`, so that its
@@ -78,10 +101,15 @@ fn run(
     decoder: &mut FrameDecoder,
     uart: &mut board::Uart,
     clock: &board::Clock,
+    #[cfg(feature = "board-stm32f405")] mut advisory: Advisory<board::AdvisoryPin>,
 ) -> ! {
     let mut accepted: u32 = 0;
     serve::serve(controller, decoder, uart, clock, |event| match event {
-        Event::Answered(answer) => log_answer(answer, &mut accepted),
+        Event::Answered(answer) => {
+            log_answer(answer, &mut accepted);
+            #[cfg(feature = "board-stm32f405")]
+            drive_advisory(&mut advisory, answer);
+        }
         Event::Silent(_) => defmt::warn!("link silent: degraded"),
         Event::ReadFailed(kind) | Event::WriteFailed(kind) => {
             defmt::warn!("uart: {}", defmt::Debug2Format(&kind))
@@ -154,5 +182,28 @@ fn log_answer(answer: &DeviceMessage, accepted: &mut u32) {
             );
         }
         _ => {}
+    }
+}
+
+/// Drives the advisory line from an Output's flags and logs each change (under
+/// QEMU, whose GPIO is a stub, the log is the only trace of the line).
+#[cfg(feature = "board-stm32f405")]
+fn drive_advisory(advisory: &mut Advisory<board::AdvisoryPin>, answer: &DeviceMessage) {
+    let DeviceMessage::Output(o) = answer else {
+        return;
+    };
+    match advisory.update(o.flags) {
+        Ok(Some(true)) => defmt::info!(
+            "advisory line asserted: seq={=u32} flags={=u16:#x}",
+            o.seq,
+            o.flags
+        ),
+        Ok(Some(false)) => defmt::info!(
+            "advisory line deasserted: seq={=u32} flags={=u16:#x}",
+            o.seq,
+            o.flags
+        ),
+        Ok(None) => {}
+        Err(never) => match never {},
     }
 }

@@ -169,6 +169,36 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
     ]);
     // The Cortex-M7 f64 profile (alias in firmware/.cargo/config.toml).
     let firmware_m7 = firmware_build(&["build-m7"]);
+    // The STM32F405 (stm32f4xx-hal): the QEMU profile built (alias) and linted, and
+    // the real part's configuration (PLL clocks, RTT logs) linted, each in the
+    // target directory of its own that the alias and the HIL library use.
+    let firmware_stm32f405 = firmware_build(&["build-stm32f405"]);
+    let firmware_clippy_stm32f405 = firmware_build(&[
+        "clippy",
+        "--release",
+        "--all-targets",
+        "--no-default-features",
+        "--features",
+        "qemu,defmt-semihosting,board-stm32f405",
+        "--target-dir",
+        "target/stm32f405",
+        "--",
+        "-D",
+        "warnings",
+    ]);
+    let firmware_clippy_stm32f405_hardware = firmware_build(&[
+        "clippy",
+        "--release",
+        "--all-targets",
+        "--no-default-features",
+        "--features",
+        "rtt,board-stm32f405",
+        "--target-dir",
+        "target/stm32f405-hw",
+        "--",
+        "-D",
+        "warnings",
+    ]);
 
     vec![
         Stage {
@@ -247,6 +277,18 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
         Stage {
             name: "firmware build (Cortex-M7, f64)",
             action: firmware_m7,
+        },
+        Stage {
+            name: "firmware build (STM32F405)",
+            action: firmware_stm32f405,
+        },
+        Stage {
+            name: "firmware clippy (STM32F405 under QEMU)",
+            action: firmware_clippy_stm32f405,
+        },
+        Stage {
+            name: "firmware clippy (STM32F405 hardware configuration)",
+            action: firmware_clippy_stm32f405_hardware,
         },
     ]
 }

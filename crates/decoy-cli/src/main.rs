@@ -91,7 +91,7 @@ struct HilArgs {
     /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
     #[arg(long, value_name = "NAME|FILE")]
     scenario: String,
-    /// The board: m4 (Cortex-M4F, f32, mps2-an386) or m7 (Cortex-M7, f64, mps2-an500).
+    /// The board: m4 (Cortex-M4F, f32, mps2-an386), m7 (Cortex-M7, f64, mps2-an500) or stm32f405 (STM32F405, f32, netduinoplus2).
     #[arg(long, value_enum, default_value_t = BoardArg::M4)]
     board: BoardArg,
     /// Cable segments (default: the configuration's solver.segments_embedded; another count builds a firmware variant).
@@ -122,6 +122,8 @@ enum BoardArg {
     M4,
     /// Cortex-M7 (QEMU mps2-an500), f64 in hardware.
     M7,
+    /// STM32F405 (QEMU netduinoplus2, Cortex-M4F at 168 MHz, stm32f4xx-hal), f32.
+    Stm32f405,
 }
 
 #[derive(Args, Debug)]
@@ -534,6 +536,7 @@ fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<Stri
         board: match args.board {
             BoardArg::M4 => Board::M4,
             BoardArg::M7 => Board::M7,
+            BoardArg::Stm32f405 => Board::Stm32f405,
         },
         segments: args.segments,
         t_end: args.t_end,

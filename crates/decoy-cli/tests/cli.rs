@@ -1026,6 +1026,47 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `decoy hil --board stm32f405`: the STM32F405 firmware (netduinoplus2) flies
+/// 0.5 s of the acceleration case, names its board, and agrees with the host f32
+/// reference bit for bit.
+#[test]
+fn hil_flies_the_stm32f405() {
+    let dir = std::env::temp_dir().join(format!("decoy-cli-hil-stm32-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let summary = json(&[
+        "hil",
+        "--board",
+        "stm32f405",
+        "--scenario",
+        "acceleration",
+        "--t-end",
+        "0.5",
+        "--no-plots",
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(summary["board"], "stm32f405");
+    assert_eq!(num(&summary, "precision_bits"), 32.0);
+    assert_eq!(num(&summary, "frames_sent"), 51.0);
+    assert_eq!(num(&summary, "frames_answered"), 51.0);
+    assert_eq!(
+        num(&summary, "max_tension_diff_vs_host_same_precision_N"),
+        0.0
+    );
+    assert_eq!(
+        num(&summary, "frames_identical_to_host_same_precision"),
+        51.0
+    );
+    assert!(
+        summary["elf"]
+            .as_str()
+            .is_some_and(|elf| elf.contains("/target/stm32f405/")),
+        "{summary}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn hil_rejects_a_firmware_that_is_not_an_elf() {
     let out = decoy(&[

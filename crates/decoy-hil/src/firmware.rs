@@ -92,6 +92,37 @@ pub fn release_elf_m7() -> PathBuf {
         .join(BINARY)
 }
 
+/// The ELF of the STM32F405 profile that [`build_board`] produces
+/// (`firmware/target/stm32f405/...`, its own target directory like the M7's).
+pub fn release_elf_stm32f405() -> PathBuf {
+    firmware_dir()
+        .join("target")
+        .join("stm32f405")
+        .join(TARGET)
+        .join("release")
+        .join(BINARY)
+}
+
+/// Cargo arguments of the STM32F405 profile (the firmware's `cargo build-stm32f405`
+/// alias): the board `stm32f405` through stm32f4xx-hal, with the QEMU clock setup
+/// (feature `qemu`), f32.
+pub const STM32F405_ARGS: &[&str] = &[
+    "--no-default-features",
+    "--features",
+    "qemu,defmt-semihosting,board-stm32f405",
+];
+
+/// The cargo arguments and the target subdirectory (under `firmware/target/`, or
+/// `target-<name>` among the variants) of `board`'s profile; `None` for the default
+/// build (the M4).
+fn profile(board: Board) -> Option<(&'static [&'static str], &'static str)> {
+    match board {
+        Board::M4 => None,
+        Board::M7 => Some((M7_ARGS, "m7")),
+        Board::Stm32f405 => Some((STM32F405_ARGS, "stm32f405")),
+    }
+}
+
 /// Cargo arguments of the M7 profile (the firmware's `cargo build-m7` alias): the
 /// board `mps2-an500` and the `f64` precision (two independent features) and code for the Cortex-M7's
 /// double-precision FPU.
@@ -231,7 +262,8 @@ pub fn build_release(timeout: Duration) -> Result<PathBuf, BuildError> {
 
 /// Builds the firmware for `board` within `timeout` and returns its ELF: the
 /// default build for [`Board::M4`], the M7 profile ([`M7_ARGS`], target directory
-/// `firmware/target/m7`) for [`Board::M7`].
+/// `firmware/target/m7`) for [`Board::M7`], the STM32F405 profile
+/// ([`STM32F405_ARGS`], `firmware/target/stm32f405`) for [`Board::Stm32f405`].
 pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildError> {
     let (release, mut cmd) = board_build(board, &[]);
     run_build(&mut cmd, timeout, release.join(BINARY))
@@ -239,16 +271,16 @@ pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildErro
 
 /// The release output directory of `board`'s build of the firmware workspace and
 /// the command that builds it with `extra` cargo arguments (M4: the default
-/// target directory; M7: [`M7_ARGS`] and `firmware/target/m7`).
+/// target directory; the others: their profile's arguments and target directory).
 fn board_build(board: Board, extra: &[&str]) -> (PathBuf, Command) {
-    match board {
-        Board::M4 => {
+    match profile(board) {
+        None => {
             let release = firmware_dir().join("target").join(TARGET).join("release");
             (release, build_command_with(&firmware_dir(), extra))
         }
-        Board::M7 => {
-            let target_dir = firmware_dir().join("target").join("m7");
-            let args: Vec<&str> = M7_ARGS.iter().chain(extra).copied().collect();
+        Some((profile_args, dir)) => {
+            let target_dir = firmware_dir().join("target").join(dir);
+            let args: Vec<&str> = profile_args.iter().chain(extra).copied().collect();
             let mut cmd = build_command_with(&firmware_dir(), &args);
             cmd.arg("--target-dir").arg(&target_dir);
             (target_dir.join(TARGET).join("release"), cmd)
@@ -258,7 +290,7 @@ fn board_build(board: Board, extra: &[&str]) -> (PathBuf, Command) {
 
 /// Builds the firmware's example `name` (`firmware/examples/<name>.rs`) for
 /// `board` within `timeout` and returns its ELF (M4: the default build's target
-/// directory; M7: the M7 profile's).
+/// directory; the others: their profile's).
 pub fn build_example(board: Board, name: &str, timeout: Duration) -> Result<PathBuf, BuildError> {
     let (release, mut cmd) = board_build(board, &["--example", name]);
     run_build(&mut cmd, timeout, release.join("examples").join(name))
@@ -282,9 +314,9 @@ fn run_build(cmd: &mut Command, timeout: Duration, elf: PathBuf) -> Result<PathB
     }
 }
 
-/// [`build_with_segments`] for `board` (the M7 profile's variants have their own
-/// target directory and ELF names `decoy-firmware-m7-<segments>seg`). Errors if
-/// `segments` is 0 or more than [`MAX_SEGMENTS`].
+/// [`build_with_segments`] for `board` (the other profiles' variants have their
+/// own target directories and ELF names `decoy-firmware-<board>-<segments>seg`).
+/// Errors if `segments` is 0 or more than [`MAX_SEGMENTS`].
 pub fn build_board_with_segments(
     board: Board,
     segments: usize,
@@ -295,31 +327,32 @@ pub fn build_board_with_segments(
             "the firmware's solver holds 1 to {MAX_SEGMENTS} segments, not {segments}"
         )));
     }
-    match board {
-        Board::M4 => build_with_segments(segments, timeout),
-        Board::M7 => {
-            let variants = variants_dir();
-            let root = variants.join(format!("segments-{segments}"));
-            prepare_variant(&root, segments, None).map_err(|e| {
-                BuildError::Variant(format!(
-                    "preparing the sources for the {segments}-segment firmware: {e}"
-                ))
-            })?;
-            let target_dir = variants.join("target-m7");
-            let mut cmd = build_command_with(&root.join("firmware"), M7_ARGS);
-            cmd.arg("--target-dir").arg(&target_dir);
-            let built = run_build(
-                &mut cmd,
-                timeout,
-                target_dir.join(TARGET).join("release").join(BINARY),
-            )?;
-            let elf = variants.join(format!("{BINARY}-m7-{segments}seg"));
-            fs::copy(&built, &elf).map_err(|e| {
-                BuildError::Variant(format!("copying the {segments}-segment M7 ELF: {e}"))
-            })?;
-            Ok(elf)
-        }
-    }
+    let Some((profile_args, dir)) = profile(board) else {
+        return build_with_segments(segments, timeout);
+    };
+    let variants = variants_dir();
+    let root = variants.join(format!("segments-{segments}"));
+    prepare_variant(&root, segments, None).map_err(|e| {
+        BuildError::Variant(format!(
+            "preparing the sources for the {segments}-segment firmware: {e}"
+        ))
+    })?;
+    let target_dir = variants.join(format!("target-{dir}"));
+    let mut cmd = build_command_with(&root.join("firmware"), profile_args);
+    cmd.arg("--target-dir").arg(&target_dir);
+    let built = run_build(
+        &mut cmd,
+        timeout,
+        target_dir.join(TARGET).join("release").join(BINARY),
+    )?;
+    let elf = variants.join(format!("{BINARY}-{dir}-{segments}seg"));
+    fs::copy(&built, &elf).map_err(|e| {
+        BuildError::Variant(format!(
+            "copying the {segments}-segment {} ELF: {e}",
+            board.name()
+        ))
+    })?;
+    Ok(elf)
 }
 
 /// [`build_board_with_segments`] with the grading ratio replaced too (for the
@@ -343,18 +376,15 @@ pub fn build_board_with_layout(
     let root = variants.join(&name);
     prepare_variant(&root, segments, Some(grading))
         .map_err(|e| BuildError::Variant(format!("preparing the sources of {name}: {e}")))?;
-    let (target_dir, mut cmd) = match board {
-        Board::M4 => {
+    let (target_dir, mut cmd) = match profile(board) {
+        None => {
             let target_dir = variants.join("target");
             (target_dir, build_command_in(&root.join("firmware")))
         }
-        Board::M7 => {
-            let target_dir = variants.join("target-m7");
-            (
-                target_dir,
-                build_command_with(&root.join("firmware"), M7_ARGS),
-            )
-        }
+        Some((profile_args, dir)) => (
+            variants.join(format!("target-{dir}")),
+            build_command_with(&root.join("firmware"), profile_args),
+        ),
     };
     cmd.arg("--target-dir").arg(&target_dir);
     let built = run_build(

@@ -23,6 +23,11 @@ pub const BOARD_ARGS: &[&str] = &["-M", "mps2-an386", "-cpu", "cortex-m4"];
 /// hardware with the firmware's `cortex-m7` build).
 pub const BOARD_ARGS_M7: &[&str] = &["-M", "mps2-an500", "-cpu", "cortex-m7"];
 
+/// Machine of the STM32F405 profile: the Netduino Plus 2 (STM32F405, Cortex-M4F;
+/// 1 MiB flash at 0x0800_0000, 192 KiB SRAM at 0x2000_0000 in QEMU, USART1 on the
+/// first `-serial`). The machine fixes its CPU, so there is no `-cpu`.
+pub const BOARD_ARGS_STM32F405: &[&str] = &["-M", "netduinoplus2"];
+
 /// The QEMU board a firmware runs on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Board {
@@ -31,14 +36,23 @@ pub enum Board {
     M4,
     /// MPS2 AN500 with a Cortex-M7 (double-precision FPU).
     M7,
+    /// STM32F405 (Cortex-M4F, 168 MHz) on QEMU's `netduinoplus2`, brought up through
+    /// `stm32f4xx-hal`: the same f32 controller as [`Board::M4`] on a real MCU's
+    /// peripherals.
+    Stm32f405,
 }
 
 impl Board {
-    /// QEMU's `-M` and `-cpu` arguments for this board.
+    /// Every board, in the order the command line lists them.
+    pub const ALL: [Board; 3] = [Board::M4, Board::M7, Board::Stm32f405];
+
+    /// QEMU's `-M` (and, where the machine does not fix it, `-cpu`) arguments for
+    /// this board.
     pub fn qemu_args(self) -> &'static [&'static str] {
         match self {
             Board::M4 => BOARD_ARGS,
             Board::M7 => BOARD_ARGS_M7,
+            Board::Stm32f405 => BOARD_ARGS_STM32F405,
         }
     }
 
@@ -47,19 +61,21 @@ impl Board {
         let (name, core_clock_hz) = match self {
             Board::M4 => ("mps2-an386", 25_000_000),
             Board::M7 => ("mps2-an500", 25_000_000),
+            Board::Stm32f405 => ("stm32f405", 168_000_000),
         };
         decoy_link::BoardInfo {
-            // Both names are short ASCII.
+            // The names are short ASCII.
             name: decoy_link::BoardName::new(name).unwrap_or_else(|| unreachable!()),
             core_clock_hz,
         }
     }
 
-    /// The board's name on the command line (`m4`, `m7`).
+    /// The board's name on the command line (`m4`, `m7`, `stm32f405`).
     pub fn name(self) -> &'static str {
         match self {
             Board::M4 => "m4",
             Board::M7 => "m7",
+            Board::Stm32f405 => "stm32f405",
         }
     }
 }
@@ -414,6 +430,22 @@ impl Qemu {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_board_has_its_own_name_machine_and_hello() {
+        for (i, a) in Board::ALL.iter().enumerate() {
+            for b in &Board::ALL[i + 1..] {
+                assert_ne!(a.name(), b.name());
+                assert_ne!(a.qemu_args(), b.qemu_args());
+                assert_ne!(a.info().name, b.info().name);
+            }
+            assert_eq!(a.qemu_args()[0], "-M", "{a}");
+        }
+        // The Netduino Plus 2 fixes its CPU; the STM32F405 runs at 168 MHz.
+        assert_eq!(Board::Stm32f405.qemu_args(), ["-M", "netduinoplus2"]);
+        assert_eq!(Board::Stm32f405.info().core_clock_hz, 168_000_000);
+        assert_eq!(Board::Stm32f405.info().name.as_str(), "stm32f405");
+    }
 
     #[test]
     fn captures_output_and_status() {

@@ -1,7 +1,14 @@
 //! The firmware in the loop over the real link: the decoy controller firmware boots
-//! on QEMU's Cortex-M4F (`mps2-an386`, `-icount shift=0`), its UART on a TCP port,
-//! and the host drives it frame by frame at the 10 ms control period with the
-//! aircraft states of the paper's scenarios (the profiles `decoy simulate` flies).
+//! on QEMU (`-icount shift=0`), its UART on a TCP port, and the host drives it frame
+//! by frame at the 10 ms control period with the aircraft states of the paper's
+//! scenarios (the profiles `decoy simulate` flies).
+//!
+//! Every f32 test runs on both f32 boards ([`F32_BOARDS`], one module each, the same
+//! test bodies): the Cortex-M4F of `mps2-an386` (the default build) and the
+//! STM32F405 on `netduinoplus2` (stm32f4xx-hal, SysTick at 168 MHz, the profile
+//! `board-stm32f405`); so the STM32F405 must answer bit for bit as the host f32
+//! controller and so as the M4, within the same instruction budgets. The M7
+//! profile (f64) has its own test.
 //!
 //! What is asserted:
 //!
@@ -28,7 +35,14 @@
 //!   where the wave-speed limit takes more steps (docs/protocol.md §5) cost
 //!   proportionally more; their share, the most steps and the costliest frame are
 //!   printed.
-//! - **Determinism.** Two runs receive byte-identical streams.
+//! - **Determinism.** Two runs receive byte-identical streams (the instruction
+//!   counts included, so on the STM32F405 the 168 MHz SysTick's conversion to
+//!   instructions repeats too).
+//! - **Hello.** Each board names itself and its core clock as
+//!   `decoy_hil::qemu::Board::info` says.
+//! - **Advisory line (STM32F405).** The firmware's log shows the line asserted at
+//!   the first Output with a hazard flag and deasserted at the first without,
+//!   exactly at the outputs where the hazard flags change.
 //! - **Robustness.** Corrupted, truncated, garbage, oversize frames; non-finite and
 //!   out-of-range values; a bad quaternion; time going backwards or jumping; link
 //!   silence. Each gets its typed answer with the right counter (the same answers a
@@ -98,16 +112,24 @@ const RK4_STEP_TARGET: u32 = 40_000;
 /// The goal per control step.
 const CONTROL_STEP_GOAL: u32 = 40_000;
 
-/// The firmware ELF, built once per test binary. Checks `defmt-print` first.
-fn elf() -> &'static PathBuf {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| {
+/// The boards of the f32 controller, each with the whole f32 suite.
+const F32_BOARDS: [Board; 2] = [Board::M4, Board::Stm32f405];
+
+/// The firmware ELF of `board`, built once per test binary. Checks `defmt-print`
+/// first.
+fn elf(board: Board) -> &'static PathBuf {
+    static ELFS: [OnceLock<PathBuf>; Board::ALL.len()] = [const { OnceLock::new() }; 3];
+    let index = Board::ALL
+        .iter()
+        .position(|&b| b == board)
+        .unwrap_or_else(|| unreachable!("Board::ALL lists every board"));
+    ELFS[index].get_or_init(|| {
         defmt::require().unwrap_or_else(|e| panic!("{e}"));
         let started = Instant::now();
-        let elf = firmware::build_board(Board::M4, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
+        let elf = firmware::build_board(board, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
         let memory = firmware::memory_usage(&elf).unwrap_or_else(|e| panic!("{e}"));
         println!(
-            "firmware built in {:.1} s: {}; {memory}",
+            "{board} firmware built in {:.1} s: {}; {memory}",
             started.elapsed().as_secs_f64(),
             elf.display()
         );
@@ -115,9 +137,17 @@ fn elf() -> &'static PathBuf {
     })
 }
 
-/// A fresh firmware session on the M4.
-fn session() -> Session {
-    Session::start(elf(), Board::M4).unwrap_or_else(|e| panic!("{e}"))
+/// A fresh firmware session on `board`, whose Hello must name the board and its
+/// core clock.
+fn session(board: Board) -> Session {
+    let s = Session::start(elf(board), board).unwrap_or_else(|e| panic!("{e}"));
+    let info = board.info();
+    assert_eq!(s.hello.board, info.name, "{board}: Hello's board name");
+    assert_eq!(
+        s.hello.core_clock_hz, info.core_clock_hz,
+        "{board}: Hello's core clock"
+    );
+    s
 }
 
 fn config() -> &'static SystemConfig {
@@ -153,10 +183,11 @@ fn frames(name: &str, rate: Option<f64>, t_end: f64) -> Vec<AircraftStateFrame> 
     flight::scenario_frames(&plan.profile, flight::frame_count(t_end))
 }
 
-/// Flies `frames` (after ResetToTrim) on a fresh session; returns the exchanges,
-/// the bytes received after Hello, and the round trips per second.
-fn fly(frames: &[AircraftStateFrame]) -> (Vec<Exchange>, Vec<u8>, f64) {
-    let mut s = session();
+/// Flies `frames` (after ResetToTrim) on a fresh session on `board`; returns the
+/// exchanges, the bytes received after Hello, the round trips per second and the
+/// firmware's log.
+fn fly(board: Board, frames: &[AircraftStateFrame]) -> (Vec<Exchange>, Vec<u8>, f64, String) {
+    let mut s = session(board);
     let boot_bytes = s.link.received().len();
     let flown = flight::fly(&mut s, &flight::scenario_messages(frames), |_| {})
         .unwrap_or_else(|e| panic!("{e}"));
@@ -165,14 +196,20 @@ fn fly(frames: &[AircraftStateFrame]) -> (Vec<Exchange>, Vec<u8>, f64) {
     let fps = flown.frames_per_second();
     let log = s.finish();
     assert!(log.was_running, "QEMU exited during the run");
-    (flown.exchanges, received, fps)
+    (flown.exchanges, received, fps, log.log)
 }
 
 /// Flies a scenario and checks it against the host in f32 and f64 and the
 /// instruction budget. `outputs_at_least`: outputs the run must give (the frames
 /// before the step rule diverges).
-fn check_scenario(label: &str, frames: &[AircraftStateFrame], outputs_at_least: usize) {
+fn check_scenario(
+    board: Board,
+    label: &str,
+    frames: &[AircraftStateFrame],
+    outputs_at_least: usize,
+) {
     check_scenario_within(
+        board,
         label,
         frames,
         outputs_at_least,
@@ -182,12 +219,14 @@ fn check_scenario(label: &str, frames: &[AircraftStateFrame], outputs_at_least: 
 
 /// [`check_scenario`] with the (connection, towing-point) tolerances against f64.
 fn check_scenario_within(
+    board: Board,
     label: &str,
     frames: &[AircraftStateFrame],
     outputs_at_least: usize,
     (connection_tolerance, tow_tolerance, against_peak): (f64, f64, bool),
 ) {
-    let (exchanges, _, fps) = fly(frames);
+    let label = &format!("{board}: {label}");
+    let (exchanges, _, fps, log) = fly(board, frames);
     let sent: Vec<HostMessage> = exchanges.iter().map(|e| e.sent).collect();
     let answers: Vec<DeviceMessage> = exchanges.iter().map(|e| e.answer).collect();
     assert!(
@@ -291,6 +330,44 @@ fn check_scenario_within(
         nominal_frame_max(&answers)
     );
     check_budget(label, &answers, FRAME_BUDGET);
+    if board == Board::Stm32f405 {
+        check_advisory_log(label, &answers, &log);
+    }
+}
+
+/// The advisory line's changes the firmware logged (`advisory line asserted:
+/// seq=N ...` or `deasserted`), as (seq, asserted), must be exactly the outputs at
+/// which the hazard flags go from clear to set or back (the line starts low).
+fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
+    let logged: Vec<(u32, bool)> = log
+        .lines()
+        .filter_map(|line| {
+            let (_, rest) = line.split_once("advisory line ")?;
+            let (level, rest) = rest.split_once(": seq=")?;
+            let seq = rest.split_whitespace().next()?.parse().ok()?;
+            Some((seq, level == "asserted"))
+        })
+        .collect();
+    let mut expected = Vec::new();
+    let mut asserted = false;
+    for out in flight::outputs(answers) {
+        let hazard = out.flags & advisory_hazards() != 0;
+        if hazard != asserted {
+            expected.push((out.seq, hazard));
+            asserted = hazard;
+        }
+    }
+    assert_eq!(
+        logged, expected,
+        "{label}: the advisory line's logged changes (seq, asserted) differ from the hazard flags' changes"
+    );
+    println!("{label}: advisory line changes {logged:?} (seq, asserted), as the hazard flags");
+}
+
+/// The hazard flags that assert the advisory line (the firmware's
+/// `advisory::HAZARDS`; the firmware is not a host crate, so it is restated).
+fn advisory_hazards() -> u16 {
+    StatusFlags::OVER_TENSION | StatusFlags::CABLE_IN_PLUME | StatusFlags::DECOY_NEAR_AIRCRAFT
 }
 
 /// The most instructions a whole nominal frame took.
@@ -330,21 +407,21 @@ fn check_budget(label: &str, answers: &[DeviceMessage], frame_budget: u32) {
     }
 }
 
-#[test]
-fn acceleration_matches_the_host_and_fits_the_budget() {
+fn acceleration_matches_the_host_and_fits_the_budget(board: Board) {
     check_scenario(
+        board,
         "acceleration (10 s)",
         &frames("acceleration", None, 10.0),
         1001,
     );
 }
 
-#[test]
-fn pull_ups_match_the_host_and_fit_the_budget() {
+fn pull_ups_match_the_host_and_fit_the_budget(board: Board) {
     for (rate, t_end) in [(0.05, 10.0), (0.10, 10.0), (0.20, 10.0)] {
         let frames = frames("pull-up", Some(rate), t_end);
         let count = frames.len();
         check_scenario_within(
+            board,
             &format!("pull-up {rate} rad/s ({t_end} s)"),
             &frames,
             count,
@@ -353,12 +430,11 @@ fn pull_ups_match_the_host_and_fit_the_budget() {
     }
 }
 
-#[test]
-fn turns_match_the_host_and_fit_the_budget() {
+fn turns_match_the_host_and_fit_the_budget(board: Board) {
     for rate in [0.10, 0.20] {
         let frames = frames("turn", Some(rate), 5.0);
         let count = frames.len();
-        check_scenario(&format!("turn {rate} rad/s (5 s)"), &frames, count);
+        check_scenario(board, &format!("turn {rate} rad/s (5 s)"), &frames, count);
     }
 }
 
@@ -411,11 +487,10 @@ fn m7_profile_matches_the_host_in_f64() {
     }
 }
 
-#[test]
-fn two_runs_receive_identical_bytes() {
+fn two_runs_receive_identical_bytes(board: Board) {
     let frames = frames("acceleration", None, 3.0);
-    let (first, bytes_a, _) = fly(&frames);
-    let (second, bytes_b, _) = fly(&frames);
+    let (first, bytes_a, _, _) = fly(board, &frames);
+    let (second, bytes_b, _, _) = fly(board, &frames);
     assert_eq!(first.len(), frames.len() + 1);
     assert!(!bytes_a.is_empty());
     assert_eq!(
@@ -428,7 +503,7 @@ fn two_runs_receive_identical_bytes() {
     }
     assert!(bytes_a == bytes_b, "the two runs' byte streams differ");
     println!(
-        "two runs: {} bytes received each, byte-identical",
+        "{board}: two runs: {} bytes received each, byte-identical",
         bytes_a.len()
     );
 }
@@ -445,10 +520,11 @@ struct Probe {
 }
 
 impl Probe {
-    /// A session trimmed on the acceleration scenario and flown `warm_up` frames.
-    fn new(warm_up: usize) -> Self {
+    /// A session on `board` trimmed on the acceleration scenario and flown
+    /// `warm_up` frames.
+    fn new(board: Board, warm_up: usize) -> Self {
         let mut probe = Probe {
-            session: session(),
+            session: session(board),
             mirror: host32(),
             undisturbed: host32(),
             frames: frames("acceleration", None, 4.0),
@@ -611,9 +687,8 @@ fn without_instructions(mut m: DeviceMessage) -> DeviceMessage {
     m
 }
 
-#[test]
-fn malformed_frames_are_rejected_and_the_state_is_kept() {
-    let mut p = Probe::new(20);
+fn malformed_frames_are_rejected_and_the_state_is_kept(board: Board) {
+    let mut p = Probe::new(board, 20);
     let next = HostMessage::State(p.frames[p.next]);
     let good = encode(&next);
 
@@ -690,9 +765,8 @@ fn malformed_frames_are_rejected_and_the_state_is_kept() {
     p.finish();
 }
 
-#[test]
-fn invalid_values_are_rejected_with_their_reason() {
-    let mut p = Probe::new(10);
+fn invalid_values_are_rejected_with_their_reason(board: Board) {
+    let mut p = Probe::new(board, 10);
     p.invalid(RejectReason::NonFinite, 1, |f| {
         f.velocity_ned_mps[0] = f32::NAN
     });
@@ -736,9 +810,8 @@ fn invalid_values_are_rejected_with_their_reason() {
     p.finish();
 }
 
-#[test]
-fn time_going_backwards_or_jumping_is_rejected() {
-    let mut p = Probe::new(10);
+fn time_going_backwards_or_jumping_is_rejected(board: Board) {
+    let mut p = Probe::new(board, 10);
     let last = p.frames[p.next - 1];
     p.invalid(RejectReason::TimeNotIncreasing, 1, |f| {
         f.time_s = last.time_s
@@ -756,16 +829,17 @@ fn time_going_backwards_or_jumping_is_rejected() {
     p.finish();
 }
 
-#[test]
-fn link_silence_degrades_and_recovers() {
-    let mut p = Probe::new(10);
-    // Silence: SILENCE_MS = 200 ms of virtual time, about 1 s of wall-clock time
-    // under -icount; the firmware sends one Status frame with DEGRADED.
+fn link_silence_degrades_and_recovers(board: Board) {
+    let mut p = Probe::new(board, 10);
+    // Silence: SILENCE_MS = 200 ms of virtual time (200 M instructions under
+    // -icount), 1 to 4 s of wall-clock time on the M4 and 3 to 10 s on the
+    // STM32F405 here (QEMU runs its idle loop more slowly), so the deadline is
+    // generous; the firmware sends one Status frame with DEGRADED.
     let silent = Instant::now();
     let status = p
         .session
         .link
-        .recv_within(Duration::from_secs(20), "the silence Status")
+        .recv_within(Duration::from_secs(60), "the silence Status")
         .unwrap_or_else(|e| panic!("{e}"));
     let waited = silent.elapsed();
     let DeviceMessage::Status(status) = status else {
@@ -800,8 +874,66 @@ fn link_silence_degrades_and_recovers() {
     assert_eq!(status.flags & StatusFlags::DEGRADED, 0);
     assert_eq!(status.counters.silences, 1);
     println!(
-        "silence: the DEGRADED status came {:.2} s (wall clock) after the last frame",
+        "{board}: silence: the DEGRADED status came {:.2} s (wall clock) after the last frame",
         waited.as_secs_f64()
     );
     p.finish();
+}
+
+/// The f32 suite, once per board of [`F32_BOARDS`]: a module per board whose tests
+/// call the functions above with it.
+macro_rules! f32_suite {
+    ($($module:ident => $board:expr),* $(,)?) => {$(
+        mod $module {
+            use super::*;
+
+            /// The board of this module's tests.
+            const BOARD: Board = $board;
+
+            #[test]
+            fn acceleration_matches_the_host_and_fits_the_budget() {
+                super::acceleration_matches_the_host_and_fits_the_budget(BOARD);
+            }
+
+            #[test]
+            fn pull_ups_match_the_host_and_fit_the_budget() {
+                super::pull_ups_match_the_host_and_fit_the_budget(BOARD);
+            }
+
+            #[test]
+            fn turns_match_the_host_and_fit_the_budget() {
+                super::turns_match_the_host_and_fit_the_budget(BOARD);
+            }
+
+            #[test]
+            fn two_runs_receive_identical_bytes() {
+                super::two_runs_receive_identical_bytes(BOARD);
+            }
+
+            #[test]
+            fn malformed_frames_are_rejected_and_the_state_is_kept() {
+                super::malformed_frames_are_rejected_and_the_state_is_kept(BOARD);
+            }
+
+            #[test]
+            fn invalid_values_are_rejected_with_their_reason() {
+                super::invalid_values_are_rejected_with_their_reason(BOARD);
+            }
+
+            #[test]
+            fn time_going_backwards_or_jumping_is_rejected() {
+                super::time_going_backwards_or_jumping_is_rejected(BOARD);
+            }
+
+            #[test]
+            fn link_silence_degrades_and_recovers() {
+                super::link_silence_degrades_and_recovers(BOARD);
+            }
+        }
+    )*};
+}
+
+f32_suite! {
+    m4 => F32_BOARDS[0],
+    stm32f405 => F32_BOARDS[1],
 }

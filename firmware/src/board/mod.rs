@@ -8,15 +8,34 @@
 //! |---|---|---|
 //! | `board-mps2-an386` (default) | QEMU MPS2 AN386, Cortex-M4F | `mps2.rs` |
 //! | `board-mps2-an500` | QEMU MPS2 AN500, Cortex-M7 | `mps2.rs` |
+//! | `board-stm32f405` | STM32F405, Cortex-M4F 168 MHz (QEMU `netduinoplus2` with `qemu`), through `stm32f4xx-hal` | `stm32f4.rs` |
+//!
+//! A board may give the application more: the STM32F405 has the advisory line
+//! (`Board::advisory`, an embedded-hal `OutputPin`; see `crate::advisory`).
 //!
 //! A new board is a module here, its memory map and a line in this table.
 
-#[cfg(all(feature = "board-mps2-an386", feature = "board-mps2-an500"))]
+#[cfg(any(
+    all(feature = "board-mps2-an386", feature = "board-mps2-an500"),
+    all(feature = "board-mps2-an386", feature = "board-stm32f405"),
+    all(feature = "board-mps2-an500", feature = "board-stm32f405"),
+))]
 compile_error!("choose one board feature");
-#[cfg(not(any(feature = "board-mps2-an386", feature = "board-mps2-an500")))]
-compile_error!("a board feature is needed: `board-mps2-an386` or `board-mps2-an500`");
+#[cfg(not(any(
+    feature = "board-mps2-an386",
+    feature = "board-mps2-an500",
+    feature = "board-stm32f405"
+)))]
+compile_error!(
+    "a board feature is needed: `board-mps2-an386`, `board-mps2-an500` or `board-stm32f405`"
+);
 
 #[cfg(any(feature = "board-mps2-an386", feature = "board-mps2-an500"))]
 mod mps2;
 #[cfg(any(feature = "board-mps2-an386", feature = "board-mps2-an500"))]
 pub use mps2::*;
+
+#[cfg(feature = "board-stm32f405")]
+mod stm32f4;
+#[cfg(feature = "board-stm32f405")]
+pub use stm32f4::*;

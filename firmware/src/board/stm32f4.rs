@@ -1,0 +1,435 @@
+//! The board: an STM32F405 (Cortex-M4F, 168 MHz, 1 MiB flash, 128 KiB SRAM + 64 KiB
+//! CCM), brought up through `stm32f4xx-hal` (embedded-hal 1.0 traits), and how the
+//! application uses it. Under QEMU it is `-M netduinoplus2`. Everything
+//! hardware-specific lives here.
+//!
+//! | role | peripheral |
+//! |---|---|
+//! | host link | USART1 (TX PA9, RX PA10), 115,200 baud 8N1, polled, wrapped as `embedded-io` 0.7 [`Uart`] |
+//! | advisory line to the mission computer | PA5, push-pull, `embedded_hal::digital::OutputPin` ([`AdvisoryPin`]) |
+//! | instruction counter, millisecond clock | SysTick on the core clock, free-running, extended in software ([`Clock`]) |
+//! | logs | defmt over semihosting (feature `defmt-semihosting`) or RTT (`rtt`) |
+//! | exit code (QEMU) | Arm semihosting `SYS_EXIT` (feature `qemu`) |
+//! | stack high-water mark | stack painting (cortex-m-stack, cortex-m-rt's `_stack_end`) |
+//!
+//! Clocks. With feature `qemu` the clock tree is left on the 16 MHz HSI
+//! (`rcc.freeze(Config::hsi())`): QEMU does not model the RCC, so any HSE or PLL
+//! setup waits forever for its ready bits. The HAL then computes USART1's divider for
+//! 16 MHz, which QEMU ignores (it moves bytes as fast as its chardev does), while
+//! QEMU runs SysTick at 168 MHz whatever is configured. Without `qemu` (the real
+//! part) the core runs from the PLL at [`CORE_CLOCK_HZ`] off an [`HSE_HZ`] crystal
+//! (the Netduino Plus 2's); that path cannot run under QEMU and is untested here.
+//!
+//! Memory. The real part's map is `memory-stm32f405.x` (flash 1 MiB at 0x0800_0000,
+//! SRAM 128 KiB at 0x2000_0000). The 64 KiB CCM at 0x1000_0000 is not used: QEMU
+//! does not map it (an access is a BusFault), and the firmware fits the SRAM.
+//!
+//! Failures: a panic or a HardFault logs what it can, then, under QEMU (feature
+//! `qemu`) exits QEMU with status 1 so a test never hangs; without `qemu`
+//! (hardware) it goes to the safe state: USART1 is switched off (the host sees the
+//! link fall silent and its own supervision takes over), interrupts are masked and
+//! the core is parked. The independent watchdog, once enabled, would then reset it.
+
+use core::cell::{Cell, RefCell};
+
+use cortex_m::peripheral::SYST;
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::{ExceptionFrame, exception};
+use stm32f4xx_hal::gpio::{Output, PA5, PushPull};
+use stm32f4xx_hal::pac;
+use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::Config as RccConfig;
+use stm32f4xx_hal::serial::{self, Rx, Tx};
+
+#[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
+compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
+#[cfg(not(any(feature = "defmt-semihosting", feature = "rtt")))]
+compile_error!("a defmt transport is needed: feature `defmt-semihosting` or `rtt`");
+
+#[cfg(feature = "rtt")]
+use defmt_rtt as _;
+#[cfg(feature = "defmt-semihosting")]
+use defmt_semihosting as _;
+
+/// SysTick's reload value: the full 24-bit range.
+const SYSTICK_RELOAD: u32 = 0x00FF_FFFF;
+/// The core clock (SysTick's source), Hz: the STM32F405's maximum, and what QEMU's
+/// `netduinoplus2` runs SysTick at.
+pub const CORE_CLOCK_HZ: u32 = 168_000_000;
+/// The external crystal of the real board (without feature `qemu`), Hz.
+pub const HSE_HZ: u32 = 25_000_000;
+/// SysTick ticks per millisecond.
+const TICKS_PER_MS: u64 = CORE_CLOCK_HZ as u64 / 1000;
+/// The host link's baud rate.
+pub const BAUD_RATE: u32 = 115_200;
+
+/// Under `-icount shift=0` one instruction is 1 ns and SysTick ticks at 168 MHz, so
+/// [`TICK_GROUP`] ticks (125 ns) are exactly [`INSTRUCTIONS_PER_GROUP`]
+/// instructions: 1e9 / 168e6 = 125 / 21 instructions per tick.
+pub const INSTRUCTIONS_PER_GROUP: u32 = 125;
+/// Ticks in one group of [`INSTRUCTIONS_PER_GROUP`] instructions.
+pub const TICK_GROUP: u32 = 21;
+
+/// The advisory line's pin (PA5, push-pull output).
+pub type AdvisoryPin = PA5<Output<PushPull>>;
+
+/// The board's peripherals, as the application uses them.
+pub struct Board {
+    /// The host link.
+    pub uart: Uart,
+    /// Instruction counter and millisecond clock.
+    pub clock: Clock,
+    /// The advisory line to the mission computer, deasserted (low) at boot.
+    pub advisory: AdvisoryPin,
+}
+
+impl Board {
+    /// Takes the core and device peripherals and sets them up; `None` if already
+    /// taken or if the HAL rejects the USART's configuration.
+    pub fn take() -> Option<Self> {
+        let core = cortex_m::Peripherals::take()?;
+        let device = pac::Peripherals::take()?;
+        let mut rcc = device.RCC.freeze(clock_config());
+        let gpioa = device.GPIOA.split(&mut rcc);
+        let mut advisory = gpioa.pa5.into_push_pull_output();
+        advisory.set_low();
+        let config = serial::Config::default().baudrate(BAUD_RATE.bps());
+        let usart = device
+            .USART1
+            .serial::<u8>((gpioa.pa9, gpioa.pa10), config, &mut rcc)
+            .ok()?;
+        let (tx, rx) = usart.split();
+        Some(Board {
+            uart: Uart { tx, rx },
+            clock: Clock::new(core.SYST),
+            advisory,
+        })
+    }
+}
+
+/// The clock tree under QEMU: the HSI as it comes out of reset (QEMU does not
+/// model the RCC's ready bits, so nothing else returns).
+#[cfg(feature = "qemu")]
+fn clock_config() -> RccConfig {
+    RccConfig::hsi()
+}
+
+/// The clock tree of the real part: the PLL from the crystal, at the full 168 MHz.
+#[cfg(not(feature = "qemu"))]
+fn clock_config() -> RccConfig {
+    RccConfig::hse(HSE_HZ.Hz()).sysclk(CORE_CLOCK_HZ.Hz())
+}
+
+/// The host link's UART: USART1 through the HAL's embedded-hal-nb serial traits,
+/// offered as `embedded-io` 0.7 (the HAL implements neither `Read` nor 0.7).
+pub struct Uart {
+    tx: Tx<pac::USART1, u8>,
+    rx: Rx<pac::USART1, u8>,
+}
+
+/// What can go wrong on the UART (the HAL's receive errors).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
+pub enum UartError {
+    /// A received byte was lost because the previous one had not been read (the
+    /// frame it belonged to will fail its CRC).
+    RxOverrun,
+    /// A byte arrived with a framing, parity or noise error (its frame will fail
+    /// its CRC).
+    RxLine,
+}
+
+impl core::fmt::Display for UartError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            UartError::RxOverrun => f.write_str("UART receive overrun: a byte was lost"),
+            UartError::RxLine => f.write_str("UART framing, parity or noise error"),
+        }
+    }
+}
+
+impl core::error::Error for UartError {}
+
+impl embedded_io::Error for UartError {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::Other
+    }
+}
+
+impl From<serial::Error> for UartError {
+    fn from(error: serial::Error) -> Self {
+        match error {
+            serial::Error::Overrun => UartError::RxOverrun,
+            _ => UartError::RxLine,
+        }
+    }
+}
+
+impl Uart {
+    /// Reads one byte if one is waiting (the HAL clears an error flag by reading it).
+    fn try_read_byte(&mut self) -> Result<Option<u8>, UartError> {
+        match embedded_hal_nb::serial::Read::read(&mut self.rx) {
+            Ok(byte) => Ok(Some(byte)),
+            Err(nb::Error::WouldBlock) => Ok(None),
+            Err(nb::Error::Other(e)) => Err(e.into()),
+        }
+    }
+
+    /// Writes one byte if the transmit register has room.
+    fn try_write_byte(&mut self, byte: u8) -> bool {
+        // The HAL's transmit path has no error other than "would block".
+        embedded_hal_nb::serial::Write::write(&mut self.tx, byte).is_ok()
+    }
+}
+
+impl embedded_io::ErrorType for Uart {
+    type Error = UartError;
+}
+
+impl embedded_io::Read for Uart {
+    /// Blocks until at least one byte is available, then returns those waiting
+    /// (the receive register holds one byte).
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        let mut count = 0;
+        while count < buf.len() {
+            match self.try_read_byte()? {
+                Some(byte) => {
+                    buf[count] = byte;
+                    count += 1;
+                }
+                None if count > 0 => break,
+                None => {}
+            }
+        }
+        Ok(count)
+    }
+}
+
+impl embedded_io::ReadReady for Uart {
+    fn read_ready(&mut self) -> Result<bool, UartError> {
+        use stm32f4xx_hal::serial::RxISR;
+        Ok(self.rx.is_rx_not_empty())
+    }
+}
+
+impl embedded_io::Write for Uart {
+    /// Blocks until the transmit register takes the first byte, then writes as many
+    /// as it takes without waiting again.
+    fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
+        let mut count = 0;
+        for &byte in buf {
+            if !self.try_write_byte(byte) {
+                if count > 0 {
+                    break;
+                }
+                while !self.try_write_byte(byte) {}
+            }
+            count += 1;
+        }
+        Ok(count)
+    }
+
+    /// Waits until the last byte has left the shift register.
+    fn flush(&mut self) -> Result<(), UartError> {
+        while embedded_hal_nb::serial::Write::flush(&mut self.tx).is_err() {}
+        Ok(())
+    }
+}
+
+impl embedded_io::WriteReady for Uart {
+    fn write_ready(&mut self) -> Result<bool, UartError> {
+        use stm32f4xx_hal::serial::TxISR;
+        Ok(self.tx.is_tx_empty())
+    }
+}
+
+/// Switches USART1 off (the safe state: nothing more goes to the host).
+fn uart_off() {
+    // SAFETY: called only from `fail`, which then masks interrupts and never
+    // returns, so no other owner of USART1 runs again; clearing CR1.UE is a single
+    // write to a valid device register.
+    #[allow(unsafe_code)]
+    let usart = unsafe { pac::USART1::steal() };
+    usart.cr1().modify(|_, w| w.ue().clear_bit());
+}
+
+/// SysTick as a free-running counter of executed instructions (under QEMU
+/// `-icount shift=0,align=off,sleep=off`, where virtual time advances exactly 1 ns
+/// per instruction and SysTick runs at 168 MHz), extended in software, and the
+/// millisecond clock derived from it.
+///
+/// Ticks convert to instructions exactly as 125 per 21 ticks, without 64-bit
+/// division (a library call whose instruction count depends on its operands,
+/// which would make the counts vary): the clock keeps the instructions of whole
+/// 21-tick groups (wrapping u32) and the ticks of the unfinished group (< 21);
+/// a reading is `groups + rest * 125 / 21`, rounded down, with one 32-bit
+/// division (a single instruction). Counts are therefore exact to within one
+/// tick (6 instructions) and repeat from run to run (see [`Clock::align`]).
+///
+/// The 24-bit counter wraps every 2^24 ticks (0.1 s at 168 MHz, 99.9 M
+/// instructions); each reading adds the ticks since the previous one, so it must
+/// be read at least that often. The application's idle loop reads it every few
+/// dozen instructions, and the longest work between two readings (a trim, about
+/// 1.3 M instructions) is far shorter.
+pub struct Clock {
+    systick: RefCell<SYST>,
+    last_reading: Cell<u32>,
+    ticks: Cell<u64>,
+    group_instructions: Cell<u32>,
+    rest_ticks: Cell<u32>,
+}
+
+impl Clock {
+    /// Starts SysTick on the core clock, counting down from [`SYSTICK_RELOAD`],
+    /// without interrupts.
+    fn new(mut systick: SYST) -> Self {
+        systick.disable_interrupt();
+        systick.set_clock_source(SystClkSource::Core);
+        systick.set_reload(SYSTICK_RELOAD);
+        systick.clear_current();
+        systick.enable_counter();
+        Clock {
+            systick: RefCell::new(systick),
+            last_reading: Cell::new(SYST::get_current()),
+            ticks: Cell::new(0),
+            group_instructions: Cell::new(0),
+            rest_ticks: Cell::new(0),
+        }
+    }
+
+    /// Adds the ticks since the previous reading, and returns the ticks since the
+    /// clock started.
+    #[inline(always)]
+    fn ticks(&self) -> u64 {
+        let now = SYST::get_current();
+        let elapsed = self.last_reading.get().wrapping_sub(now) & SYSTICK_RELOAD;
+        self.last_reading.set(now);
+        let ticks = self.ticks.get() + u64::from(elapsed);
+        self.ticks.set(ticks);
+        // At most 20 + 2^24 - 1: no overflow.
+        let rest = self.rest_ticks.get() + elapsed;
+        let groups = rest / TICK_GROUP;
+        self.rest_ticks.set(rest - groups * TICK_GROUP);
+        self.group_instructions.set(
+            self.group_instructions
+                .get()
+                .wrapping_add(groups.wrapping_mul(INSTRUCTIONS_PER_GROUP)),
+        );
+        ticks
+    }
+
+    /// Restarts SysTick's tick phase and the tick group at this instant, keeping
+    /// the clock's count.
+    ///
+    /// How long the idle loop polled before a frame arrived depends on the host, so
+    /// a free-running counter would start each measurement at a different phase
+    /// within its tick and within its 21-tick group, and a count could differ by a
+    /// few instructions from run to run. Writing SYST_CVR restarts the count from
+    /// the reload value at the write (QEMU anchors the tick period there), and the
+    /// unfinished group is completed, so a measurement that starts a fixed number
+    /// of instructions after this call reads the same count in every run. The clock
+    /// gains less than one group (125 ns) per call.
+    pub fn align(&self) {
+        self.ticks();
+        let rest = self.rest_ticks.get();
+        if rest > 0 {
+            self.ticks
+                .set(self.ticks.get() + u64::from(TICK_GROUP - rest));
+            self.rest_ticks.set(0);
+            self.group_instructions.set(
+                self.group_instructions
+                    .get()
+                    .wrapping_add(INSTRUCTIONS_PER_GROUP),
+            );
+        }
+        self.systick.borrow_mut().clear_current();
+        self.last_reading.set(SYST::get_current());
+    }
+
+    /// Milliseconds since the clock started (wrapping after 49 days).
+    pub fn now_ms(&self) -> u32 {
+        (self.ticks() / TICKS_PER_MS) as u32
+    }
+}
+
+impl decoy_controller::serve::Clock for Clock {
+    fn now_ms(&self) -> u32 {
+        Clock::now_ms(self)
+    }
+    fn align(&self) {
+        Clock::align(self)
+    }
+}
+
+impl decoy_controller::InstructionCounter for Clock {
+    /// Instructions since the clock started, wrapping at 2^32: 125 per 21 ticks,
+    /// rounded down.
+    #[inline(always)]
+    fn now(&self) -> u32 {
+        self.ticks();
+        self.group_instructions
+            .get()
+            .wrapping_add(self.rest_ticks.get() * INSTRUCTIONS_PER_GROUP / TICK_GROUP)
+    }
+}
+
+/// The board's name in Hello.
+const NAME: &str = "stm32f405";
+
+/// The board as Hello describes it: its name and the 168 MHz core clock.
+pub const INFO: decoy_link::BoardInfo = decoy_link::BoardInfo {
+    name: match decoy_link::BoardName::new(NAME) {
+        Some(name) => name,
+        None => panic!("a board name is 1 to 24 printable ASCII bytes"),
+    },
+    core_clock_hz: CORE_CLOCK_HZ,
+};
+
+/// Paints the unused stack so that [`stack_high_water`] can find how deep it got.
+pub fn paint_stack() {
+    cortex_m_stack::repaint_stack();
+}
+
+/// Bytes of stack used at the deepest point since [`paint_stack`].
+pub fn stack_high_water() -> u32 {
+    cortex_m_stack::stack_size() - cortex_m_stack::stack_painted()
+}
+
+/// Bytes of RAM the stack may grow into (all RAM above `.bss`).
+pub fn stack_size() -> u32 {
+    cortex_m_stack::stack_size()
+}
+
+/// Ends the program after a failure: under QEMU, exit status 1; on hardware the
+/// safe state (USART1 off, interrupts masked, core parked).
+pub fn fail() -> ! {
+    cortex_m::interrupt::disable();
+    uart_off();
+    #[cfg(feature = "qemu")]
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    defmt::error!("panic: {}", defmt::Display2Format(info));
+    fail()
+}
+
+// cortex-m-rt requires the HardFault handler to be an `unsafe fn` (it runs on a
+// possibly corrupt stack); it does nothing unsafe: it logs the faulting address
+// and fails.
+#[allow(unsafe_code)]
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    defmt::error!(
+        "hardfault: pc={=u32:#x} lr={=u32:#x}",
+        frame.pc(),
+        frame.lr()
+    );
+    fail()
+}
