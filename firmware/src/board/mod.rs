@@ -13,7 +13,9 @@
 //! A board may give the application more: the STM32F405 has the advisory line
 //! (`Board::advisory`, an embedded-hal `OutputPin`; see `crate::advisory`).
 //!
-//! A new board is a module here, its memory map and a line in this table.
+//! A new board is a module here, its memory map and a line in this table; what
+//! every board shares (the failure path with its panic and HardFault handlers,
+//! stack painting, the blocking `embedded-io` loops) is `common.rs`.
 
 #[cfg(any(
     all(feature = "board-mps2-an386", feature = "board-mps2-an500"),
@@ -29,6 +31,10 @@ compile_error!("choose one board feature");
 compile_error!(
     "a board feature is needed: `board-mps2-an386`, `board-mps2-an500` or `board-stm32f405`"
 );
+
+/// The failure path, stack painting and the UART loops every board shares.
+mod common;
+pub use common::{fail, paint_stack, stack_high_water, stack_size};
 
 #[cfg(any(feature = "board-mps2-an386", feature = "board-mps2-an500"))]
 mod mps2;

@@ -19,9 +19,10 @@
 
 use core::cell::{Cell, RefCell};
 
+use super::common;
+
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m_rt::{ExceptionFrame, exception};
 
 #[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
 compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
@@ -169,10 +170,20 @@ impl Uart {
         }
         Ok(Some(mmio::read(DATA) as u8))
     }
+
+    /// Writes one byte if the transmit buffer has room.
+    fn try_write_byte(&mut self, byte: u8) -> bool {
+        use uart_registers::*;
+        if Self::state() & STATE_TX_FULL != 0 {
+            return false;
+        }
+        mmio::write(DATA, u32::from(byte));
+        true
+    }
 }
 
 /// Switches the UART off (the safe state: nothing more goes to the host).
-fn uart_off() {
+pub(super) fn uart_off() {
     mmio::write(uart_registers::CTRL, 0);
 }
 
@@ -184,21 +195,7 @@ impl embedded_io::Read for Uart {
     /// Blocks until at least one byte is available, then returns those waiting
     /// (the receive buffer holds one byte).
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
-        if buf.is_empty() {
-            return Ok(0);
-        }
-        let mut count = 0;
-        while count < buf.len() {
-            match self.try_read_byte()? {
-                Some(byte) => {
-                    buf[count] = byte;
-                    count += 1;
-                }
-                None if count > 0 => break,
-                None => {}
-            }
-        }
-        Ok(count)
+        common::read_blocking(buf, || self.try_read_byte())
     }
 }
 
@@ -212,19 +209,9 @@ impl embedded_io::Write for Uart {
     /// Blocks until the transmit buffer takes the first byte, then writes as many
     /// as it takes without waiting again.
     fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
-        use uart_registers::*;
-        let mut count = 0;
-        for &byte in buf {
-            if Self::state() & STATE_TX_FULL != 0 {
-                if count > 0 {
-                    break;
-                }
-                while Self::state() & STATE_TX_FULL != 0 {}
-            }
-            mmio::write(DATA, u32::from(byte));
-            count += 1;
-        }
-        Ok(count)
+        Ok(common::write_blocking(buf, |byte| {
+            self.try_write_byte(byte)
+        }))
     }
 
     /// Waits until the transmit buffer has room, i.e. the last byte is on its way.
@@ -336,51 +323,4 @@ impl decoy_controller::InstructionCounter for Clock {
     fn now(&self) -> u32 {
         (self.ticks() as u32).wrapping_mul(INSTRUCTIONS_PER_TICK)
     }
-}
-
-/// Paints the unused stack so that [`stack_high_water`] can find how deep it got.
-pub fn paint_stack() {
-    cortex_m_stack::repaint_stack();
-}
-
-/// Bytes of stack used at the deepest point since [`paint_stack`].
-pub fn stack_high_water() -> u32 {
-    cortex_m_stack::stack_size() - cortex_m_stack::stack_painted()
-}
-
-/// Bytes of RAM the stack may grow into (all RAM above `.bss`).
-pub fn stack_size() -> u32 {
-    cortex_m_stack::stack_size()
-}
-
-/// Ends the program after a failure: under QEMU, exit status 1; on hardware the
-/// safe state (UART off, interrupts masked, core parked).
-pub fn fail() -> ! {
-    uart_off();
-    cortex_m::interrupt::disable();
-    #[cfg(feature = "qemu")]
-    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    defmt::error!("panic: {}", defmt::Display2Format(info));
-    fail()
-}
-
-// cortex-m-rt requires the HardFault handler to be an `unsafe fn` (it runs on a
-// possibly corrupt stack); it does nothing unsafe: it logs the faulting address
-// and fails.
-#[allow(unsafe_code)]
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    defmt::error!(
-        "hardfault: pc={=u32:#x} lr={=u32:#x}",
-        frame.pc(),
-        frame.lr()
-    );
-    fail()
 }

@@ -32,9 +32,10 @@
 
 use core::cell::{Cell, RefCell};
 
+use super::common;
+
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m_rt::{ExceptionFrame, exception};
 use stm32f4xx_hal::gpio::{Output, PA5, PushPull};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
@@ -189,21 +190,7 @@ impl embedded_io::Read for Uart {
     /// Blocks until at least one byte is available, then returns those waiting
     /// (the receive register holds one byte).
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
-        if buf.is_empty() {
-            return Ok(0);
-        }
-        let mut count = 0;
-        while count < buf.len() {
-            match self.try_read_byte()? {
-                Some(byte) => {
-                    buf[count] = byte;
-                    count += 1;
-                }
-                None if count > 0 => break,
-                None => {}
-            }
-        }
-        Ok(count)
+        common::read_blocking(buf, || self.try_read_byte())
     }
 }
 
@@ -218,17 +205,9 @@ impl embedded_io::Write for Uart {
     /// Blocks until the transmit register takes the first byte, then writes as many
     /// as it takes without waiting again.
     fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
-        let mut count = 0;
-        for &byte in buf {
-            if !self.try_write_byte(byte) {
-                if count > 0 {
-                    break;
-                }
-                while !self.try_write_byte(byte) {}
-            }
-            count += 1;
-        }
-        Ok(count)
+        Ok(common::write_blocking(buf, |byte| {
+            self.try_write_byte(byte)
+        }))
     }
 
     /// Waits until the last byte has left the shift register.
@@ -246,7 +225,7 @@ impl embedded_io::WriteReady for Uart {
 }
 
 /// Switches USART1 off (the safe state: nothing more goes to the host).
-fn uart_off() {
+pub(super) fn uart_off() {
     // SAFETY: called only from `fail`, which then masks interrupts and never
     // returns, so no other owner of USART1 runs again; clearing CR1.UE is a single
     // write to a valid device register.
@@ -386,50 +365,3 @@ pub const INFO: decoy_link::BoardInfo = decoy_link::BoardInfo {
     },
     core_clock_hz: CORE_CLOCK_HZ,
 };
-
-/// Paints the unused stack so that [`stack_high_water`] can find how deep it got.
-pub fn paint_stack() {
-    cortex_m_stack::repaint_stack();
-}
-
-/// Bytes of stack used at the deepest point since [`paint_stack`].
-pub fn stack_high_water() -> u32 {
-    cortex_m_stack::stack_size() - cortex_m_stack::stack_painted()
-}
-
-/// Bytes of RAM the stack may grow into (all RAM above `.bss`).
-pub fn stack_size() -> u32 {
-    cortex_m_stack::stack_size()
-}
-
-/// Ends the program after a failure: under QEMU, exit status 1; on hardware the
-/// safe state (USART1 off, interrupts masked, core parked).
-pub fn fail() -> ! {
-    cortex_m::interrupt::disable();
-    uart_off();
-    #[cfg(feature = "qemu")]
-    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    defmt::error!("panic: {}", defmt::Display2Format(info));
-    fail()
-}
-
-// cortex-m-rt requires the HardFault handler to be an `unsafe fn` (it runs on a
-// possibly corrupt stack); it does nothing unsafe: it logs the faulting address
-// and fails.
-#[allow(unsafe_code)]
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    defmt::error!(
-        "hardfault: pc={=u32:#x} lr={=u32:#x}",
-        frame.pc(),
-        frame.lr()
-    );
-    fail()
-}
