@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 use std::fs;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Criterion medians, ns, keyed `group/function/value` (criterion's `full_id`, e.g.
 /// `pendulum_rk4_step/f64/300`).
@@ -11,10 +11,9 @@ pub type WallClock = BTreeMap<String, f64>;
 /// Instruction counts keyed `group/function/id` (e.g. `steps/pendulum_f64/n300`).
 pub type Instructions = BTreeMap<String, u64>;
 
-/// Reads every `new/benchmark.json` + `new/estimates.json` pair under `dir`
-/// (criterion's output directory) into median times.
-pub fn read_criterion(dir: &Path) -> Result<WallClock, String> {
-    let mut out = WallClock::new();
+/// Every file under `dir` (recursively) for which `wanted` is true.
+fn files_under(dir: &Path, wanted: impl Fn(&Path) -> bool) -> Result<Vec<PathBuf>, String> {
+    let mut files = Vec::new();
     let mut pending = vec![dir.to_path_buf()];
     while let Some(current) = pending.pop() {
         let entries = fs::read_dir(&current)
@@ -23,27 +22,37 @@ pub fn read_criterion(dir: &Path) -> Result<WallClock, String> {
             let path = entry.path();
             if path.is_dir() {
                 pending.push(path);
-                continue;
+            } else if wanted(&path) {
+                files.push(path);
             }
-            let in_new = path
-                .parent()
-                .and_then(Path::file_name)
-                .is_some_and(|name| name == "new");
-            if !in_new || path.file_name().is_none_or(|n| n != "benchmark.json") {
-                continue;
-            }
-            let id = json_file(&path)?;
-            let id = id["full_id"]
-                .as_str()
-                .ok_or_else(|| format!("{}: no `full_id`", path.display()))?
-                .to_owned();
-            let estimates_path = path.with_file_name("estimates.json");
-            let estimates = json_file(&estimates_path)?;
-            let median = estimates["median"]["point_estimate"]
-                .as_f64()
-                .ok_or_else(|| format!("{}: no median", estimates_path.display()))?;
-            out.insert(id, median);
         }
+    }
+    Ok(files)
+}
+
+/// Reads every `new/benchmark.json` + `new/estimates.json` pair under `dir`
+/// (criterion's output directory) into median times.
+pub fn read_criterion(dir: &Path) -> Result<WallClock, String> {
+    let mut out = WallClock::new();
+    let benchmarks = files_under(dir, |path| {
+        let in_new = path
+            .parent()
+            .and_then(Path::file_name)
+            .is_some_and(|name| name == "new");
+        in_new && path.file_name().is_some_and(|n| n == "benchmark.json")
+    })?;
+    for path in benchmarks {
+        let id = json_file(&path)?;
+        let id = id["full_id"]
+            .as_str()
+            .ok_or_else(|| format!("{}: no `full_id`", path.display()))?
+            .to_owned();
+        let estimates_path = path.with_file_name("estimates.json");
+        let estimates = json_file(&estimates_path)?;
+        let median = estimates["median"]["point_estimate"]
+            .as_f64()
+            .ok_or_else(|| format!("{}: no median", estimates_path.display()))?;
+        out.insert(id, median);
     }
     Ok(out)
 }
@@ -52,20 +61,12 @@ pub fn read_criterion(dir: &Path) -> Result<WallClock, String> {
 /// instruction counts (callgrind's `Ir`, total over the run's parts).
 pub fn read_gungraun(dir: &Path) -> Result<Instructions, String> {
     let mut out = Instructions::new();
-    let mut pending = vec![dir.to_path_buf()];
-    while let Some(current) = pending.pop() {
-        let entries = fs::read_dir(&current)
-            .map_err(|e| format!("cannot read {}: {e}", current.display()))?;
-        for entry in entries.flatten() {
-            let path = entry.path();
-            if path.is_dir() {
-                pending.push(path);
-            } else if path.file_name().is_some_and(|n| n == "summary.json") {
-                let (key, count) = parse_gungraun_summary(&json_file(&path)?)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
-                out.insert(key, count);
-            }
-        }
+    for path in files_under(dir, |path| {
+        path.file_name().is_some_and(|n| n == "summary.json")
+    })? {
+        let (key, count) = parse_gungraun_summary(&json_file(&path)?)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        out.insert(key, count);
     }
     Ok(out)
 }

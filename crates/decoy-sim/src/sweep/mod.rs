@@ -198,6 +198,24 @@ pub(crate) fn csv_row(values: &[f64]) -> String {
     row
 }
 
+/// Writes the tables (file name, CSV text) and, with `plots`, the figures
+/// (stem, panels) of a sweep into `dir`; returns the files written.
+pub(crate) fn write_sweep(
+    dir: &Path,
+    tables: &[(&str, String)],
+    plots: Option<Vec<(&'static str, Vec<Plot>)>>,
+) -> Result<Vec<PathBuf>, SimError> {
+    create_dir(dir)?;
+    let mut files = Vec::new();
+    for (name, text) in tables {
+        files.push(write_text(&dir.join(name), text)?);
+    }
+    for (stem, panels) in plots.into_iter().flatten() {
+        files.extend(draw(dir, stem, &panels)?);
+    }
+    Ok(files)
+}
+
 /// Creates `dir` and its parents.
 pub(crate) fn create_dir(dir: &Path) -> Result<(), SimError> {
     std::fs::create_dir_all(dir).map_err(|source| SimError::Io {

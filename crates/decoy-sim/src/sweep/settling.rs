@@ -15,8 +15,8 @@ use crate::trace::{Start, TraceOptions, trace};
 use crate::trim::trim_point;
 
 use super::{
-    HISTORY_INTERVAL_S, MAX_HISTORIES, SweepRange, cli_invalid, create_dir, draw, evenly, plot,
-    trim_number, write_text,
+    HISTORY_INTERVAL_S, MAX_HISTORIES, SweepRange, cli_invalid, evenly, plot, trim_number,
+    write_sweep,
 };
 
 /// Which decoy station a settling sweep varies.
@@ -584,17 +584,14 @@ pub fn write_settling_sweep(
     dir: &Path,
     plots: bool,
 ) -> Result<Vec<PathBuf>, SimError> {
-    create_dir(dir)?;
-    let mut files = vec![
-        write_text(&dir.join("sweep.csv"), &sweep.table_csv())?,
-        write_text(&dir.join("pitch.csv"), &sweep.pitch_csv())?,
-    ];
-    if plots {
-        for (stem, panels) in sweep.plots() {
-            files.extend(draw(dir, stem, &panels)?);
-        }
-    }
-    Ok(files)
+    write_sweep(
+        dir,
+        &[
+            ("sweep.csv", sweep.table_csv()),
+            ("pitch.csv", sweep.pitch_csv()),
+        ],
+        plots.then(|| sweep.plots()),
+    )
 }
 
 #[cfg(test)]

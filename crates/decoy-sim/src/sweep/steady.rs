@@ -12,7 +12,7 @@ use crate::format::format_value;
 use crate::scenario::{check_altitude, check_mach};
 use crate::trim::{TrimPoint, trim_point};
 
-use super::{SweepRange, cli_invalid, create_dir, csv_row, draw, plot, trim_number, write_text};
+use super::{SweepRange, cli_invalid, csv_row, plot, trim_number, write_sweep};
 
 /// What a steady sweep varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -329,15 +329,12 @@ pub fn write_steady_sweep(
     dir: &Path,
     plots: bool,
 ) -> Result<Vec<PathBuf>, SimError> {
-    create_dir(dir)?;
-    let mut files = vec![
-        write_text(&dir.join("sweep.csv"), &sweep.table_csv())?,
-        write_text(&dir.join("cable.csv"), &sweep.cable_csv())?,
-    ];
-    if plots {
-        for (stem, panels) in sweep.plots() {
-            files.extend(draw(dir, stem, &panels)?);
-        }
-    }
-    Ok(files)
+    write_sweep(
+        dir,
+        &[
+            ("sweep.csv", sweep.table_csv()),
+            ("cable.csv", sweep.cable_csv()),
+        ],
+        plots.then(|| sweep.plots()),
+    )
 }
