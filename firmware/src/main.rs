@@ -23,17 +23,18 @@ use decoy_firmware::advisory::Advisory;
 use decoy_firmware::board::{self, Board};
 use decoy_firmware::{SEGMENT_CAPACITY, Scalar, reference};
 use decoy_link::{DeviceMessage, FrameDecoder};
-use solver_core::Model;
-use static_cell::StaticCell;
+use static_cell::{ConstStaticCell, StaticCell};
 
 /// Log a line every this many accepted State frames.
 const LOG_EVERY_FRAMES: u32 = 100;
 
-/// The controller, with its solver, in static memory (`.bss`). The cell holds the
-/// whole `Result` of building it, so that the (large) controller is constructed
-/// directly in static memory rather than on the stack and then moved.
+/// The controller, with its solver, in static memory (`.bss`): a constant of zero
+/// bits ([`Controller::UNCONFIGURED`]) until `build_controller` configures it in
+/// place, so that it never passes through the stack (37.5 KB in f64, with the
+/// M7's 64 KiB of RAM).
 type EmbeddedController = Controller<Scalar, SEGMENT_CAPACITY>;
-static CONTROLLER: StaticCell<Result<EmbeddedController, BuildError>> = StaticCell::new();
+static CONTROLLER: ConstStaticCell<EmbeddedController> =
+    ConstStaticCell::new(EmbeddedController::UNCONFIGURED);
 /// The frame decoder's buffer, in static memory.
 static DECODER: StaticCell<FrameDecoder> = StaticCell::new();
 
@@ -117,38 +118,39 @@ fn run(
     })
 }
 
-/// Builds the controller in its `static`: the model first (validated), then the
-/// controller in place.
+/// Configures the controller in its `static`, in place: the reference system's
+/// configuration (a few KB, the aerodynamic table included) is the largest value
+/// on the stack, never the controller or its solver.
 #[inline(never)]
-fn build_controller() -> &'static mut Result<EmbeddedController, BuildError> {
-    CONTROLLER.init_with(|| {
-        let system = &reference::SYSTEM;
-        let config = system
-            .controller_config::<Scalar>(system.embedded_layout())
-            .map_err(BuildError::AeroTable)?;
-        let model =
-            Model::<Scalar, SEGMENT_CAPACITY>::new(config.params).map_err(BuildError::Model)?;
-        EmbeddedController::from_model(model, config.geometry, config.allowable_tension_n)
-            .map_err(BuildError::Controller)
-    })
+fn build_controller() -> Result<&'static mut EmbeddedController, BuildError> {
+    let controller = CONTROLLER.try_take().ok_or(BuildError::Taken)?;
+    let system = &reference::SYSTEM;
+    let config = system
+        .controller_config::<Scalar>(system.embedded_layout())
+        .map_err(BuildError::AeroTable)?;
+    controller
+        .configure(&config)
+        .map_err(BuildError::Controller)?;
+    Ok(controller)
 }
 
 /// Why the controller could not be built (a configuration the solver rejects).
 #[derive(Debug)]
 enum BuildError {
+    /// The controller's `static` was already taken (built twice).
+    Taken,
     /// The aerodynamic table is unusable.
     AeroTable(solver_core::AeroTableError),
-    /// The model parameters are invalid.
-    Model(solver_core::ConfigError),
-    /// The controller rejected its configuration.
+    /// The controller rejected its configuration (the model's parameters or the
+    /// allowable tension).
     Controller(decoy_controller::ControllerError),
 }
 
 impl core::fmt::Display for BuildError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
+            BuildError::Taken => f.write_str("the controller was already built"),
             BuildError::AeroTable(e) => write!(f, "aerodynamic table: {e}"),
-            BuildError::Model(e) => write!(f, "model: {e}"),
             BuildError::Controller(e) => write!(f, "controller: {e}"),
         }
     }

@@ -606,6 +606,15 @@ fn hil_text(config: &SystemConfig, run: &HilRun) -> String {
         "Firmware                             flash {} B, static RAM {} B ({})",
         h.flash_bytes, h.ram_bytes, h.elf
     );
+    let bytes = |b: Option<u64>| b.map_or_else(|| "not logged".to_owned(), |b| format!("{b} B"));
+    let _ = writeln!(
+        s,
+        "Stack and RAM                        stack peak at boot {}, in the link loop {}; RAM peak {} of the board's {} B",
+        bytes(h.stack_boot_bytes),
+        bytes(h.stack_link_bytes),
+        bytes(h.ram_peak_bytes),
+        h.ram_budget_bytes
+    );
     let _ = writeln!(s, "Files written to {}:", run.out_dir.display());
     for file in &run.files {
         let name = file.file_name().map_or_else(

@@ -969,6 +969,15 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
     );
     assert!(num(&summary, "instructions_per_step_max") > 10_000.0);
     assert!(num(&summary, "ram_bytes") > 0.0 && num(&summary, "flash_bytes") > 0.0);
+    // The RAM peak (static RAM and the larger stack peak) within the M4's 64 KiB.
+    let peak = num(&summary, "ram_peak_bytes");
+    assert_eq!(
+        peak,
+        num(&summary, "ram_bytes")
+            + num(&summary, "stack_boot_bytes").max(num(&summary, "stack_link_bytes"))
+    );
+    assert!(peak <= num(&summary, "ram_budget_bytes"), "{summary}");
+    assert_eq!(num(&summary, "ram_budget_bytes"), 65536.0);
     let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 101);
     assert!(csv.starts_with("t_s,seq,tension_connection_N,"), "{csv}");

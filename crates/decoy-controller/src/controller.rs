@@ -172,39 +172,92 @@ pub struct Controller<T: Real, const N: usize> {
 }
 
 impl<T: Real, const N: usize> Controller<T, N> {
+    /// A controller without a configuration yet, as a constant of all zero bits
+    /// (its solver is [`Solver::UNCONFIGURED`]): for a controller that must not
+    /// pass through the stack (37.5 KB in f64 with room for 64 segments), put this
+    /// in its final place, for example
+    /// `static C: ConstStaticCell<Controller<f64, 64>> = ConstStaticCell::new(Controller::UNCONFIGURED);`
+    /// (a `static` of zero bits lies in `.bss`), and configure it there with
+    /// [`Controller::configure`].
+    ///
+    /// Until configured it never trims: it answers commands, and every State frame
+    /// gets a typed rejection ([`RejectReason::NotTrimmed`] where nothing else is
+    /// wrong with it first), so it never steps its solver.
+    pub const UNCONFIGURED: Self = Controller {
+        solver: Solver::UNCONFIGURED,
+        geometry: Geometry::ZERO,
+        allowable_tension_n: T::ZERO,
+        profile: Profile::Streamed,
+        // `Some` of a zero path rather than `None`, whose niche is nonzero bits: the
+        // constant must be all zero bits to lie in `.bss` (checked by the HIL
+        // tests). Never read: selecting a profile replaces it, `configure` clears
+        // it, and an unconfigured controller never starts a run.
+        builtin: Some(BuiltinPath::Level(LevelAcceleration {
+            altitude: 0.0,
+            initial_speed: 0.0,
+            final_speed: 0.0,
+            start: 0.0,
+            acceleration: 0.0,
+        })),
+        run: None,
+        counters: Counters::ZERO,
+        degraded: false,
+        recovered_pending: false,
+        hazard_flags: 0,
+        wave_rate: T::ZERO,
+        activity: false,
+        last_activity_ms: None,
+    };
+
     /// A controller for `config`, waiting for its first State frame to trim at.
     pub fn new(config: ControllerConfig<T>) -> Result<Self, ControllerError> {
-        let model = Model::<T, N>::new(config.params).map_err(ControllerError::Config)?;
-        Self::from_model(model, config.geometry, config.allowable_tension_n)
+        let mut controller = Self::UNCONFIGURED;
+        controller.configure(&config)?;
+        Ok(controller)
     }
 
-    /// [`Controller::new`] with an already built model (lets the firmware build
-    /// the controller in place in a `static`).
+    /// [`Controller::new`] with an already built model.
     pub fn from_model(
         model: Model<T, N>,
         geometry: Geometry<T>,
         allowable_tension_n: T,
     ) -> Result<Self, ControllerError> {
+        Self::new(ControllerConfig {
+            params: *model.params(),
+            geometry,
+            allowable_tension_n,
+        })
+    }
+
+    /// Makes this the controller [`Controller::new`] builds for `config`, in place:
+    /// its solver and model are built in the controller's own memory, and nothing
+    /// controller-, solver- or model-sized passes through the stack (the firmware
+    /// configures [`Controller::UNCONFIGURED`] in its `static` this way). Everything
+    /// the controller held before is replaced: run, profile, counters, link state.
+    ///
+    /// On error the controller is left exactly as it was.
+    pub fn configure(&mut self, config: &ControllerConfig<T>) -> Result<(), ControllerError> {
+        let allowable_tension_n = config.allowable_tension_n;
         if !(allowable_tension_n.finite() && allowable_tension_n > T::zero()) {
             return Err(ControllerError::AllowableTension);
         }
-        // The default state is never integrated: every run starts from a trim.
-        let solver = Solver::new(model, State::default()).map_err(ControllerError::Solve)?;
-        Ok(Controller {
-            solver,
-            geometry,
-            allowable_tension_n,
-            profile: Profile::Streamed,
-            builtin: None,
-            run: None,
-            counters: Counters::default(),
-            degraded: false,
-            recovered_pending: false,
-            hazard_flags: 0,
-            wave_rate: T::zero(),
-            activity: false,
-            last_activity_ms: None,
-        })
+        // The state at rest is never integrated: every run starts from a trim.
+        self.solver
+            .configure(&config.params)
+            .map_err(ControllerError::Config)?;
+        self.geometry = config.geometry;
+        self.allowable_tension_n = allowable_tension_n;
+        self.profile = Profile::Streamed;
+        self.builtin = None;
+        self.run = None;
+        self.counters = Counters::ZERO;
+        self.degraded = false;
+        self.recovered_pending = false;
+        self.hazard_flags = 0;
+        self.wave_rate = T::zero();
+        self.activity = false;
+        self.last_activity_ms = None;
+        Ok(())
     }
 
     /// The Hello message of this controller on `board`.
@@ -521,6 +574,10 @@ impl<T: Real, const N: usize> Controller<T, N> {
     ///
     /// Returns the new run, 0 steps and (streamed) the constant path at the frame.
     fn start_run(&mut self, frame: &AircraftStateFrame) -> Result<Advanced<T>, RejectReason> {
+        // Unconfigured (`Controller::UNCONFIGURED`): no model to trim.
+        if self.solver.model().segment_count() == 0 {
+            return Err(RejectReason::NotTrimmed);
+        }
         let p = frame.position_ned_m;
         let run = Run {
             last: *frame,

@@ -187,6 +187,28 @@ pub struct Geometry<T: Real> {
     pub envelope: Envelope<T>,
 }
 
+impl<T: Real> Geometry<T> {
+    /// Every value zero (a point plume and envelope at the aircraft's reference
+    /// point): the geometry of [`Controller::UNCONFIGURED`](crate::Controller::UNCONFIGURED).
+    pub(crate) const ZERO: Self = {
+        let z = Vec3::new(T::ZERO, T::ZERO, T::ZERO);
+        Geometry {
+            plume: ExhaustPlume {
+                nozzle: z,
+                axis: z,
+                nozzle_radius: T::ZERO,
+                tan_half_angle: T::ZERO,
+                length: T::ZERO,
+            },
+            envelope: Envelope {
+                fore: z,
+                aft: z,
+                radius: T::ZERO,
+            },
+        }
+    };
+}
+
 /// The NED point `p` in the aircraft body frame (relative to its reference point).
 pub fn to_body<T: Real>(aircraft: &AircraftState<T>, p: &Vec3<T>) -> Vec3<T> {
     aircraft

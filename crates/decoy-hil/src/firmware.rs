@@ -599,6 +599,63 @@ impl fmt::Display for MemoryUsage {
     }
 }
 
+/// What a firmware's log says of its memory: the stack high-water marks that
+/// stack painting measured (`firmware/src/board/common.rs`) and the controller's
+/// size from the boot banner.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StackMarks {
+    /// The deepest the stack got from reset until the controller was built (the
+    /// line `boot stack high-water N B`), bytes.
+    pub boot: u64,
+    /// The deepest the stack got in the link loop (painted again after the boot),
+    /// at the last line that reports it (`stack=N`: the trim and every 100th
+    /// output), bytes; None before any such line.
+    pub link: Option<u64>,
+    /// Size of the controller with its solver (the banner's `controller N B`),
+    /// bytes: it lies in `.bss`.
+    pub controller: u64,
+}
+
+impl StackMarks {
+    /// The deepest stack of the run: the boot's or the link loop's.
+    pub fn peak(&self) -> u64 {
+        self.boot.max(self.link.unwrap_or(0))
+    }
+}
+
+/// Reads the [`StackMarks`] from a firmware's decoded log.
+pub fn stack_marks(log: &str) -> Result<StackMarks, String> {
+    /// The number right after the first `key` in `line`.
+    fn number_after(line: &str, key: &str) -> Option<u64> {
+        let (_, rest) = line.split_once(key)?;
+        let digits: &str = rest
+            .split(|c: char| !c.is_ascii_digit())
+            .next()
+            .filter(|d| !d.is_empty())?;
+        digits.parse().ok()
+    }
+    let boot = log
+        .lines()
+        .find_map(|line| number_after(line, "boot stack high-water "))
+        .ok_or_else(|| format!("no `boot stack high-water` line in the firmware's log:\n{log}"))?;
+    let controller = log
+        .lines()
+        .find_map(|line| number_after(line, ", controller "))
+        .ok_or_else(|| {
+            format!("no banner with the controller's size in the firmware's log:\n{log}")
+        })?;
+    // The high-water mark only grows: the last report is the deepest.
+    let link = log
+        .lines()
+        .filter_map(|line| number_after(line, " stack="))
+        .max();
+    Ok(StackMarks {
+        boot,
+        link,
+        controller,
+    })
+}
+
 /// Reads the allocated sections of the ELF at `path`.
 pub fn memory_usage(path: &Path) -> Result<MemoryUsage, String> {
     let bytes = fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
@@ -630,6 +687,25 @@ pub fn memory_usage(path: &Path) -> Result<MemoryUsage, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stack_marks_are_read_from_the_log() {
+        let log = "INFO  decoy controller: board mps2-an500, f64, 16 segments (capacity 64), controller 37536 B, stack room 4153000 B, protocol 2\n\
+                   INFO  boot stack high-water 6208 B\n\
+                   INFO  seq=0 t=0 T0=255.1 TN=50.2 steps=0 instr=2212360 flags=0x1 stack=14020\n\
+                   INFO  seq=100 t=1 T0=255.1 TN=50.2 steps=2 instr=125040 flags=0x1 stack=15024\n";
+        let marks = stack_marks(log).unwrap();
+        assert_eq!(
+            marks,
+            StackMarks {
+                boot: 6208,
+                link: Some(15024),
+                controller: 37536
+            }
+        );
+        assert_eq!(marks.peak(), 15024);
+        assert!(stack_marks("INFO  seq=0 stack=1").is_err());
+    }
 
     #[test]
     fn segments_line_is_replaced_and_nothing_else() {

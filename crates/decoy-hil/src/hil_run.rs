@@ -100,6 +100,17 @@ pub struct HilSummary {
     pub ram_bytes: u64,
     /// Flash of the ELF (`.text` + `.data`), bytes.
     pub flash_bytes: u64,
+    /// The stack's peak from reset until the controller was built (stack
+    /// painting, from the firmware's log), bytes; None if the log has no report.
+    pub stack_boot_bytes: Option<u64>,
+    /// The stack's peak in the link loop, at its last report in the log (the trim
+    /// and every 100th output), bytes; None without one.
+    pub stack_link_bytes: Option<u64>,
+    /// Static RAM plus the larger stack peak: the most RAM in use at any moment,
+    /// bytes; None without the stack reports.
+    pub ram_peak_bytes: Option<u64>,
+    /// The board's RAM ([`crate::qemu::Board::ram_budget`]), bytes.
+    pub ram_budget_bytes: u64,
     /// Round trips per second over the link (wall clock).
     pub link_frames_per_s: f64,
     /// The ELF that ran.
@@ -286,6 +297,7 @@ pub fn run_hil(
     }
     let flown = fly_until_rejected(&mut session, &messages, progress);
     let log = session.finish();
+    let marks = firmware::stack_marks(&log.log).ok();
     let (exchanges, stop, fps) = match flown {
         Ok(run) => run,
         Err(e) => return Err(HilError::Link(e)),
@@ -354,6 +366,10 @@ pub fn run_hil(
         frames_identical_to_host_same_precision: vs_same.identical,
         ram_bytes: memory.ram(),
         flash_bytes: memory.flash(),
+        stack_boot_bytes: marks.map(|m| m.boot),
+        stack_link_bytes: marks.and_then(|m| m.link),
+        ram_peak_bytes: marks.map(|m| memory.ram() + m.peak()),
+        ram_budget_bytes: options.board.ram_budget(),
         link_frames_per_s: fps,
         elf: elf.display().to_string(),
         firmware_source,

@@ -70,6 +70,17 @@ impl Board {
         }
     }
 
+    /// The RAM the firmware may use on this board, bytes: static RAM and the
+    /// stack's peak together. The MPS2 boards stand for a Cortex-M part with
+    /// 64 KiB (QEMU maps 4 MiB; the product's budget is 64 KiB); the STM32F405's
+    /// 128 KiB SRAM (its 64 KiB CCM is not used).
+    pub fn ram_budget(self) -> u64 {
+        match self {
+            Board::M4 | Board::M7 => 64 * 1024,
+            Board::Stm32f405 => 128 * 1024,
+        }
+    }
+
     /// The board's name on the command line (`m4`, `m7`, `stm32f405`).
     pub fn name(self) -> &'static str {
         match self {

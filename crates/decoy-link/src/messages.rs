@@ -232,6 +232,26 @@ pub struct Counters {
 }
 
 impl Counters {
+    /// Every counter zero ([`Counters::default`]), as a constant (for a controller
+    /// built in a `static`).
+    pub const ZERO: Self = Counters {
+        frames_ok: 0,
+        oversize: 0,
+        cobs: 0,
+        crc: 0,
+        truncated: 0,
+        decode: 0,
+        non_finite: 0,
+        out_of_range: 0,
+        time_not_increasing: 0,
+        time_jump: 0,
+        not_trimmed: 0,
+        solver_failure: 0,
+        wrong_mode: 0,
+        bad_quaternion: 0,
+        silences: 0,
+    };
+
     /// Counts one rejection for `reason` and returns the new count.
     pub fn count(&mut self, reason: RejectReason) -> u32 {
         let counter = match reason {

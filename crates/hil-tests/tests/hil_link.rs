@@ -487,6 +487,56 @@ fn m7_profile_matches_the_host_in_f64() {
     }
 }
 
+/// Memory at every moment fits the board: static RAM (`.data` + `.bss`) plus the
+/// deepest stack, at boot (building the controller) or in the link loop (the
+/// trim and 300 frames of the acceleration), at most the board's RAM
+/// ([`Board::ram_budget`]); the controller, built in place in its `static`, lies
+/// in `.bss` and never on the stack: the boot's stack is smaller than the
+/// controller (a copy of it on the stack would make it larger).
+fn ram_peak_fits_the_board(board: Board) {
+    let memory = firmware::memory_usage(elf(board)).unwrap_or_else(|e| panic!("{e}"));
+    let (exchanges, _, _, log) = fly(board, &frames("acceleration", None, 3.0));
+    let answers: Vec<DeviceMessage> = exchanges.iter().map(|e| e.answer).collect();
+    assert_eq!(flight::outputs(&answers).len(), 301, "{board}: outputs");
+    let marks = firmware::stack_marks(&log).unwrap_or_else(|e| panic!("{board}: {e}"));
+    let link = marks.link.unwrap_or_else(|| {
+        panic!("{board}: no stack high-water reported in the link loop:\n{log}")
+    });
+    let peak = memory.ram() + marks.peak();
+    let budget = board.ram_budget();
+    println!(
+        "{board}: {memory}; controller {} B; stack: boot {} B, link loop {link} B; \
+         RAM peak {peak} B of {budget} B ({:.0} %)",
+        marks.controller,
+        marks.boot,
+        100.0 * peak as f64 / budget as f64
+    );
+    assert!(
+        peak <= budget,
+        "{board}: RAM peak {peak} B (static {} B + stack {} B) over the board's {budget} B",
+        memory.ram(),
+        marks.peak()
+    );
+    assert!(
+        memory.bss >= marks.controller,
+        "{board}: the controller ({} B) is not in .bss ({} B): its `static` has an initial value (flash and a copy at boot)",
+        marks.controller,
+        memory.bss
+    );
+    assert!(
+        marks.boot < marks.controller,
+        "{board}: the boot's stack ({} B) is as large as the controller ({} B): it was built on the stack",
+        marks.boot,
+        marks.controller
+    );
+}
+
+/// [`ram_peak_fits_the_board`] on the M7 (f64: the largest controller, 64 KiB).
+#[test]
+fn m7_ram_peak_fits_the_board() {
+    ram_peak_fits_the_board(Board::M7);
+}
+
 fn two_runs_receive_identical_bytes(board: Board) {
     let frames = frames("acceleration", None, 3.0);
     let (first, bytes_a, _, _) = fly(board, &frames);
@@ -903,6 +953,11 @@ macro_rules! f32_suite {
             #[test]
             fn turns_match_the_host_and_fit_the_budget() {
                 super::turns_match_the_host_and_fit_the_budget(BOARD);
+            }
+
+            #[test]
+            fn ram_peak_fits_the_board() {
+                super::ram_peak_fits_the_board(BOARD);
             }
 
             #[test]

@@ -27,6 +27,18 @@ pub struct AeroTable<T: Real> {
 }
 
 impl<T: Real> AeroTable<T> {
+    /// No rows, all zero bits: the table of an unconfigured model
+    /// ([`Solver::UNCONFIGURED`](crate::Solver::UNCONFIGURED)), never looked up.
+    pub(crate) const EMPTY: Self = AeroTable {
+        alpha: [T::ZERO; AERO_TABLE_CAPACITY],
+        coefficients: [AeroCoefficients {
+            cl: T::ZERO,
+            cd: T::ZERO,
+            cm: T::ZERO,
+        }; AERO_TABLE_CAPACITY],
+        rows: 0,
+    };
+
     /// Builds the table from rows `(alpha_deg, cl, cd, cm)`.
     ///
     /// Angles must be finite, strictly increasing, start at 0 and end at 180 degrees.

@@ -30,7 +30,7 @@ use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
-use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite};
+use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite, zero3, zero33};
 use crate::state::{Derivative, State};
 
 /// Per-evaluation scratch and results. Read after an evaluation through
@@ -93,6 +93,53 @@ pub struct DecoyScratch<T: Real> {
     pub(crate) joint_block: Mat3<T>,
     /// Decoy part of b_N.
     pub(crate) joint_rhs: Vec3<T>,
+}
+
+impl<T: Real, const N: usize> Workspace<T, N> {
+    /// Every value zero, all zero bits (the workspace of
+    /// [`Solver::UNCONFIGURED`](crate::Solver::UNCONFIGURED), which a `static` keeps
+    /// in `.bss`); [`Workspace::default`] but for the decoy rotation, which is the
+    /// identity there.
+    pub(crate) const ZERO: Self = {
+        let z = zero3();
+        Workspace {
+            connection: PointKinematics {
+                position: z,
+                velocity: z,
+                acceleration: z,
+            },
+            joint_position: [z; N],
+            joint_velocity: [z; N],
+            specific_force: [z; N],
+            joint_rhs: [z; N],
+            tow_rhs: z,
+            elimination: [zero33(); N],
+            pivot_inverse: [Sym3::ZERO; N],
+            pivot_direction: [z; N],
+            reduced_rhs: [z; N],
+            joint_force: [z; N],
+            connection_force: z,
+            decoy: DecoyScratch {
+                cg_position: z,
+                cg_velocity: z,
+                aero_force: z,
+                aero_moment_body: z,
+                angle_of_attack: T::ZERO,
+                airspeed: T::ZERO,
+                dynamic_pressure: T::ZERO,
+                rotation: zero33(),
+                joint_block: zero33(),
+                joint_rhs: z,
+            },
+        }
+    };
+
+    /// Sets every value as [`Workspace::default`] does, in place (no workspace-sized
+    /// temporary).
+    pub(crate) fn reset(&mut self) {
+        *self = Self::ZERO;
+        self.decoy.rotation = Mat3::identity();
+    }
 }
 
 impl<T: Real, const N: usize> Default for Workspace<T, N> {
@@ -396,6 +443,16 @@ pub(crate) struct Sym3<T: Real> {
 }
 
 impl<T: Real> Sym3<T> {
+    /// Every entry zero.
+    const ZERO: Self = Sym3 {
+        xx: T::ZERO,
+        yy: T::ZERO,
+        zz: T::ZERO,
+        xy: T::ZERO,
+        xz: T::ZERO,
+        yz: T::ZERO,
+    };
+
     fn zero() -> Self {
         let z = T::zero();
         Sym3 {

@@ -9,7 +9,7 @@
 use crate::aero::AeroTable;
 use crate::atmosphere::Atmosphere;
 use crate::error::ConfigError;
-use crate::scalar::{Mat3, Real, Vec3, vec_finite};
+use crate::scalar::{Mat3, Real, Vec3, vec_finite, zero3};
 
 /// Gravity, wind and atmosphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -180,151 +180,259 @@ fn finite_vec<T: Real>(field: &'static str, v: &Vec3<T>) -> Result<(), ConfigErr
     }
 }
 
+/// Checks everything in `params` but the segments' lengths and masses and the
+/// decoy, in the order [`Model::new`] reports them; returns the segment count (at
+/// most `capacity`).
+fn validate<T: Real>(params: &ModelParams<T>, capacity: usize) -> Result<usize, ConfigError> {
+    let count = params.layout.count();
+    if count == 0 {
+        return Err(ConfigError::NoSegments);
+    }
+    if count > capacity {
+        return Err(ConfigError::TooManySegments {
+            requested: count,
+            capacity,
+        });
+    }
+    let env = &params.environment;
+    non_negative("environment.gravity", env.gravity)?;
+    finite_vec("environment.wind_ned", &env.wind)?;
+    if let Atmosphere::Isa1976 {
+        gas_constant,
+        gamma,
+        gravity,
+    } = env.atmosphere
+    {
+        positive("environment.gas_constant", gas_constant)?;
+        positive("environment.gamma", gamma)?;
+        positive("environment.gravity", gravity)?;
+    }
+    finite_vec("aircraft.connection_point", &params.connection_point)?;
+    let cable = &params.cable;
+    positive("cable.length", cable.length)?;
+    positive("cable.linear_density", cable.linear_density)?;
+    non_negative("cable.diameter", cable.diameter)?;
+    non_negative("cable.cd_normal", cable.cd_normal)?;
+    non_negative("cable.cf_tangential", cable.cf_tangential)?;
+    if let SegmentLayout::Graded { ratio, .. } = params.layout {
+        positive("grading ratio", ratio)?;
+        if ratio < T::one() || ratio > T::lit(10.0) {
+            return Err(ConfigError::OutOfRange {
+                field: "grading ratio",
+                value: ratio.to_f64(),
+            });
+        }
+    }
+    Ok(count)
+}
+
+/// Calls `f(i, length, mass)` for every segment of `params`' layout, from the
+/// decoy end (`i = count - 1`) to the connection point (`i = 0`).
+///
+/// Graded: segment N (at the decoy) is the shortest, l_i = l_N r^(N-i); the weights
+/// r^k are formed by repeated multiplication from the decoy end and scaled so that
+/// the lengths sum to the cable length (the same bits on every call).
+fn for_each_segment<T: Real>(
+    params: &ModelParams<T>,
+    count: usize,
+    mut f: impl FnMut(usize, T, T),
+) {
+    let cable = &params.cable;
+    let mass = |length: T| cable.linear_density * length;
+    match params.layout {
+        SegmentLayout::Uniform { .. } => {
+            let l = cable.length / T::lit(count as f64);
+            for i in (0..count).rev() {
+                f(i, l, mass(l));
+            }
+        }
+        SegmentLayout::Graded { ratio, .. } => {
+            // Sum = l_N (r^N - 1)/(r - 1), or N l_N at r = 1.
+            let mut weight = T::one();
+            let mut total = T::zero();
+            for _ in 0..count {
+                total += weight;
+                weight *= ratio;
+            }
+            let scale = cable.length / total;
+            let mut weight = T::one();
+            for i in (0..count).rev() {
+                let l = weight * scale;
+                f(i, l, mass(l));
+                weight *= ratio;
+            }
+        }
+    }
+}
+
+/// Validates the decoy and derives its constant quantities.
+fn decoy_derived<T: Real>(d: &DecoyParams<T>) -> Result<DecoyDerived<T>, ConfigError> {
+    positive("decoy.mass", d.mass)?;
+    positive("decoy.length", d.length)?;
+    positive("decoy.diameter", d.diameter)?;
+    non_negative("decoy.x_cg", d.x_cg)?;
+    non_negative("decoy.x_tow", d.x_tow)?;
+    non_negative("decoy.x_mrp", d.x_mrp)?;
+    positive("decoy.inertia_cg[roll]", d.inertia_cg.x)?;
+    positive("decoy.inertia_cg[pitch]", d.inertia_cg.y)?;
+    positive("decoy.inertia_cg[yaw]", d.inertia_cg.z)?;
+    if !d.cm_q.finite() {
+        return Err(ConfigError::NonFinite {
+            field: "decoy.cm_q",
+        });
+    }
+    if !d.cl_p.finite() {
+        return Err(ConfigError::NonFinite {
+            field: "decoy.cl_p",
+        });
+    }
+    for (field, s) in [
+        ("decoy.x_cg", d.x_cg),
+        ("decoy.x_tow", d.x_tow),
+        ("decoy.x_mrp", d.x_mrp),
+    ] {
+        if s > d.length {
+            return Err(ConfigError::OutOfRange {
+                field,
+                value: s.to_f64(),
+            });
+        }
+    }
+    let tow_from_cg = Vec3::new(d.x_cg - d.x_tow, T::zero(), T::zero());
+    let mrp_from_cg = Vec3::new(d.x_cg - d.x_mrp, T::zero(), T::zero());
+    let inertia_inv = Vec3::new(
+        T::one() / d.inertia_cg.x,
+        T::one() / d.inertia_cg.y,
+        T::one() / d.inertia_cg.z,
+    );
+    let rx = crate::scalar::skew(&tow_from_cg);
+    let hinge_compliance = rx.transpose() * Mat3::from_diagonal(&inertia_inv) * rx;
+    let reference_area = T::pi() * d.diameter * d.diameter / T::lit(4.0);
+    Ok(DecoyDerived {
+        tow_from_cg,
+        mrp_from_cg,
+        inertia_inv,
+        hinge_compliance,
+        reference_area,
+    })
+}
+
 impl<T: Real, const N: usize> Model<T, N> {
     /// The capacity `N`.
     pub const CAPACITY: usize = N;
 
+    /// No segments, every value zero, all zero bits: the model of
+    /// [`Solver::UNCONFIGURED`](crate::Solver::UNCONFIGURED), which
+    /// [`Model::configure`] replaces. It breaks the invariant (no segments) and is
+    /// never evaluated.
+    pub(crate) const UNCONFIGURED: Self = {
+        let z = T::ZERO;
+        let z3 = zero3();
+        Model {
+            params: ModelParams {
+                environment: Environment {
+                    gravity: z,
+                    wind: z3,
+                    atmosphere: Atmosphere::Isa1976 {
+                        gas_constant: z,
+                        gamma: z,
+                        gravity: z,
+                    },
+                },
+                connection_point: z3,
+                cable: CableParams {
+                    length: z,
+                    diameter: z,
+                    linear_density: z,
+                    cd_normal: z,
+                    cf_tangential: z,
+                },
+                layout: SegmentLayout::Uniform { count: 0 },
+                // The first variant (like every enum here), so that the constant is
+                // all zero bits in practice; `decoy` below is None, so the model has
+                // no decoy.
+                end: EndBody::Decoy(DecoyParams {
+                    mass: z,
+                    length: z,
+                    diameter: z,
+                    x_cg: z,
+                    x_tow: z,
+                    x_mrp: z,
+                    inertia_cg: z3,
+                    cm_q: z,
+                    cl_p: z,
+                    aero: AeroTable::EMPTY,
+                }),
+            },
+            segment_count: 0,
+            lengths: [z; N],
+            masses: [z; N],
+            inverse_masses: [z; N],
+            rate_gains: [z; N],
+            normal_drag_factors: [z; N],
+            tangential_drag_factors: [z; N],
+            decoy: None,
+        }
+    };
+
     /// Validates `params` and builds the model.
     pub fn new(params: ModelParams<T>) -> Result<Self, ConfigError> {
-        let count = params.layout.count();
-        if count == 0 {
-            return Err(ConfigError::NoSegments);
-        }
-        if count > N {
-            return Err(ConfigError::TooManySegments {
-                requested: count,
-                capacity: N,
-            });
-        }
-        let env = &params.environment;
-        non_negative("environment.gravity", env.gravity)?;
-        finite_vec("environment.wind_ned", &env.wind)?;
-        if let Atmosphere::Isa1976 {
-            gas_constant,
-            gamma,
-            gravity,
-        } = env.atmosphere
-        {
-            positive("environment.gas_constant", gas_constant)?;
-            positive("environment.gamma", gamma)?;
-            positive("environment.gravity", gravity)?;
-        }
-        finite_vec("aircraft.connection_point", &params.connection_point)?;
-        let cable = &params.cable;
-        positive("cable.length", cable.length)?;
-        positive("cable.linear_density", cable.linear_density)?;
-        non_negative("cable.diameter", cable.diameter)?;
-        non_negative("cable.cd_normal", cable.cd_normal)?;
-        non_negative("cable.cf_tangential", cable.cf_tangential)?;
+        let mut model = Self::UNCONFIGURED;
+        model.configure(&params)?;
+        Ok(model)
+    }
 
-        let mut lengths = [T::zero(); N];
-        let mut masses = [T::zero(); N];
-        match params.layout {
-            SegmentLayout::Uniform { .. } => {
-                let l = cable.length / T::lit(count as f64);
-                lengths[..count].fill(l);
+    /// Validates `params` and makes this the model built from them, in place (no
+    /// model-sized temporary): [`Model::new`] for a model that already has its
+    /// memory, for example inside a solver in a `static`. On error the model is
+    /// left exactly as it was.
+    pub(crate) fn configure(&mut self, params: &ModelParams<T>) -> Result<(), ConfigError> {
+        // Every check first (the segments' lengths and masses computed once to be
+        // checked), then the writes, which cannot fail.
+        let count = validate(params, N)?;
+        // The segments come from the decoy end: the error kept is the one of the
+        // segment nearest the connection point, as checking from there would find.
+        let mut segments = Ok(());
+        for_each_segment(params, count, |_, length, mass| {
+            let check =
+                positive("segment length", length).and_then(|()| positive("segment mass", mass));
+            if check.is_err() {
+                segments = check;
             }
-            SegmentLayout::Graded { ratio, .. } => {
-                positive("grading ratio", ratio)?;
-                if ratio < T::one() || ratio > T::lit(10.0) {
-                    return Err(ConfigError::OutOfRange {
-                        field: "grading ratio",
-                        value: ratio.to_f64(),
-                    });
-                }
-                // l_N shortest; l_i = l_N r^(N-i). Sum = l_N (r^N - 1)/(r - 1), or N l_N at r = 1.
-                let mut weight = T::one();
-                let mut total = T::zero();
-                for i in (0..count).rev() {
-                    lengths[i] = weight;
-                    total += weight;
-                    weight *= ratio;
-                }
-                let scale = cable.length / total;
-                for l in &mut lengths[..count] {
-                    *l *= scale;
-                }
-            }
-        }
-        let mut inverse_masses = [T::zero(); N];
-        let mut rate_gains = [T::zero(); N];
-        let mut normal_drag_factors = [T::zero(); N];
-        let mut tangential_drag_factors = [T::zero(); N];
-        for i in 0..count {
-            positive("segment length", lengths[i])?;
-            masses[i] = cable.linear_density * lengths[i];
-            positive("segment mass", masses[i])?;
-            inverse_masses[i] = T::one() / masses[i];
-            rate_gains[i] = T::lit(6.0) / (masses[i] * lengths[i]);
-            let area_per_mass = T::lit(0.5) * cable.diameter * lengths[i] * inverse_masses[i];
-            normal_drag_factors[i] = area_per_mass * cable.cd_normal;
-            tangential_drag_factors[i] = area_per_mass * T::pi() * cable.cf_tangential;
-        }
-
+        });
+        segments?;
         let decoy = match &params.end {
             EndBody::Free => None,
-            EndBody::Decoy(d) => {
-                positive("decoy.mass", d.mass)?;
-                positive("decoy.length", d.length)?;
-                positive("decoy.diameter", d.diameter)?;
-                non_negative("decoy.x_cg", d.x_cg)?;
-                non_negative("decoy.x_tow", d.x_tow)?;
-                non_negative("decoy.x_mrp", d.x_mrp)?;
-                positive("decoy.inertia_cg[roll]", d.inertia_cg.x)?;
-                positive("decoy.inertia_cg[pitch]", d.inertia_cg.y)?;
-                positive("decoy.inertia_cg[yaw]", d.inertia_cg.z)?;
-                if !d.cm_q.finite() {
-                    return Err(ConfigError::NonFinite {
-                        field: "decoy.cm_q",
-                    });
-                }
-                if !d.cl_p.finite() {
-                    return Err(ConfigError::NonFinite {
-                        field: "decoy.cl_p",
-                    });
-                }
-                for (field, s) in [
-                    ("decoy.x_cg", d.x_cg),
-                    ("decoy.x_tow", d.x_tow),
-                    ("decoy.x_mrp", d.x_mrp),
-                ] {
-                    if s > d.length {
-                        return Err(ConfigError::OutOfRange {
-                            field,
-                            value: s.to_f64(),
-                        });
-                    }
-                }
-                let tow_from_cg = Vec3::new(d.x_cg - d.x_tow, T::zero(), T::zero());
-                let mrp_from_cg = Vec3::new(d.x_cg - d.x_mrp, T::zero(), T::zero());
-                let inertia_inv = Vec3::new(
-                    T::one() / d.inertia_cg.x,
-                    T::one() / d.inertia_cg.y,
-                    T::one() / d.inertia_cg.z,
-                );
-                let rx = crate::scalar::skew(&tow_from_cg);
-                let hinge_compliance = rx.transpose() * Mat3::from_diagonal(&inertia_inv) * rx;
-                let reference_area = T::pi() * d.diameter * d.diameter / T::lit(4.0);
-                Some(DecoyDerived {
-                    tow_from_cg,
-                    mrp_from_cg,
-                    inertia_inv,
-                    hinge_compliance,
-                    reference_area,
-                })
-            }
+            EndBody::Decoy(d) => Some(decoy_derived(d)?),
         };
-        Ok(Model {
-            params,
-            segment_count: count,
-            lengths,
-            masses,
-            inverse_masses,
-            rate_gains,
-            normal_drag_factors,
-            tangential_drag_factors,
-            decoy,
-        })
+
+        self.params = *params;
+        self.segment_count = count;
+        let cable = &params.cable;
+        let unused = count..N;
+        for array in [
+            &mut self.lengths,
+            &mut self.masses,
+            &mut self.inverse_masses,
+            &mut self.rate_gains,
+            &mut self.normal_drag_factors,
+            &mut self.tangential_drag_factors,
+        ] {
+            array[unused.clone()].fill(T::zero());
+        }
+        // Checked above: every length and mass is positive and finite.
+        for_each_segment(params, count, |i, length, mass| {
+            self.lengths[i] = length;
+            self.masses[i] = mass;
+            let inverse_mass = T::one() / mass;
+            self.inverse_masses[i] = inverse_mass;
+            self.rate_gains[i] = T::lit(6.0) / (mass * length);
+            let area_per_mass = T::lit(0.5) * cable.diameter * length * inverse_mass;
+            self.normal_drag_factors[i] = area_per_mass * cable.cd_normal;
+            self.tangential_drag_factors[i] = area_per_mass * T::pi() * cable.cf_tangential;
+        });
+        self.decoy = decoy;
+        Ok(())
     }
 
     /// The parameters the model was built from.

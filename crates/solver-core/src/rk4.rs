@@ -94,6 +94,16 @@ pub struct Rk4<T: Real, const N: usize> {
 }
 
 impl<T: Real, const N: usize> Rk4<T, N> {
+    /// Every buffer zero, all zero bits: an integrator that has no state yet (give it
+    /// one with [`Rk4::set_state`]), as a constant, so that a `static` holding it
+    /// lies in `.bss` ([`Solver::UNCONFIGURED`](crate::Solver::UNCONFIGURED)).
+    pub const ZERO: Self = Rk4 {
+        states: [State::ZERO; 2],
+        current: 0,
+        slope: Derivative::ZERO,
+        sum: Derivative::ZERO,
+    };
+
     /// An integrator starting from `state` (the caller checks it is finite).
     pub fn new(state: State<T, N>) -> Self {
         Rk4 {

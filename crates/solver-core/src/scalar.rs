@@ -7,6 +7,10 @@ use nalgebra::{Matrix3, Quaternion, RealField, UnitQuaternion, Vector3};
 /// `RealField` comes from nalgebra/simba; in `no_std` builds its transcendental
 /// functions come from `libm`.
 pub trait Real: RealField + Copy + Default + core::fmt::Debug + core::fmt::Display {
+    /// Zero, as a constant (usable in `const` items, where `T::zero()` is not).
+    const ZERO: Self;
+    /// One, as a constant.
+    const ONE: Self;
     /// Converts an `f64` literal or parameter to this type (rounding for `f32`).
     fn lit(x: f64) -> Self;
     /// Widens to `f64` (exact for both `f32` and `f64`).
@@ -28,6 +32,8 @@ pub trait Real: RealField + Copy + Default + core::fmt::Debug + core::fmt::Displ
 }
 
 impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
     #[inline(always)]
     fn lit(x: f64) -> Self {
         x as f32
@@ -55,6 +61,8 @@ impl Real for f32 {
 }
 
 impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
     #[inline(always)]
     fn lit(x: f64) -> Self {
         x
@@ -149,6 +157,17 @@ pub fn norm<T: Real>(v: &Vec3<T>) -> T {
 pub type Vec3<T> = Vector3<T>;
 /// A 3x3 matrix.
 pub type Mat3<T> = Matrix3<T>;
+
+/// The zero vector, in a `const` context (where `Vec3::zeros()` cannot be called).
+pub(crate) const fn zero3<T: Real>() -> Vec3<T> {
+    Vec3::new(T::ZERO, T::ZERO, T::ZERO)
+}
+
+/// The zero matrix, in a `const` context.
+pub(crate) const fn zero33<T: Real>() -> Mat3<T> {
+    let z = T::ZERO;
+    Mat3::new(z, z, z, z, z, z, z, z, z)
+}
 
 /// Returns `r` unchanged, with its address hidden from the optimiser
 /// ([`core::hint::black_box`]); no effect on any value.

@@ -2,13 +2,13 @@
 
 use nalgebra::UnitQuaternion;
 
-use crate::atmosphere::AirColumn;
+use crate::atmosphere::{AirColumn, AirProperties};
 use crate::dynamics::{self, TensionMethod, Workspace};
-use crate::error::{InputError, SolveError};
-use crate::model::Model;
+use crate::error::{ConfigError, InputError, SolveError};
+use crate::model::{Model, ModelParams};
 use crate::motion::{AircraftState, FlightPath, PointKinematics};
 use crate::rk4::{DerivativeSource, Rk4};
-use crate::scalar::{Real, Vec3};
+use crate::scalar::{Real, Vec3, zero3};
 use crate::state::{Derivative, State};
 
 /// A towed system ready to integrate: the model (immutable), the state (a plain
@@ -122,6 +122,64 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
 }
 
 impl<T: Real, const N: usize> Solver<T, N> {
+    /// A solver without a model yet, as a constant of all zero bits: where a solver
+    /// must not pass through the stack (tens of KB on a microcontroller), put this
+    /// in its final place (a `static`, where it lies in `.bss`, or a field of a
+    /// larger value built the same way) and give it its model there with
+    /// [`Solver::configure`].
+    ///
+    /// Until configured it has no segments: [`Solver::configure`] is the only
+    /// method to call. Stepping or evaluating it panics (an index out of bounds).
+    pub const UNCONFIGURED: Self = Solver {
+        model: Model::UNCONFIGURED,
+        rk4: Rk4::ZERO,
+        method: TensionMethod::TwoSweep,
+        ws: Workspace::ZERO,
+        // `Some` of zero values rather than `None`: these options keep `None` in a
+        // niche of nonzero bits, and the constant must be all zero bits to lie in
+        // `.bss` (the HIL tests check that the firmware's controller does). Never
+        // read: `configure` clears both caches.
+        air: Some(AirColumn {
+            reference_altitude: T::ZERO,
+            air: AirProperties {
+                density: T::ZERO,
+                density_slope: T::ZERO,
+                density_curvature: T::ZERO,
+                speed_of_sound: T::ZERO,
+                temperature: T::ZERO,
+                pressure: T::ZERO,
+            },
+            across_tropopause: None,
+        }),
+        evaluated: Some(EvaluationKey {
+            connection: PointKinematics {
+                position: zero3(),
+                velocity: zero3(),
+                acceleration: zero3(),
+            },
+            air_reference: T::ZERO,
+            method: TensionMethod::TwoSweep,
+        }),
+    };
+
+    /// Makes this the solver [`Solver::new`] builds for `Model::new(*params)` and
+    /// the state at rest ([`State::default`]), in place: the model is built in the
+    /// solver's own memory, and nothing solver- or model-sized passes through the
+    /// stack. Everything the solver held before is replaced (state, caches,
+    /// method).
+    ///
+    /// On error ([`Model::new`]'s) the solver is left exactly as it was.
+    pub fn configure(&mut self, params: &ModelParams<T>) -> Result<(), ConfigError> {
+        self.model.configure(params)?;
+        self.rk4 = Rk4::ZERO;
+        self.rk4.set_state(State::default());
+        self.method = TensionMethod::TwoSweep;
+        self.ws.reset();
+        self.air = None;
+        self.evaluated = None;
+        Ok(())
+    }
+
     /// A solver for `model` starting from `state`.
     ///
     /// Errors with [`SolveError::NonFinite`] if the state holds NaN or infinity.

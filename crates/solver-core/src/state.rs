@@ -2,7 +2,7 @@
 
 use nalgebra::UnitQuaternion;
 
-use crate::scalar::{Real, Vec3};
+use crate::scalar::{Real, Vec3, zero3};
 
 /// State of the cable and decoy (2N + 3 degrees of freedom).
 ///
@@ -37,6 +37,27 @@ pub struct Derivative<T: Real, const N: usize> {
     pub decoy_rate: Vec3<T>,
 }
 
+impl<T: Real, const N: usize> State<T, N> {
+    /// Every value zero (the decoy quaternion too, so this is not an attitude): the
+    /// contents of an integrator that has not been given a state yet, all zero
+    /// bits, so that a `static` holding it lies in `.bss`.
+    pub const ZERO: Self = State {
+        time: 0.0,
+        directions: [zero3(); N],
+        rates: [zero3(); N],
+        decoy_attitude: [T::ZERO; 4],
+        decoy_rate: zero3(),
+    };
+
+    /// At rest: every direction, rate and time zero, the decoy level heading north
+    /// (the identity quaternion): [`State::default`].
+    pub const REST: Self = State {
+        decoy_attitude: [T::ONE, T::ZERO, T::ZERO, T::ZERO],
+        ..Self::ZERO
+    };
+}
+
+/// [`State::REST`], built at run time (no constant image in the binary).
 impl<T: Real, const N: usize> Default for State<T, N> {
     fn default() -> Self {
         State {
@@ -49,6 +70,17 @@ impl<T: Real, const N: usize> Default for State<T, N> {
     }
 }
 
+impl<T: Real, const N: usize> Derivative<T, N> {
+    /// Every value zero ([`Derivative::default`]).
+    pub const ZERO: Self = Derivative {
+        directions: [zero3(); N],
+        rates: [zero3(); N],
+        decoy_attitude: [T::ZERO; 4],
+        decoy_rate: zero3(),
+    };
+}
+
+/// [`Derivative::ZERO`], built at run time.
 impl<T: Real, const N: usize> Default for Derivative<T, N> {
     fn default() -> Self {
         Derivative {
