@@ -19,7 +19,10 @@ fn example_binary() -> std::path::PathBuf {
         if profile_dir.ends_with("release") {
             cargo.arg("--release");
         }
-        assert!(cargo.status().unwrap().success(), "cannot build the example");
+        assert!(
+            cargo.status().unwrap().success(),
+            "cannot build the example"
+        );
     }
     binary
 }
