@@ -1,0 +1,1 @@
+"""Python client of the towed-decoy solver's host bridge."""
