@@ -19,7 +19,7 @@ from decoy_bridge import Bridge, BridgeTimeout, NoBridge, Rejected, VersionMisma
 from decoy_bridge import f16 as F
 from decoy_bridge import flight
 
-from .conftest import REPO, sweep_iceoryx, unique_prefix
+from conftest import REPO, sweep_iceoryx, unique_prefix
 
 SPEED = 243.0  # m/s, about Mach 0.8 at 9 km
 

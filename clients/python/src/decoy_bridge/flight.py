@@ -244,16 +244,16 @@ def summarize(
         after = pitch[t >= manoeuvre_start - 1e-9]
         final = tc[-1]
         outside = np.nonzero(np.abs(tc - final) > 0.02 * abs(final))[0]
+        # As decoy_sim's settling_time: from the row after the last one outside the
+        # 2 % band around the final tension; shown only when held for 1 s.
         settle = float(t[outside[-1] + 1]) if len(outside) else float(t[0])
-        if outside.size and outside[-1] + 1 >= len(t):
-            settle = math.inf
         last = rows[-1]
         out.update(
             {
                 "max_tension_connection_N": float(tc[k]),
                 "t_at_max_tension_s": round(float(t[k]), 9),
                 "pitch_oscillation_amplitude_deg": float(0.5 * (after.max() - after.min())) if after.size else None,
-                "settling_time_s": round(settle, 9) if run.stopped is None and settle <= t[-1] - 1.0 else None,
+                "settling_time_s": round(settle, 9) if run.stopped is None and t[-1] - settle >= 1.0 - 1e-9 else None,
                 "final": {
                     "tension_connection_N": last["tension_connection_N"],
                     "tension_tow_N": last["tension_tow_N"],
