@@ -4,12 +4,14 @@ are removed afterwards."""
 
 from __future__ import annotations
 
+import gc
 import itertools
 import json
 import os
 import shutil
 import signal
 import subprocess
+import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -62,8 +64,9 @@ class RunningBridge:
     def __init__(self, decoy: str, tmp: Path, *args: str):
         self.instance = f"py{os.getpid()}n{next(_counter)}"
         self.prefix = unique_prefix()
-        self.root = tmp / "iox"
-        self.root.mkdir(parents=True, exist_ok=True)
+        # Short: the event services' sockets live under the root and a Unix socket
+        # path holds at most 107 bytes (pytest's tmp_path is too long).
+        self.root = Path(tempfile.mkdtemp(prefix="dxpy", dir="/tmp"))
         self.env = dict(os.environ, DECOY_IOX_PREFIX=self.prefix, DECOY_IOX_ROOT=str(self.root))
         self.proc = subprocess.Popen(
             [decoy, "bridge", "--instance", self.instance, "--json", *args],
@@ -112,6 +115,7 @@ def bridge_factory(decoy: str, tmp_path: Path) -> Iterator:
         return b
 
     yield start
+    gc.collect()  # the clients' nodes go first (they remove their own files)
     for b in started:
         b.stop()
         sweep_iceoryx(b.prefix, b.root)

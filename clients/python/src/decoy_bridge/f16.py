@@ -286,7 +286,7 @@ class _Loops:
     # (measured: step inputs, about 1 s time constant); a feed-forward only, the
     # proportional-integral term on the load factor error does the rest.
     FF_ELEV = (-1.0, -0.8, -0.4, -0.2, -0.1, 0.0, 0.1, 0.2, 0.4)
-    FF_DN = (2.8, 2.35, 1.07, 0.25, -0.29, -1.0, -1.7, -2.25, -3.0)
+    FF_DN = (3.6, 3.35, 2.05, 1.25, 0.7, 0.0, -0.7, -1.25, -2.05)
     KP_N = -0.25
     KI_N = -0.5
     KP_MACH = 8.0
