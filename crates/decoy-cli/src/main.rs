@@ -16,6 +16,8 @@
 //! - `decoy hil`: flies a scenario on the decoy controller firmware under QEMU,
 //!   frame by frame over the decoy link, beside the host's solution
 //!   (`decoy_hil::hil_run`).
+//! - `decoy bridge`, `decoy bridge-layout`, `decoy feed`: the host bridge over
+//!   iceoryx2 (`host_bridge`, docs/bridge.md).
 //!
 //! Human-readable output by default, `--json` for machines. Errors are one line
 //! `error: ...` on stderr; the exit code is 2 for usage and configuration errors and
@@ -26,6 +28,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod bridge_cmd;
 mod progress;
 mod studies;
 
@@ -84,6 +87,16 @@ enum Command {
     /// 10 ms frames over the UART) beside the host's solution: timeseries.csv,
     /// summary.json, firmware.log and plots.
     Hil(HilArgs),
+    /// Serve the decoy controller (in process, or the firmware under QEMU) to
+    /// avionics simulations over iceoryx2 shared memory until Ctrl-C
+    /// (docs/bridge.md); prints its counters at exit.
+    Bridge(bridge_cmd::BridgeArgs),
+    /// Print the bridge's wire types (size, alignment, every field's offset and
+    /// type), its services and codes: the reference of a mirror in another language.
+    BridgeLayout,
+    /// Fly a scenario through a running bridge (lockstep or free-running) and
+    /// write timeseries.csv, summary.json and plots as `decoy hil` does.
+    Feed(bridge_cmd::FeedArgs),
 }
 
 #[derive(Args, Debug)]
@@ -357,6 +370,15 @@ fn run(cli: &Cli) -> Result<String, Failure> {
                 ));
             }
             hil_command(&SystemConfig::builtin()?, args, cli.json)
+        }
+        Command::Bridge(args) => bridge_cmd::bridge_command(config, args, cli.json),
+        Command::BridgeLayout => bridge_cmd::layout_command(cli.json),
+        Command::Feed(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            bridge_cmd::feed_command(&config, args, cli.json)
         }
         Command::Report(args) => {
             let config = match config {

@@ -449,8 +449,8 @@ fn fly_until_rejected(
 }
 
 /// The frames answered by an output on both sides, with both outputs, matched by
-/// `seq`.
-fn paired_rows(
+/// `seq` (also `decoy feed`'s rows).
+pub fn paired_rows(
     frames: &[AircraftStateFrame],
     firmware: &[DeviceMessage],
     host: &[DeviceMessage],
@@ -534,7 +534,10 @@ pub fn sample(out: &OutputFrame, frame: &AircraftStateFrame, lateral_sign: f64) 
     }
 }
 
-fn write_timeseries(
+/// Writes `decoy hil`'s `timeseries.csv` ([`HIL_TIMESERIES_HEADER`]): the
+/// controller's outputs (`firmware`), the host's (`host`) and their differences,
+/// one row per element of `rows` (also `decoy feed`'s file).
+pub fn write_timeseries(
     path: &Path,
     rows: &[(AircraftStateFrame, OutputFrame, OutputFrame)],
     firmware: &[Sample],

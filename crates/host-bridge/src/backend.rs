@@ -1,0 +1,285 @@
+//! What answers the states: the controller in this process (`host`) or the
+//! firmware under QEMU over its UART (`qemu`). Both take the decoy link's
+//! messages, so the bridge maps every request the same way for both.
+
+use std::time::Duration;
+
+use decoy_config::SystemConfig;
+use decoy_controller::{Controller, NoCounter};
+use decoy_hil::link::{LinkError, Session};
+use decoy_hil::qemu::Board;
+use decoy_link::{DeviceMessage, HostMessage, PROTOCOL_VERSION, StatusFlags};
+use solver_core::{Real, SegmentLayout};
+
+use crate::BridgeError;
+
+/// Segment capacity of the host controller up to 64 segments (decoy-hil's, the firmware's).
+pub const SMALL_CAPACITY: usize = decoy_hil::flight::CONTROLLER_CAPACITY;
+/// Segment capacity of the host controller above 64 segments.
+pub const LARGE_CAPACITY: usize = 512;
+
+/// Which backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BackendKind {
+    /// `decoy_controller::Controller` in the bridge's process.
+    Host,
+    /// The firmware under QEMU, over the decoy link.
+    Qemu,
+}
+
+/// The solver's scalar.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// f32 (the firmware's on the M4; with libm the same bits).
+    F32,
+    /// f64 (the host's reference; the M7 firmware's).
+    F64,
+}
+
+impl Precision {
+    /// Bits of the scalar.
+    pub fn bits(self) -> u8 {
+        match self {
+            Precision::F32 => 32,
+            Precision::F64 => 64,
+        }
+    }
+}
+
+/// How to build a backend.
+#[derive(Clone, Debug)]
+pub struct BackendOptions {
+    /// Host or QEMU.
+    pub kind: BackendKind,
+    /// The board of the qemu backend (M4: f32, M7: f64).
+    pub board: Board,
+    /// The host backend's precision (None: f32; the qemu backend's is its board's).
+    pub precision: Option<Precision>,
+    /// Segments (None: the configuration's embedded count).
+    pub segments: Option<usize>,
+    /// Grading ratio (None: the configuration's embedded ratio; 1: uniform).
+    pub grading: Option<f64>,
+}
+
+impl Default for BackendOptions {
+    fn default() -> Self {
+        BackendOptions {
+            kind: BackendKind::Host,
+            board: Board::M4,
+            precision: None,
+            segments: None,
+            grading: None,
+        }
+    }
+}
+
+/// What a backend runs (the status's model part).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelInfo {
+    /// [`bridge_types::backend`] code.
+    pub backend: u8,
+    /// `host`, or the firmware's board name.
+    pub board: String,
+    /// 32 or 64.
+    pub precision_bits: u8,
+    /// Segments of the model.
+    pub segments: u16,
+    /// Capacity of the solver.
+    pub capacity: u16,
+    /// Grading ratio of the segments (1: uniform).
+    pub grading_ratio: f64,
+    /// The decoy link protocol the controller speaks.
+    pub link_protocol_version: u16,
+    /// The firmware ELF (qemu backend).
+    pub elf: Option<String>,
+}
+
+/// A controller behind the decoy link's messages.
+pub trait Backend {
+    /// The one answer to `message` (a link failure is an error, not an answer).
+    fn handle(&mut self, message: HostMessage) -> Result<DeviceMessage, BridgeError>;
+    /// What runs.
+    fn info(&self) -> &ModelInfo;
+}
+
+struct HostBackend<T: Real, const N: usize> {
+    controller: Box<Controller<T, N>>,
+    info: ModelInfo,
+}
+
+impl<T: Real, const N: usize> Backend for HostBackend<T, N> {
+    fn handle(&mut self, message: HostMessage) -> Result<DeviceMessage, BridgeError> {
+        // No silence polling here: the bridge supervises its clients itself, so
+        // that an answer never depends on the client's pace (docs/bridge.md).
+        Ok(self.controller.handle(message, &mut NoCounter))
+    }
+    fn info(&self) -> &ModelInfo {
+        &self.info
+    }
+}
+
+/// The layout of `segments` graded by `grading` (exactly uniform at 1).
+fn layout<T: Real>(segments: usize, grading: f64) -> SegmentLayout<T> {
+    if grading == 1.0 {
+        SegmentLayout::Uniform { count: segments }
+    } else {
+        SegmentLayout::Graded {
+            count: segments,
+            ratio: T::lit(grading),
+        }
+    }
+}
+
+fn host<T: Real, const N: usize>(
+    config: &SystemConfig,
+    segments: usize,
+    grading: f64,
+) -> Result<Box<dyn Backend + Send>, BridgeError> {
+    let controller_config = config
+        .controller_config::<T>(layout::<T>(segments, grading))
+        .map_err(|e| BridgeError::Usage(format!("the model: {e}")))?;
+    let controller = Controller::<T, N>::new(controller_config)
+        .map(Box::new)
+        .map_err(|e| BridgeError::Usage(format!("the controller: {e}")))?;
+    Ok(Box::new(HostBackend {
+        controller,
+        info: ModelInfo {
+            backend: bridge_types::backend::HOST,
+            board: "host".to_owned(),
+            precision_bits: (std::mem::size_of::<T>() * 8) as u8,
+            segments: segments as u16,
+            capacity: N as u16,
+            grading_ratio: grading,
+            link_protocol_version: PROTOCOL_VERSION,
+            elf: None,
+        },
+    }))
+}
+
+/// The controller in this process. Needs a large stack for more than 64
+/// segments (the solver's fixed-capacity arrays are values): run it on a worker
+/// thread of a few tens of MB.
+pub fn host_backend(
+    config: &SystemConfig,
+    options: &BackendOptions,
+) -> Result<Box<dyn Backend + Send>, BridgeError> {
+    let segments = options.segments.unwrap_or(config.solver.segments_embedded);
+    let grading = options
+        .grading
+        .unwrap_or(config.solver.grading_ratio_embedded);
+    if !(1..=LARGE_CAPACITY).contains(&segments) {
+        return Err(BridgeError::Usage(format!(
+            "--segments must be between 1 and {LARGE_CAPACITY}, got {segments}"
+        )));
+    }
+    if !(grading.is_finite() && grading > 0.0) {
+        return Err(BridgeError::Usage(format!(
+            "--grading must be a positive number, got {grading}"
+        )));
+    }
+    match (
+        options.precision.unwrap_or(Precision::F32),
+        segments <= SMALL_CAPACITY,
+    ) {
+        (Precision::F32, true) => host::<f32, SMALL_CAPACITY>(config, segments, grading),
+        (Precision::F32, false) => host::<f32, LARGE_CAPACITY>(config, segments, grading),
+        (Precision::F64, true) => host::<f64, SMALL_CAPACITY>(config, segments, grading),
+        (Precision::F64, false) => host::<f64, LARGE_CAPACITY>(config, segments, grading),
+    }
+}
+
+struct QemuBackend {
+    session: Session,
+    info: ModelInfo,
+    /// Silence reports the firmware sent on its own (its link went quiet).
+    pub silences: u64,
+}
+
+impl Backend for QemuBackend {
+    fn handle(&mut self, message: HostMessage) -> Result<DeviceMessage, BridgeError> {
+        let link = &mut self.session.link;
+        link.send(&message).map_err(link_failure)?;
+        loop {
+            let answer = link.recv().map_err(link_failure)?;
+            // The firmware's own silence report (DEGRADED set; the answer to a
+            // command never has it, the command having ended the silence) came
+            // before the answer: skip it.
+            if let DeviceMessage::Status(s) = &answer
+                && s.flags & StatusFlags::DEGRADED != 0
+            {
+                self.silences += 1;
+                continue;
+            }
+            return Ok(answer);
+        }
+    }
+    fn info(&self) -> &ModelInfo {
+        &self.info
+    }
+}
+
+fn link_failure(e: LinkError) -> BridgeError {
+    BridgeError::Backend(format!("the firmware link: {e}"))
+}
+
+/// Builds (or finds) the firmware for `options.board` and boots it under QEMU.
+pub fn qemu_backend(
+    config: &SystemConfig,
+    options: &BackendOptions,
+) -> Result<Box<dyn Backend + Send>, BridgeError> {
+    let board = options.board;
+    let board_precision = if board == Board::M7 {
+        Precision::F64
+    } else {
+        Precision::F32
+    };
+    if let Some(p) = options.precision
+        && p != board_precision
+    {
+        return Err(BridgeError::Usage(format!(
+            "the {board} firmware computes in f{}; --precision f{} needs the other board",
+            board_precision.bits(),
+            p.bits()
+        )));
+    }
+    let configured = config.solver.segments_embedded;
+    let segments = options.segments.unwrap_or(configured);
+    if let Some(g) = options.grading
+        && g != config.solver.grading_ratio_embedded
+    {
+        return Err(BridgeError::Usage(format!(
+            "the firmware's segments are graded {} (the configuration's solver.grading_ratio_embedded), not {g}",
+            config.solver.grading_ratio_embedded
+        )));
+    }
+    let elf = decoy_hil::hil_run::build_firmware(board, segments, configured)
+        .map_err(|e| BridgeError::Backend(e.to_string()))?;
+    let mut session = Session::start(&elf, board).map_err(link_failure)?;
+    session.link.set_timeout(Duration::from_secs(5));
+    let hello = session.hello;
+    Ok(Box::new(QemuBackend {
+        info: ModelInfo {
+            backend: bridge_types::backend::QEMU,
+            board: hello.board.as_str().to_owned(),
+            precision_bits: hello.precision_bits,
+            segments: hello.segments,
+            capacity: hello.capacity,
+            grading_ratio: config.solver.grading_ratio_embedded,
+            link_protocol_version: hello.protocol_version,
+            elf: Some(elf.display().to_string()),
+        },
+        session,
+        silences: 0,
+    }))
+}
+
+/// The backend `options` asks for.
+pub fn make_backend(
+    config: &SystemConfig,
+    options: &BackendOptions,
+) -> Result<Box<dyn Backend + Send>, BridgeError> {
+    match options.kind {
+        BackendKind::Host => host_backend(config, options),
+        BackendKind::Qemu => qemu_backend(config, options),
+    }
+}

@@ -1,0 +1,644 @@
+//! The bridge: one controller (a [`Backend`]) served to any number of clients
+//! over the services of [`crate::services`], woken by a WaitSet (no busy loop).
+
+use std::collections::HashMap;
+use std::io::{IsTerminal, Write};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use bridge_types::{
+    AircraftState, Answer, Command, CommandReply, Counters, Header, Status, ascii_field, event,
+    health, kind, reason, result,
+};
+use decoy_link::{DeviceMessage, HostMessage, StatusFlags};
+use iceoryx2::identifiers::UniquePublisherId;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::server::Server;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use iceoryx2::waitset::WaitSetRunResult;
+use serde::Serialize;
+
+use crate::BridgeError;
+use crate::backend::{Backend, ModelInfo};
+use crate::convert;
+use crate::services::{Ipc, Services, node};
+
+/// A run with no valid state for this long is reported degraded (the
+/// controller's own link-silence time, on the bridge's clock).
+pub const SILENCE: Duration = Duration::from_millis(decoy_controller::SILENCE_MS as u64);
+/// The WaitSet's tick: silence supervision, status publication, the status line.
+pub const TICK: Duration = Duration::from_millis(100);
+/// Status published at least this often.
+pub const STATUS_PERIOD: Duration = Duration::from_secs(1);
+
+/// Service time of the answers (receive to send, in the bridge), kept for the
+/// status line and the summary.
+#[derive(Clone, Debug, Default)]
+struct Timing {
+    all_us: Vec<u32>,
+    window_us: Vec<u32>,
+    window_answers: u64,
+}
+
+/// Percentiles of a set of durations, us.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Percentiles {
+    /// Median.
+    pub p50: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// 99.9th percentile.
+    pub p999: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Percentiles {
+    /// The percentiles of `values` (nearest rank); zeros when empty.
+    pub fn of(values: &mut [f64]) -> Self {
+        if values.is_empty() {
+            return Percentiles::default();
+        }
+        values.sort_by(f64::total_cmp);
+        let rank = |p: f64| {
+            let i = ((p * values.len() as f64).ceil() as usize).clamp(1, values.len());
+            values[i - 1]
+        };
+        Percentiles {
+            p50: rank(0.50),
+            p99: rank(0.99),
+            p999: rank(0.999),
+            max: values[values.len() - 1],
+        }
+    }
+}
+
+/// What `decoy bridge` prints when it ends.
+#[derive(Clone, Debug, Serialize)]
+pub struct BridgeSummary {
+    /// The instance.
+    pub instance: String,
+    /// `host` or `qemu`.
+    pub backend: String,
+    /// The board (`host` or the firmware's).
+    pub board: String,
+    /// 32 or 64.
+    pub precision_bits: u8,
+    /// Segments of the model.
+    pub segments: u16,
+    /// Grading ratio.
+    pub grading_ratio: f64,
+    /// Why it ended: `SIGINT/SIGTERM` (iceoryx2 does not tell them apart), or
+    /// `stop request` (a bridge on a thread).
+    pub ended_by: String,
+    /// Seconds it ran.
+    pub uptime_s: f64,
+    /// Every counter.
+    pub counters: Counters,
+    /// States rejected, all reasons.
+    pub rejected: u64,
+    /// Service time of the answers in the bridge (receive to send), us.
+    pub service_time_us: Percentiles,
+    /// Health at the end.
+    pub health: String,
+}
+
+impl BridgeSummary {
+    /// The human-readable form.
+    pub fn text(&self) -> String {
+        let c = &self.counters;
+        let mut s = format!(
+            "bridge {} ({} {}, f{}, {} segments graded {}) ended by {} after {:.1} s\n",
+            self.instance,
+            self.backend,
+            self.board,
+            self.precision_bits,
+            self.segments,
+            self.grading_ratio,
+            self.ended_by,
+            self.uptime_s
+        );
+        s += &format!(
+            "  states: {} lockstep, {} free-running; {} answered, {} rejected; {} commands\n",
+            c.lockstep_requests, c.free_samples, c.accepted, self.rejected, c.commands
+        );
+        let reasons: Vec<String> = [
+            ("non_finite", c.non_finite),
+            ("out_of_range", c.out_of_range),
+            ("bad_quaternion", c.bad_quaternion),
+            ("time_not_increasing", c.time_not_increasing),
+            ("time_jump", c.time_jump),
+            ("not_trimmed", c.not_trimmed),
+            ("solver_failure", c.solver_failure),
+            ("wrong_mode", c.wrong_mode),
+            ("wrong_version", c.wrong_version),
+            ("wrong_type", c.wrong_type),
+            ("backend_failure", c.backend_failure),
+        ]
+        .iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(k, n)| format!("{k} {n}"))
+        .collect();
+        if !reasons.is_empty() {
+            s += &format!("  rejections: {}\n", reasons.join(", "));
+        }
+        s += &format!(
+            "  free-running: {} overruns, {} lost; {} silences; health {}\n",
+            c.overruns, c.lost, c.silences, self.health
+        );
+        let t = &self.service_time_us;
+        s += &format!(
+            "  service time (us): p50 {:.1}, p99 {:.1}, p99.9 {:.1}, max {:.1}\n",
+            t.p50, t.p99, t.p999, t.max
+        );
+        s
+    }
+}
+
+/// A running bridge's options.
+#[derive(Clone, Debug)]
+pub struct BridgeOptions {
+    /// The instance's name.
+    pub instance: String,
+    /// The iceoryx2 configuration.
+    pub config: Config,
+    /// Draw the status line (on a terminal).
+    pub status_line: bool,
+    /// Set to stop the bridge (noticed within a tick) as SIGINT would; for a
+    /// bridge run on a thread (tests, benchmarks).
+    pub stop: Option<Arc<AtomicBool>>,
+}
+
+/// The ports of a bridge.
+struct Ports {
+    lockstep: Server<Ipc, AircraftState, (), Answer, ()>,
+    commands: Server<Ipc, Command, (), CommandReply, ()>,
+    state: Subscriber<Ipc, AircraftState, ()>,
+    outputs: Publisher<Ipc, Answer, ()>,
+    status: Publisher<Ipc, Status, ()>,
+    to_bridge: Listener<Ipc>,
+    from_bridge: Notifier<Ipc>,
+    // The services and the node outlive the ports (fields drop in order).
+    _services: Services,
+    _node: Node<Ipc>,
+}
+
+/// The bridge's state apart from its ports.
+struct Engine {
+    instance: String,
+    backend: Box<dyn Backend + Send>,
+    info: ModelInfo,
+    counters: Counters,
+    started: Instant,
+    last_input: Option<Instant>,
+    /// A run is active (the controller has trimmed and not been reset since).
+    trimmed: bool,
+    health: u8,
+    controller_flags: u16,
+    last_time_s: f64,
+    answer_seq: u32,
+    status_seq: u32,
+    reply_seq: u32,
+    /// Next expected `header.seq` of each free-running publisher.
+    free_next: HashMap<UniquePublisherId, u32>,
+    timing: Timing,
+    last_status: Instant,
+    last_line: Instant,
+}
+
+impl Engine {
+    fn new(instance: &str, backend: Box<dyn Backend + Send>) -> Self {
+        let info = backend.info().clone();
+        let now = Instant::now();
+        Engine {
+            instance: instance.to_owned(),
+            backend,
+            info,
+            counters: Counters::default(),
+            started: now,
+            last_input: None,
+            trimmed: false,
+            health: health::WAITING,
+            controller_flags: 0,
+            last_time_s: 0.0,
+            answer_seq: 0,
+            status_seq: 0,
+            reply_seq: 0,
+            free_next: HashMap::new(),
+            timing: Timing::default(),
+            last_status: now,
+            last_line: now,
+        }
+    }
+
+    fn reject(&mut self, request_seq: u32, code: u16) -> Answer {
+        let count = self.counters.count_rejection(code);
+        self.answer_seq = self.answer_seq.wrapping_add(1);
+        convert::rejected_answer(self.answer_seq, request_seq, code, count)
+    }
+
+    /// The answer to one state (validated by the header here, then by the controller).
+    fn on_state(&mut self, state: &AircraftState) -> Answer {
+        let started = Instant::now();
+        let seq = state.header.seq;
+        if let Some(code) = convert::check_header(&state.header, kind::AIRCRAFT_STATE) {
+            return self.reject(seq, code);
+        }
+        let message = HostMessage::State(convert::to_link_frame(state));
+        let answer = match self.backend.handle(message) {
+            Ok(DeviceMessage::Output(out)) => {
+                self.counters.accepted += 1;
+                self.trimmed = out.flags & StatusFlags::TRIMMED != 0;
+                self.controller_flags = out.flags & !convert::LINK_SUPERVISION_FLAGS;
+                self.last_time_s = out.time_s;
+                self.last_input = Some(Instant::now());
+                self.health = match self.health {
+                    health::DEGRADED | health::RECOVERED => health::RECOVERED,
+                    _ => health::RUNNING,
+                };
+                self.answer_seq = self.answer_seq.wrapping_add(1);
+                convert::output_answer(self.answer_seq, convert::output_from_link(&out))
+            }
+            Ok(DeviceMessage::Rejected(r)) => self.reject(seq, convert::reason_code(r.reason)),
+            Ok(other) => {
+                eprintln!(
+                    "bridge {}: unexpected answer to a state: {other:?}",
+                    self.instance
+                );
+                self.reject(seq, reason::BACKEND_FAILURE)
+            }
+            Err(e) => {
+                eprintln!("bridge {}: {e}", self.instance);
+                self.reject(seq, reason::BACKEND_FAILURE)
+            }
+        };
+        let us = started.elapsed().as_secs_f64() * 1e6;
+        let us = us.min(f64::from(u32::MAX)) as u32;
+        self.timing.all_us.push(us);
+        self.timing.window_us.push(us);
+        self.timing.window_answers += 1;
+        answer
+    }
+
+    fn on_command(&mut self, c: &Command) -> CommandReply {
+        self.counters.commands += 1;
+        let mut reply_reason = 0;
+        let mut ok = true;
+        match convert::check_header(&c.header, kind::COMMAND)
+            .map(Err)
+            .unwrap_or_else(|| convert::to_link_command(c))
+        {
+            Err(code) => {
+                self.counters.count_rejection(code);
+                reply_reason = code;
+                ok = false;
+            }
+            Ok(command) => match self.backend.handle(HostMessage::Command(command)) {
+                Ok(DeviceMessage::Status(s)) => {
+                    self.controller_flags = s.flags & !convert::LINK_SUPERVISION_FLAGS;
+                    self.trimmed = s.flags & StatusFlags::TRIMMED != 0;
+                    if !self.trimmed {
+                        self.health = health::WAITING;
+                    }
+                }
+                Ok(DeviceMessage::Pong { .. }) => {}
+                Ok(DeviceMessage::Rejected(r)) => {
+                    let code = convert::reason_code(r.reason);
+                    self.counters.count_rejection(code);
+                    reply_reason = code;
+                    ok = false;
+                }
+                Ok(other) => {
+                    eprintln!(
+                        "bridge {}: unexpected answer to a command: {other:?}",
+                        self.instance
+                    );
+                    self.counters.count_rejection(reason::BACKEND_FAILURE);
+                    reply_reason = reason::BACKEND_FAILURE;
+                    ok = false;
+                }
+                Err(e) => {
+                    eprintln!("bridge {}: {e}", self.instance);
+                    self.counters.count_rejection(reason::BACKEND_FAILURE);
+                    reply_reason = reason::BACKEND_FAILURE;
+                    ok = false;
+                }
+            },
+        }
+        self.reply_seq = self.reply_seq.wrapping_add(1);
+        CommandReply {
+            header: Header::new(kind::COMMAND_REPLY, self.reply_seq),
+            request_seq: c.header.seq,
+            command: c.command,
+            result: if ok { result::OK } else { result::REJECTED },
+            reason: reply_reason,
+            reserved: 0,
+            nonce: c.nonce,
+            status: self.status(),
+        }
+    }
+
+    fn status(&mut self) -> Status {
+        self.status_seq = self.status_seq.wrapping_add(1);
+        Status {
+            header: Header::new(kind::STATUS, self.status_seq),
+            time_s: self.last_time_s,
+            uptime_s: self.started.elapsed().as_secs_f64(),
+            input_age_s: self.last_input.map_or(-1.0, |t| t.elapsed().as_secs_f64()),
+            counters: self.counters,
+            grading_ratio: self.info.grading_ratio,
+            segments: self.info.segments,
+            capacity: self.info.capacity,
+            precision_bits: self.info.precision_bits,
+            backend: self.info.backend,
+            health: self.health,
+            reserved0: 0,
+            controller_flags: self.controller_flags,
+            link_protocol_version: self.info.link_protocol_version,
+            reserved1: 0,
+            board: ascii_field(&self.info.board),
+            instance: ascii_field(&self.instance),
+        }
+    }
+
+    /// Silence supervision; true when the health changed.
+    fn supervise(&mut self) -> bool {
+        if self.trimmed
+            && matches!(self.health, health::RUNNING | health::RECOVERED)
+            && self.last_input.is_some_and(|t| t.elapsed() >= SILENCE)
+        {
+            self.health = health::DEGRADED;
+            self.counters.silences += 1;
+            return true;
+        }
+        false
+    }
+
+    fn status_line(&mut self) {
+        let elapsed = self.last_line.elapsed().as_secs_f64();
+        if elapsed < 0.5 {
+            return;
+        }
+        let rate = self.timing.window_answers as f64 / elapsed;
+        let mut w: Vec<f64> = self
+            .timing
+            .window_us
+            .iter()
+            .map(|&u| f64::from(u))
+            .collect();
+        let p = Percentiles::of(&mut w);
+        let c = &self.counters;
+        let line = format!(
+            "\r{} [{} f{} {}seg] {:>7.0} states/s  service p50 {:>6.1} us max {:>7.1} us  ok {}  rejected {}  overruns {}  lost {}  {}   ",
+            self.instance,
+            self.info.board,
+            self.info.precision_bits,
+            self.info.segments,
+            rate,
+            p.p50,
+            p.max,
+            c.accepted,
+            c.rejected(),
+            c.overruns,
+            c.lost,
+            health::name(self.health)
+        );
+        let mut err = std::io::stderr();
+        let _ = err.write_all(line.as_bytes());
+        let _ = err.flush();
+        self.timing.window_us.clear();
+        self.timing.window_answers = 0;
+        self.last_line = Instant::now();
+    }
+
+    fn summary(&self, ended_by: &str) -> BridgeSummary {
+        let mut all: Vec<f64> = self.timing.all_us.iter().map(|&u| f64::from(u)).collect();
+        BridgeSummary {
+            instance: self.instance.clone(),
+            backend: bridge_types::backend::name(self.info.backend).to_owned(),
+            board: self.info.board.clone(),
+            precision_bits: self.info.precision_bits,
+            segments: self.info.segments,
+            grading_ratio: self.info.grading_ratio,
+            ended_by: ended_by.to_owned(),
+            uptime_s: self.started.elapsed().as_secs_f64(),
+            counters: self.counters,
+            rejected: self.counters.rejected(),
+            service_time_us: Percentiles::of(&mut all),
+            health: health::name(self.health).to_owned(),
+        }
+    }
+}
+
+impl Ports {
+    fn open(options: &BridgeOptions) -> Result<Self, BridgeError> {
+        let node = node(&options.instance, &options.config)?;
+        let services = Services::open_or_create(&node, &options.instance)?;
+        let ipc = |what: &str, e: String| BridgeError::Ipc(format!("{what}: {e}"));
+        let lockstep = services.lockstep.server_builder().create().map_err(|e| {
+            BridgeError::Ipc(format!(
+                "cannot serve decoy/{}/lockstep ({e:?}): is another bridge with this instance name running?",
+                options.instance
+            ))
+        })?;
+        let commands = services
+            .commands
+            .server_builder()
+            .create()
+            .map_err(|e| ipc("the commands server", format!("{e:?}")))?;
+        let state = services
+            .state
+            .subscriber_builder()
+            .buffer_size(crate::services::STATE_BUFFER)
+            .create()
+            .map_err(|e| ipc("the state subscriber", format!("{e:?}")))?;
+        let outputs = services
+            .outputs
+            .publisher_builder()
+            .create()
+            .map_err(|e| ipc("the outputs publisher", format!("{e:?}")))?;
+        let status = services
+            .status
+            .publisher_builder()
+            .create()
+            .map_err(|e| ipc("the status publisher", format!("{e:?}")))?;
+        let to_bridge = services
+            .to_bridge
+            .listener_builder()
+            .create()
+            .map_err(|e| ipc("the event listener", format!("{e:?}")))?;
+        let from_bridge = services
+            .from_bridge
+            .notifier_builder()
+            .create()
+            .map_err(|e| ipc("the event notifier", format!("{e:?}")))?;
+        Ok(Ports {
+            lockstep,
+            commands,
+            state,
+            outputs,
+            status,
+            to_bridge,
+            from_bridge,
+            _services: services,
+            _node: node,
+        })
+    }
+
+    fn notify(&self, id: usize) {
+        let _ = self
+            .from_bridge
+            .notify_with_custom_event_id(EventId::new(id));
+    }
+
+    fn publish(&self, answer: &Answer) {
+        if let Ok(sample) = self.outputs.loan_uninit() {
+            let _ = sample.write_payload(*answer).send();
+        }
+    }
+
+    fn publish_status(&self, engine: &mut Engine) {
+        let status = engine.status();
+        if let Ok(sample) = self.status.loan_uninit() {
+            let _ = sample.write_payload(status).send();
+        }
+        engine.last_status = Instant::now();
+        self.notify(event::STATUS);
+    }
+
+    /// Everything waiting, in order: commands, lockstep requests, free-running samples.
+    fn process(&self, engine: &mut Engine) -> Result<(), BridgeError> {
+        let ipc = |e: String| BridgeError::Ipc(e);
+        while let Some(active) = self.commands.receive().map_err(|e| ipc(format!("{e:?}")))? {
+            let reply = engine.on_command(active.payload());
+            if let Ok(r) = active.loan_uninit() {
+                let _ = r.write_payload(reply).send();
+            }
+            self.notify(event::COMMAND_REPLY);
+            self.publish_status(engine);
+        }
+        while let Some(active) = self.lockstep.receive().map_err(|e| ipc(format!("{e:?}")))? {
+            engine.counters.lockstep_requests += 1;
+            let answer = engine.on_state(active.payload());
+            if let Ok(r) = active.loan_uninit() {
+                let _ = r.write_payload(answer).send();
+            }
+            self.notify(event::ANSWER);
+            self.publish(&answer);
+            self.notify(event::OUTPUT);
+        }
+        let mut any = false;
+        while let Some(sample) = self.state.receive().map_err(|e| ipc(format!("{e:?}")))? {
+            any = true;
+            engine.counters.free_samples += 1;
+            let publisher = sample.header().publisher_id();
+            let seq = sample.payload().header.seq;
+            if let Some(next) = engine.free_next.get(&publisher) {
+                let gap = seq.wrapping_sub(*next);
+                // A gap is lost samples; a number at or below the expected one
+                // (a restarted publisher) starts counting afresh.
+                if gap > 0 && gap < u32::MAX / 2 {
+                    engine.counters.lost += u64::from(gap);
+                }
+            }
+            engine.free_next.insert(publisher, seq.wrapping_add(1));
+            if self.state.has_samples().unwrap_or(false) {
+                engine.counters.overruns += 1;
+            }
+            let answer = engine.on_state(sample.payload());
+            drop(sample);
+            self.publish(&answer);
+        }
+        if any {
+            self.notify(event::OUTPUT);
+        }
+        Ok(())
+    }
+}
+
+/// Runs a bridge until SIGINT or SIGTERM and returns its summary. The services
+/// exist from `ready` on (called once, with the status now).
+pub fn run_bridge(
+    options: &BridgeOptions,
+    backend: Box<dyn Backend + Send>,
+    ready: impl FnOnce(&Status),
+) -> Result<BridgeSummary, BridgeError> {
+    let ports = Ports::open(options)?;
+    let mut engine = Engine::new(&options.instance, backend);
+    let waitset = WaitSetBuilder::new()
+        .create::<Ipc>()
+        .map_err(|e| BridgeError::Ipc(format!("cannot create the WaitSet: {e:?}")))?;
+    let wake = waitset
+        .attach_notification(&ports.to_bridge)
+        .map_err(|e| BridgeError::Ipc(format!("cannot attach the listener: {e:?}")))?;
+    let tick = waitset
+        .attach_interval(TICK)
+        .map_err(|e| BridgeError::Ipc(format!("cannot attach the tick: {e:?}")))?;
+    ports.publish_status(&mut engine);
+    ready(&engine.status());
+    let status_line = options.status_line && std::io::stderr().is_terminal();
+    let mut failure = None;
+    let outcome = waitset.wait_and_process(|id| {
+        if id.has_event_from(&wake) {
+            // Consume the notifications, or the WaitSet keeps waking.
+            let _ = ports.to_bridge.try_wait(|_| {});
+        }
+        if let Err(e) = ports.process(&mut engine) {
+            failure = Some(e);
+            return CallbackProgression::Stop;
+        }
+        if options
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Relaxed))
+        {
+            return CallbackProgression::Stop;
+        }
+        if id.has_event_from(&tick) {
+            let changed = engine.supervise();
+            if changed || engine.last_status.elapsed() >= STATUS_PERIOD {
+                ports.publish_status(&mut engine);
+            }
+            if status_line {
+                engine.status_line();
+            }
+        }
+        CallbackProgression::Continue
+    });
+    if status_line {
+        eprintln!();
+    }
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    let ended_by = match outcome {
+        // iceoryx2 reports SIGINT and SIGTERM alike once its handler consumed
+        // the signal: the summary does not pretend to know which.
+        Ok(WaitSetRunResult::Interrupt | WaitSetRunResult::TerminationRequest) => "SIGINT/SIGTERM",
+        Ok(_) => "stop request",
+        Err(e) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
+    };
+    let summary = engine.summary(ended_by);
+    drop(tick);
+    drop(wake);
+    drop(waitset);
+    drop(ports);
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_by_nearest_rank() {
+        let mut v: Vec<f64> = (1..=1000).map(f64::from).collect();
+        let p = Percentiles::of(&mut v);
+        assert_eq!((p.p50, p.p99, p.p999, p.max), (500.0, 990.0, 999.0, 1000.0));
+        assert_eq!(Percentiles::of(&mut []), Percentiles::default());
+    }
+}

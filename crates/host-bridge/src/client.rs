@@ -1,0 +1,264 @@
+//! A client of a running bridge: lockstep requests with a deadline, free-running
+//! samples, commands, and the outputs and status it publishes. `decoy feed`, the
+//! tests, the benchmark and the smallest-client example use it.
+
+use std::time::{Duration, Instant};
+
+use bridge_types::{
+    AircraftState, Answer, Command, CommandReply, Header, Status, command, event, kind,
+};
+use iceoryx2::pending_response::PendingResponse;
+use iceoryx2::port::client::Client as IoxClient;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+
+use crate::BridgeError;
+use crate::services::{Ipc, Services, node};
+
+/// Default deadline of one answer.
+pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// A connection to bridge `instance`.
+pub struct BridgeClient {
+    lockstep: IoxClient<Ipc, AircraftState, (), Answer, ()>,
+    commands: IoxClient<Ipc, Command, (), CommandReply, ()>,
+    state: Publisher<Ipc, AircraftState, ()>,
+    outputs: Subscriber<Ipc, Answer, ()>,
+    status: Subscriber<Ipc, Status, ()>,
+    to_bridge: Notifier<Ipc>,
+    from_bridge: Listener<Ipc>,
+    _services: Services,
+    _node: Node<Ipc>,
+    instance: String,
+    timeout: Duration,
+    command_seq: u32,
+    free_seq: u32,
+}
+
+fn ipc(what: &str, e: impl std::fmt::Debug) -> BridgeError {
+    BridgeError::Ipc(format!("{what}: {e:?}"))
+}
+
+impl BridgeClient {
+    /// Connects to bridge `instance` as node `node_name`;
+    /// [`BridgeError::NoBridge`] when no bridge serves it.
+    pub fn connect(instance: &str, node_name: &str, config: &Config) -> Result<Self, BridgeError> {
+        let node = node(node_name, config)?;
+        let services = Services::open(&node, instance)?;
+        let lockstep = services
+            .lockstep
+            .client_builder()
+            .create()
+            .map_err(|e| ipc("the lockstep client", e))?;
+        let commands = services
+            .commands
+            .client_builder()
+            .create()
+            .map_err(|e| ipc("the commands client", e))?;
+        let state = services
+            .state
+            .publisher_builder()
+            .create()
+            .map_err(|e| ipc("the state publisher", e))?;
+        let outputs = services
+            .outputs
+            .subscriber_builder()
+            .buffer_size(crate::services::OUTPUTS_BUFFER)
+            .create()
+            .map_err(|e| ipc("the outputs subscriber", e))?;
+        let status = services
+            .status
+            .subscriber_builder()
+            .create()
+            .map_err(|e| ipc("the status subscriber", e))?;
+        let to_bridge = services
+            .to_bridge
+            .notifier_builder()
+            .create()
+            .map_err(|e| ipc("the event notifier", e))?;
+        let from_bridge = services
+            .from_bridge
+            .listener_builder()
+            .create()
+            .map_err(|e| ipc("the event listener", e))?;
+        Ok(BridgeClient {
+            lockstep,
+            commands,
+            state,
+            outputs,
+            status,
+            to_bridge,
+            from_bridge,
+            _services: services,
+            _node: node,
+            instance: instance.to_owned(),
+            timeout: ANSWER_TIMEOUT,
+            command_seq: 0,
+            free_seq: 0,
+        })
+    }
+
+    /// Sets the deadline of each answer.
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
+    fn no_answer(&self, what: &str) -> BridgeError {
+        BridgeError::NoAnswer(format!(
+            "no {what} from bridge {:?} within {:?}: is `decoy bridge --instance {}` running?",
+            self.instance, self.timeout, self.instance
+        ))
+    }
+
+    /// Waits (blocked on the from-bridge event, no spinning) for the response
+    /// to `pending` until the deadline.
+    fn await_response<Req, Resp>(
+        &self,
+        pending: &PendingResponse<Ipc, Req, (), Resp, ()>,
+        what: &str,
+    ) -> Result<Resp, BridgeError>
+    where
+        Req: std::fmt::Debug + ZeroCopySend,
+        Resp: std::fmt::Debug + ZeroCopySend + Copy,
+    {
+        let deadline = Instant::now() + self.timeout;
+        loop {
+            if let Some(response) = pending
+                .receive()
+                .map_err(|e| ipc("receiving an answer", e))?
+            {
+                return Ok(*response.payload());
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(self.no_answer(what));
+            }
+            if pending.number_of_server_connections() == 0 {
+                return Err(BridgeError::NoAnswer(format!(
+                    "bridge {:?} is not serving (no server took the request)",
+                    self.instance
+                )));
+            }
+            if !pending.is_connected() {
+                // Answered and released between the two calls, or dropped.
+                if let Some(response) = pending
+                    .receive()
+                    .map_err(|e| ipc("receiving an answer", e))?
+                {
+                    return Ok(*response.payload());
+                }
+                return Err(BridgeError::NoAnswer(format!(
+                    "bridge {:?} released the request without an answer (it is shutting down or died)",
+                    self.instance
+                )));
+            }
+            self.from_bridge
+                .timed_wait(|_| {}, left.min(Duration::from_millis(100)))
+                .map_err(|e| ipc("waiting for the bridge", e))?;
+        }
+    }
+
+    /// One lockstep exchange: `state` in, its answer out (an output or a rejection).
+    pub fn step(&mut self, state: &AircraftState) -> Result<Answer, BridgeError> {
+        let pending = self
+            .lockstep
+            .loan_uninit()
+            .map_err(|e| ipc("loaning a request", e))?
+            .write_payload(*state)
+            .send()
+            .map_err(|e| ipc("sending a request", e))?;
+        let _ = self
+            .to_bridge
+            .notify_with_custom_event_id(EventId::new(event::REQUEST));
+        self.await_response(&pending, "answer")
+    }
+
+    /// One command; its reply.
+    pub fn command(&mut self, mut c: Command) -> Result<CommandReply, BridgeError> {
+        self.command_seq = self.command_seq.wrapping_add(1);
+        c.header = Header::new(kind::COMMAND, self.command_seq);
+        let pending = self
+            .commands
+            .loan_uninit()
+            .map_err(|e| ipc("loaning a command", e))?
+            .write_payload(c)
+            .send()
+            .map_err(|e| ipc("sending a command", e))?;
+        let _ = self
+            .to_bridge
+            .notify_with_custom_event_id(EventId::new(event::COMMAND));
+        self.await_response(&pending, "command reply")
+    }
+
+    /// `command` with only its code set.
+    pub fn simple_command(&mut self, code: u16) -> Result<CommandReply, BridgeError> {
+        self.command(Command {
+            command: code,
+            ..Default::default()
+        })
+    }
+
+    /// The bridge's status now (a GetStatus command).
+    pub fn get_status(&mut self) -> Result<Status, BridgeError> {
+        Ok(self.simple_command(command::GET_STATUS)?.status)
+    }
+
+    /// Publishes `state` on the free-running service (its `header.seq` as
+    /// given; see [`BridgeClient::next_free_seq`]) and wakes the bridge.
+    pub fn publish(&mut self, state: &AircraftState) -> Result<(), BridgeError> {
+        self.state
+            .loan_uninit()
+            .map_err(|e| ipc("loaning a sample", e))?
+            .write_payload(*state)
+            .send()
+            .map_err(|e| ipc("publishing a state", e))?;
+        let _ = self
+            .to_bridge
+            .notify_with_custom_event_id(EventId::new(event::STATE));
+        Ok(())
+    }
+
+    /// The next sequence number of this client's free-running samples (from 0).
+    pub fn next_free_seq(&mut self) -> u32 {
+        let s = self.free_seq;
+        self.free_seq = self.free_seq.wrapping_add(1);
+        s
+    }
+
+    /// Every answer received on the outputs service so far.
+    pub fn take_outputs(&mut self) -> Result<Vec<Answer>, BridgeError> {
+        let mut out = Vec::new();
+        while let Some(sample) = self
+            .outputs
+            .receive()
+            .map_err(|e| ipc("receiving outputs", e))?
+        {
+            out.push(*sample.payload());
+        }
+        Ok(out)
+    }
+
+    /// The newest status published, if any arrived.
+    pub fn latest_status(&mut self) -> Result<Option<Status>, BridgeError> {
+        let mut last = None;
+        while let Some(sample) = self
+            .status
+            .receive()
+            .map_err(|e| ipc("receiving status", e))?
+        {
+            last = Some(*sample.payload());
+        }
+        Ok(last)
+    }
+
+    /// Blocks until the bridge notifies something or `timeout` passes.
+    pub fn wait_event(&self, timeout: Duration) -> Result<(), BridgeError> {
+        self.from_bridge
+            .timed_wait(|_| {}, timeout)
+            .map_err(|e| ipc("waiting for the bridge", e))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,266 @@
+//! The one mapping between the bridge's wire types and the decoy link's messages,
+//! which the controller (host backend) and the firmware (qemu backend) take: a
+//! wire state becomes the link's `AircraftStateFrame` field for field (same
+//! types, same bits), so validation is exactly the controller's.
+
+use bridge_types::{
+    AircraftState, Answer, Header, Output, PROTOCOL_VERSION, Rejection, command, kind, profile,
+    reason,
+};
+use decoy_link::{AircraftStateFrame, Command, OutputFrame, Profile, RejectReason, StatusFlags};
+
+/// The link's State frame carrying `state` (its `header.seq` as the frame's seq).
+pub fn to_link_frame(state: &AircraftState) -> AircraftStateFrame {
+    AircraftStateFrame {
+        seq: state.header.seq,
+        time_s: state.time_s,
+        position_ned_m: state.position_ned_m,
+        velocity_ned_mps: state.velocity_ned_mps,
+        acceleration_ned_mps2: state.acceleration_ned_mps2,
+        attitude_wxyz: state.attitude_wxyz,
+        body_rate_radps: state.body_rate_radps,
+        body_angular_acceleration_radps2: state.body_angular_acceleration_radps2,
+    }
+}
+
+/// The wire state of a link State frame (the inverse of [`to_link_frame`]).
+pub fn from_link_frame(frame: &AircraftStateFrame) -> AircraftState {
+    AircraftState {
+        header: Header::new(kind::AIRCRAFT_STATE, frame.seq),
+        time_s: frame.time_s,
+        position_ned_m: frame.position_ned_m,
+        velocity_ned_mps: frame.velocity_ned_mps,
+        acceleration_ned_mps2: frame.acceleration_ned_mps2,
+        attitude_wxyz: frame.attitude_wxyz,
+        body_rate_radps: frame.body_rate_radps,
+        body_angular_acceleration_radps2: frame.body_angular_acceleration_radps2,
+    }
+}
+
+/// The link-supervision bits, which describe the bridge's link to a firmware and
+/// never reach the bridge's clients (docs/bridge.md, the lockstep rule).
+pub const LINK_SUPERVISION_FLAGS: u16 = StatusFlags::DEGRADED | StatusFlags::RECOVERED;
+
+/// The wire output of a link output frame (the supervision bits cleared).
+pub fn output_from_link(out: &OutputFrame) -> Output {
+    Output {
+        time_s: out.time_s,
+        request_seq: out.seq,
+        connection_tension_n: out.connection_tension_n,
+        tow_tension_n: out.tow_tension_n,
+        decoy_position_fp_m: out.decoy_position_fp_m,
+        decoy_euler_rel_rad: out.decoy_euler_rel_rad,
+        angle_of_attack_rad: out.angle_of_attack_rad,
+        cable_clearance_exhaust_m: out.cable_clearance_exhaust_m,
+        decoy_clearance_aircraft_m: out.decoy_clearance_aircraft_m,
+        flags: out.flags & !LINK_SUPERVISION_FLAGS,
+        steps: out.steps,
+        instructions: out.instructions,
+        step_instructions: out.step_instructions,
+        reserved: 0,
+    }
+}
+
+/// The link output frame a wire output carries (the supervision bits as sent: clear).
+pub fn output_to_link(out: &Output) -> OutputFrame {
+    OutputFrame {
+        seq: out.request_seq,
+        time_s: out.time_s,
+        connection_tension_n: out.connection_tension_n,
+        tow_tension_n: out.tow_tension_n,
+        decoy_position_fp_m: out.decoy_position_fp_m,
+        decoy_euler_rel_rad: out.decoy_euler_rel_rad,
+        angle_of_attack_rad: out.angle_of_attack_rad,
+        cable_clearance_exhaust_m: out.cable_clearance_exhaust_m,
+        decoy_clearance_aircraft_m: out.decoy_clearance_aircraft_m,
+        flags: out.flags,
+        instructions: out.instructions,
+        step_instructions: out.step_instructions,
+        steps: out.steps,
+    }
+}
+
+/// The wire code of a link rejection reason (the same index).
+pub fn reason_code(r: RejectReason) -> u16 {
+    match r {
+        RejectReason::Oversize => reason::OVERSIZE,
+        RejectReason::Cobs => reason::COBS,
+        RejectReason::Crc => reason::CRC,
+        RejectReason::Truncated => reason::TRUNCATED,
+        RejectReason::Decode => reason::DECODE,
+        RejectReason::NonFinite => reason::NON_FINITE,
+        RejectReason::OutOfRange => reason::OUT_OF_RANGE,
+        RejectReason::TimeNotIncreasing => reason::TIME_NOT_INCREASING,
+        RejectReason::TimeJump => reason::TIME_JUMP,
+        RejectReason::NotTrimmed => reason::NOT_TRIMMED,
+        RejectReason::SolverFailure => reason::SOLVER_FAILURE,
+        RejectReason::WrongMode => reason::WRONG_MODE,
+        RejectReason::BadQuaternion => reason::BAD_QUATERNION,
+    }
+}
+
+/// The answer carrying `output`, numbered `seq`.
+pub fn output_answer(seq: u32, output: Output) -> Answer {
+    Answer {
+        header: Header::new(kind::OUTPUT, seq),
+        rejection: Rejection::default(),
+        output,
+    }
+}
+
+/// The answer rejecting request `request_seq` for `code` (the `count`-th time), numbered `seq`.
+pub fn rejected_answer(seq: u32, request_seq: u32, code: u16, count: u64) -> Answer {
+    Answer {
+        header: Header::new(kind::REJECTED, seq),
+        rejection: Rejection {
+            request_seq,
+            reason: code,
+            reserved: 0,
+            count,
+        },
+        output: Output::default(),
+    }
+}
+
+/// Why a header is not acceptable on a service expecting `expected` (None: fine).
+pub fn check_header(header: &Header, expected: u16) -> Option<u16> {
+    if header.protocol_version != PROTOCOL_VERSION {
+        Some(reason::WRONG_VERSION)
+    } else if header.kind != expected {
+        Some(reason::WRONG_TYPE)
+    } else {
+        None
+    }
+}
+
+/// The link command of a wire command; `Err(WRONG_TYPE)` for an unknown command
+/// or profile code.
+pub fn to_link_command(c: &bridge_types::Command) -> Result<Command, u16> {
+    match c.command {
+        command::RESET_TO_TRIM => Ok(Command::ResetToTrim),
+        command::GET_STATUS => Ok(Command::GetStatus),
+        command::PING => Ok(Command::Ping { nonce: c.nonce }),
+        command::SELECT_PROFILE => {
+            let rate_milli_radps = c.rate_milli_radps;
+            let p = match c.profile {
+                profile::STREAMED => Profile::Streamed,
+                profile::STEADY => Profile::Steady,
+                profile::ACCELERATION => Profile::Acceleration,
+                profile::PULL_UP => Profile::PullUp { rate_milli_radps },
+                profile::TURN => Profile::Turn { rate_milli_radps },
+                _ => return Err(reason::WRONG_TYPE),
+            };
+            Ok(Command::SelectProfile(p))
+        }
+        _ => Err(reason::WRONG_TYPE),
+    }
+}
+
+/// A wire command (sequence number `seq`).
+pub fn command(seq: u32, code: u16) -> bridge_types::Command {
+    bridge_types::Command {
+        header: Header::new(kind::COMMAND, seq),
+        command: code,
+        ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn states_map_field_for_field_both_ways() {
+        let frame = AircraftStateFrame {
+            seq: 7,
+            time_s: 1.25,
+            position_ned_m: [1.0, 2.0, -9000.0],
+            velocity_ned_mps: [240.0, 1.5, -0.25],
+            acceleration_ned_mps2: [0.5, 0.0, 0.125],
+            attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
+            body_rate_radps: [0.01, 0.02, 0.03],
+            body_angular_acceleration_radps2: [0.0, -0.5, 0.0],
+        };
+        let wire = from_link_frame(&frame);
+        assert_eq!(wire.header, Header::new(kind::AIRCRAFT_STATE, 7));
+        assert_eq!(to_link_frame(&wire), frame);
+    }
+
+    #[test]
+    fn every_link_reason_keeps_its_index_and_name() {
+        use RejectReason::*;
+        let all = [
+            Oversize,
+            Cobs,
+            Crc,
+            Truncated,
+            Decode,
+            NonFinite,
+            OutOfRange,
+            TimeNotIncreasing,
+            TimeJump,
+            NotTrimmed,
+            SolverFailure,
+            WrongMode,
+            BadQuaternion,
+        ];
+        for (i, r) in all.into_iter().enumerate() {
+            assert_eq!(usize::from(reason_code(r)), i);
+            assert_ne!(reason::name(reason_code(r)), "?");
+        }
+    }
+
+    #[test]
+    fn supervision_bits_never_reach_a_client() {
+        let frame = OutputFrame {
+            seq: 3,
+            time_s: 0.5,
+            connection_tension_n: 900.0,
+            tow_tension_n: 850.0,
+            decoy_position_fp_m: [-100.0, 0.0, 8.0],
+            decoy_euler_rel_rad: [0.0, 0.01, 0.0],
+            angle_of_attack_rad: 0.02,
+            cable_clearance_exhaust_m: 1.5,
+            decoy_clearance_aircraft_m: 90.0,
+            flags: StatusFlags::TRIMMED | StatusFlags::RECOVERED | StatusFlags::OVER_TENSION,
+            instructions: 5,
+            step_instructions: 4,
+            steps: 2,
+        };
+        let out = output_from_link(&frame);
+        assert_eq!(out.flags, StatusFlags::TRIMMED | StatusFlags::OVER_TENSION);
+        let mut back = frame;
+        back.flags = out.flags;
+        assert_eq!(output_to_link(&out), back);
+    }
+
+    #[test]
+    fn headers_and_commands_are_checked() {
+        assert_eq!(
+            check_header(&Header::new(kind::AIRCRAFT_STATE, 1), kind::AIRCRAFT_STATE),
+            None
+        );
+        let mut h = Header::new(kind::AIRCRAFT_STATE, 1);
+        h.protocol_version = 99;
+        assert_eq!(
+            check_header(&h, kind::AIRCRAFT_STATE),
+            Some(reason::WRONG_VERSION)
+        );
+        assert_eq!(
+            check_header(&Header::new(kind::STATUS, 1), kind::AIRCRAFT_STATE),
+            Some(reason::WRONG_TYPE)
+        );
+        let mut c = command(1, command::SELECT_PROFILE);
+        c.profile = profile::TURN;
+        c.rate_milli_radps = 100;
+        assert_eq!(
+            to_link_command(&c),
+            Ok(Command::SelectProfile(Profile::Turn {
+                rate_milli_radps: 100
+            }))
+        );
+        c.profile = 77;
+        assert_eq!(to_link_command(&c), Err(reason::WRONG_TYPE));
+        assert_eq!(to_link_command(&command(1, 9)), Err(reason::WRONG_TYPE));
+    }
+}
