@@ -343,13 +343,18 @@ class PullUp:
     """The paper's pull-up: level until ``start`` s, the flight path rotating up at
     ``rate`` rad/s for ``duration`` s, then the climb held; Mach held on throttle.
 
-    Elevator loop: the flight-path angle follows ``γ_ref(t)`` (a ramp of slope
-    ``rate``) through the load factor ``n = (V (γ̇_ref + K (γ_ref - γ)) + g cos γ) / g``,
-    K = 2 /s.
+    Elevator loop: the flight-path angle follows ``γ_ref(t)`` through the load
+    factor ``n = (V (γ̇_ref + K (γ_ref - γ)) + g cos γ) / g``, K = 0.5 /s. The
+    reference's rate is the paper's step (``rate`` from ``start`` for ``duration``)
+    through a first-order lag of ``TAU`` s, and ``γ_ref`` its integral: the same
+    final climb angle (``rate × duration``), but a load factor the fly-by-wire (about
+    1 s to respond) can follow without overshooting into a push-over at the end,
+    which would slacken the cable and snatch it.
     """
 
     name = "pull-up"
-    K_GAMMA = 2.0
+    K_GAMMA = 0.5
+    TAU = 1.0
 
     def __init__(self, fdm: F16, rate: float, start: float = 2.0, duration: float = 5.0):
         self.rate, self.start, self.duration = rate, start, duration
@@ -357,10 +362,19 @@ class PullUp:
         self.mach_cmd = fdm.mach
 
     def gamma_ref(self, t: float) -> tuple[float, float]:
-        """Reference flight-path angle (rad) and its rate (rad/s) at ``t``."""
-        tau = min(max(t - self.start, 0.0), self.duration)
-        rate = self.rate if self.start <= t < self.start + self.duration else 0.0
-        return self.rate * tau, rate
+        """Reference flight-path angle (rad) and its rate (rad/s) at ``t``: the step
+        of the rate through the lag, in closed form."""
+        w, tau = self.rate, self.TAU
+
+        def ramp(x: float) -> tuple[float, float]:  # response to a rate step at x = 0
+            if x <= 0.0:
+                return 0.0, 0.0
+            e = math.exp(-x / tau)
+            return w * (x - tau * (1.0 - e)), w * (1.0 - e)
+
+        g1, r1 = ramp(t - self.start)
+        g2, r2 = ramp(t - self.start - self.duration)
+        return g1 - g2, r1 - r2
 
     def control(self, fdm: F16, t: float) -> None:
         """Elevator for the flight-path angle, throttle for Mach."""

@@ -109,9 +109,10 @@ def to_wire(s: AircraftState) -> Any:
 
 def fly_lockstep(bridge: Bridge, states: Iterable[AircraftState], progress: Any = None) -> Run:
     """Resets the bridge's controller to trim, then sends every state and waits for
-    its answer (the first state trims). A rejection is recorded and the run goes on
-    (the controller is as if the state had never come); any other error stops it,
-    recorded in ``stopped``."""
+    its answer (the first state trims). As ``decoy feed``, the run stops at the
+    first rejected state (recorded, with ``stopped``: the controller stays at the
+    last accepted state, so every later frame would be a time jump) or at any other
+    error; what was flown up to then is kept."""
     run = Run()
     bridge.reset_to_trim()
     start = time.perf_counter()
@@ -129,6 +130,11 @@ def fly_lockstep(bridge: Bridge, states: Iterable[AircraftState], progress: Any 
             except Rejected as r:
                 rec.rejection = r
             run.records.append(rec)
+            if rec.rejection is not None:
+                last = next((x.state.time_s for x in reversed(run.records) if x.output is not None), 0.0)
+                run.stopped = {"t_s": last, "reason": f"state {rec.seq} at t = {s.time_s:.2f} s rejected: "
+                                                     f"{rec.rejection.reason}"}
+                break
             if progress is not None:
                 progress(s.time_s)
     except Exception as e:  # stop, keep what was flown
