@@ -407,20 +407,24 @@ class Turn(_LevelFlight):
     """Coordinated level turn at ``rate`` rad/s (positive right) from t = ``start``:
     bank ``atan(V ω / g)`` on the aileron, altitude on the elevator, Mach on the throttle.
 
-    The bank's turn rate is corrected by the integral of the track-rate error, except
-    when the elevator is at its stop: then the aircraft has no more load factor
-    (about 4 g for the F-16 at 9 km, Mach 0.8, i.e. 0.16 rad/s) and the turn rate is
-    given up rather than the altitude."""
+    The bank's turn rate is corrected by the integral of the track-rate error once
+    the bank has settled, and not while the elevator is at its stop. The bank is
+    limited to ``acos(1 / MAX_LOAD_FACTOR)`` (75.5 deg): the F-16 at 9 km, Mach 0.8
+    pulls about 4.2 g with the elevator at its stop, so a level turn of 0.20 rad/s
+    (5 g) is out of reach and it flies about 0.16 rad/s instead, keeping its
+    altitude."""
 
     name = "turn"
 
     K_RATE = 1.0  # 1/s: integral correction of the commanded turn rate
+    MAX_LOAD_FACTOR = 4.0  # g: about what the elevator's stop gives at 9 km, Mach 0.8
 
     def __init__(self, fdm: F16, rate: float, start: float = 0.0):
         super().__init__(fdm)
         self.rate, self.start = rate, start
         self.mach_cmd = fdm.mach
         self.rate_int = 0.0
+        self.last_bank = 0.0
         self.track: float | None = None
 
     def control(self, fdm: F16, t: float) -> None:
@@ -431,14 +435,19 @@ class Turn(_LevelFlight):
         track = math.atan2(v[1], v[0])
         if self.track is not None and t >= self.start:
             track_rate = ((track - self.track + math.pi) % (2 * math.pi) - math.pi) / JSBSIM_DT
-            if abs(fdm.fdm["fcs/elevator-cmd-norm"]) < 0.99:
+            settled = abs(fdm.fdm["attitude/phi-rad"] - self.last_bank) < math.radians(3.0)
+            # Not while rolling in (that winds up into an overshoot), nor while the
+            # elevator is at its stop (no load factor left to turn harder with).
+            if settled and abs(fdm.fdm["fcs/elevator-cmd-norm"]) < 0.95:
                 self.rate_int += self.K_RATE * (self.rate - track_rate) * JSBSIM_DT
-            else:  # out of load factor: give up turn rate, not altitude
-                self.rate_int -= math.copysign(0.2 * JSBSIM_DT, self.rate)
             self.rate_int = max(-abs(self.rate), min(abs(self.rate), self.rate_int))
         self.track = track
         w = self.rate + self.rate_int
         bank = math.atan(speed * w / G0) if t >= self.start else 0.0
+        # A level turn at bank φ needs 1/cos φ g: no more than the aircraft has.
+        limit = math.acos(1.0 / self.MAX_LOAD_FACTOR)
+        bank = max(-limit, min(limit, bank))
+        self.last_bank = bank
         self.loops.bank(fdm, bank)
         self.hold_altitude(fdm)
         self.loops.mach(fdm, self.mach_cmd)
