@@ -2,6 +2,8 @@
 //! on the real dependency graph with `cargo tree`, and on the sources:
 //!
 //! - `decoy-link` (the protocol) depends on nothing of the solver;
+//! - `bridge-types` (the host bridge's wire types) depends on nothing of the
+//!   solver, the protocol or the controller;
 //! - no crate depends on `hil-tests` (tests only; the library is `decoy-hil`);
 //! - no `#[path]` includes anywhere in the sources.
 
@@ -13,6 +15,19 @@ use crate::process::Result;
 
 /// Crates the protocol must not reach.
 const NOT_IN_THE_PROTOCOL: &[&str] = &["solver-core", "nalgebra", "decoy-controller", "libm"];
+
+/// Crates the bridge's wire types must not reach (any language mirrors them).
+const NOT_IN_THE_WIRE_TYPES: &[&str] = &[
+    "solver-core",
+    "nalgebra",
+    "libm",
+    "decoy-link",
+    "decoy-controller",
+    "decoy-config",
+    "decoy-sim",
+    "decoy-hil",
+    "host-bridge",
+];
 
 /// Source folders searched for `#[path]`.
 const SOURCES: &[&str] = &["crates", "firmware/src", "firmware/examples", "xtask/src"];
@@ -28,6 +43,16 @@ pub fn check(root: &Path) -> Result<()> {
             .any(|l| l.split_whitespace().next() == Some(name))
         {
             violations.push(format!("decoy-link (the protocol) depends on {name}"));
+        }
+    }
+
+    let wire = cargo_tree(root, &["-p", "bridge-types", "-e", "normal"])?;
+    for name in NOT_IN_THE_WIRE_TYPES {
+        if wire
+            .lines()
+            .any(|l| l.split_whitespace().next() == Some(name))
+        {
+            violations.push(format!("bridge-types (the wire types) depends on {name}"));
         }
     }
 
@@ -48,7 +73,7 @@ pub fn check(root: &Path) -> Result<()> {
 
     if violations.is_empty() {
         println!(
-            "layering: decoy-link free of the solver, nothing depends on hil-tests, no #[path]"
+            "layering: decoy-link and bridge-types free of the solver, nothing depends on hil-tests, no #[path]"
         );
         Ok(())
     } else {

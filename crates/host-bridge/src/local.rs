@@ -60,7 +60,7 @@ impl Isolated {
     /// shutdown should have removed), but iceoryx2's global management file.
     pub fn leftovers(&self) -> Vec<PathBuf> {
         let mut found = shm_files(&self.prefix);
-        found.retain(|p| !p.to_string_lossy().ends_with("_global_mgmt"));
+        found.retain(|p| !p.to_string_lossy().ends_with("global_mgmt"));
         collect_files(&self.root, &mut found);
         found
     }

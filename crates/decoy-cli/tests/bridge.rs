@@ -1,0 +1,339 @@
+//! `decoy bridge` and `decoy feed` as processes, each test in an iceoryx2 setup
+//! of its own (`DECOY_IOX_PREFIX`, `DECOY_IOX_ROOT`, swept afterwards): signals,
+//! killed clients and bridges, the feed's files, the layout JSON.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use bridge_types::{command, health};
+use host_bridge::client::BridgeClient;
+use host_bridge::convert::from_link_frame;
+use host_bridge::local::Isolated;
+use serde_json::Value;
+
+const DECOY: &str = env!("CARGO_BIN_EXE_decoy");
+
+/// Starts `decoy bridge --instance NAME ARGS` in `iso` and waits for its ready line.
+fn bridge(iso: &Isolated, instance: &str, args: &[&str]) -> Child {
+    let mut child = Command::new(DECOY)
+        .args(["bridge", "--instance", instance])
+        .args(args)
+        .envs(iso.env())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match rx.recv_timeout(left) {
+            Ok(line) if line.contains(" ready (") => return child,
+            Ok(_) => {}
+            Err(_) => {
+                let _ = child.kill();
+                panic!(
+                    "the bridge did not get ready: {:?}",
+                    child.wait_with_output()
+                );
+            }
+        }
+    }
+}
+
+fn signal(child: &Child, name: &str) {
+    let ok = Command::new("kill")
+        .args([&format!("-{name}"), &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok, "kill -{name}");
+}
+
+fn feed(iso: &Isolated, instance: &str, out: &Path, extra: &[&str]) -> Output {
+    Command::new(DECOY)
+        .args(["feed", "--instance", instance, "--out"])
+        .arg(out)
+        .args(extra)
+        .envs(iso.env())
+        .output()
+        .unwrap()
+}
+
+fn summary_of(child: Child) -> (Value, Output) {
+    let out = child.wait_with_output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let v = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text:?}"));
+    (v, out)
+}
+
+fn frames(n: u32) -> Vec<decoy_link::AircraftStateFrame> {
+    let path = solver_core::profiles::LevelAcceleration {
+        altitude: 9000.0,
+        initial_speed: 182.0,
+        final_speed: 243.0,
+        start: 0.5,
+        acceleration: 10.0,
+    };
+    decoy_hil::flight::scenario_frames(&path, n)
+}
+
+/// SIGINT and SIGTERM: a clean exit 0, the counters as JSON, no file left.
+#[test]
+fn sigint_and_sigterm_end_the_bridge_cleanly() {
+    for sig in ["INT", "TERM"] {
+        let iso = Isolated::new().unwrap();
+        let child = bridge(&iso, "sig", &["--json"]);
+        {
+            let mut c = BridgeClient::connect("sig", "sig-client", &iso.config).unwrap();
+            c.simple_command(command::RESET_TO_TRIM).unwrap();
+            for f in &frames(9) {
+                c.step(&from_link_frame(f)).unwrap();
+            }
+        }
+        signal(&child, sig);
+        let (v, out) = summary_of(child);
+        assert!(out.status.success(), "{out:?}");
+        assert_eq!(v["ended_by"], "SIGINT/SIGTERM", "SIG{sig}");
+        assert_eq!(v["counters"]["accepted"], 10);
+        assert_eq!(v["counters"]["commands"], 1);
+        assert_eq!(v["rejected"], 0);
+        assert_eq!(v["backend"], "host");
+        assert_eq!(
+            iso.leftovers(),
+            Vec::<std::path::PathBuf>::new(),
+            "SIG{sig}"
+        );
+    }
+}
+
+/// A client killed mid-flight: the bridge keeps serving and reports the silence;
+/// a restarted client continues.
+#[test]
+fn a_killed_client_leaves_a_serving_bridge() {
+    let iso = Isolated::new().unwrap();
+    let dir = std::env::temp_dir().join(format!("decoy-bridge-kill-client-{}", std::process::id()));
+    let child = bridge(&iso, "kc", &["--json"]);
+    let mut feeder = Command::new(DECOY)
+        .args([
+            "feed",
+            "--instance",
+            "kc",
+            "--scenario",
+            "steady",
+            "--realtime",
+            "--no-plots",
+            "--out",
+        ])
+        .arg(&dir)
+        .envs(iso.env())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    feeder.kill().unwrap(); // SIGKILL
+    feeder.wait().unwrap();
+    std::thread::sleep(Duration::from_millis(600));
+    let mut c = BridgeClient::connect("kc", "kc-after", &iso.config).unwrap();
+    let s = c.get_status().unwrap();
+    assert_eq!(s.health, health::DEGRADED, "{s:?}");
+    assert_eq!(s.counters.silences, 1);
+    assert!(s.counters.accepted > 20, "{:?}", s.counters);
+    drop(c);
+    let out = feed(
+        &iso,
+        "kc",
+        &dir,
+        &[
+            "--scenario",
+            "steady",
+            "--t-end",
+            "1",
+            "--no-plots",
+            "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["frames_sent"], 101);
+    assert_eq!(v["frames_answered"], 101);
+    signal(&child, "INT");
+    let (v, out) = summary_of(child);
+    assert!(out.status.success());
+    assert!(v["counters"]["silences"].as_u64().unwrap() >= 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The bridge killed: a waiting client gets a timeout, not a hang; a restarted
+/// bridge comes up over the stale resources and serves.
+#[test]
+fn a_killed_bridge_times_out_its_client_and_restarts_cleanly() {
+    let iso = Isolated::new().unwrap();
+    let mut child = bridge(&iso, "kb", &[]);
+    let mut c = BridgeClient::connect("kb", "kb-client", &iso.config).unwrap();
+    c.set_timeout(Duration::from_secs(2));
+    c.simple_command(command::RESET_TO_TRIM).unwrap();
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let started = Instant::now();
+    let e = c.step(&from_link_frame(&frames(0)[0])).unwrap_err();
+    assert!(
+        started.elapsed() < Duration::from_secs(4),
+        "{:?}",
+        started.elapsed()
+    );
+    assert!(
+        e.to_string().contains("no answer from bridge \"kb\""),
+        "{e}"
+    );
+    drop(c);
+    let restarted = bridge(&iso, "kb", &["--json"]);
+    let dir = std::env::temp_dir().join(format!("decoy-bridge-kill-bridge-{}", std::process::id()));
+    let out = feed(
+        &iso,
+        "kb",
+        &dir,
+        &[
+            "--scenario",
+            "pull-up",
+            "--t-end",
+            "1",
+            "--no-plots",
+            "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    signal(&restarted, "TERM");
+    let (v, out) = summary_of(restarted);
+    assert!(out.status.success());
+    assert_eq!(v["counters"]["accepted"], 101);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// No bridge: a plain message and exit 1, within the deadline.
+#[test]
+fn feed_without_a_bridge_fails_plainly() {
+    let iso = Isolated::new().unwrap();
+    let dir = std::env::temp_dir().join(format!("decoy-bridge-none-{}", std::process::id()));
+    let started = Instant::now();
+    let out = feed(&iso, "absent", &dir, &["--scenario", "steady"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("error: no bridge named \"absent\" is running"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(started.elapsed() < Duration::from_secs(10));
+    assert!(!dir.exists());
+}
+
+/// `decoy feed` writes what `decoy hil` writes plus its own keys; lockstep over
+/// the host backend in f32 equals the host replay bit for bit, free-running loses
+/// nothing.
+#[test]
+fn feed_writes_the_hil_files_lockstep_and_free() {
+    let iso = Isolated::new().unwrap();
+    let child = bridge(&iso, "files", &[]);
+    let dir = std::env::temp_dir().join(format!("decoy-bridge-files-{}", std::process::id()));
+    for mode in ["lockstep", "free"] {
+        let out = feed(
+            &iso,
+            "files",
+            &dir,
+            &[
+                "--scenario",
+                "turn",
+                "--t-end",
+                "3",
+                "--mode",
+                mode,
+                "--json",
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["frames_sent"], 301, "{mode}");
+        assert_eq!(v["frames_answered"], 301, "{mode}");
+        assert_eq!(v["frames_rejected"], 0, "{mode}");
+        assert_eq!(v["frames_lost"], 0, "{mode}");
+        assert_eq!(v["backend"], "host");
+        assert_eq!(v["mode"], mode);
+        assert_eq!(
+            v["max_tension_diff_vs_host_same_precision_N"], 0.0,
+            "{mode}"
+        );
+        assert_eq!(v["frames_identical_to_host_same_precision"], 301, "{mode}");
+        let l = &v["latency_us"];
+        for k in ["p50", "p99", "p999", "max"] {
+            assert!(l[k].as_f64().unwrap() > 0.0, "{mode} {k}");
+        }
+        assert!(v["max_tension_connection_N"].as_f64().unwrap() > 500.0);
+        let on_disk: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(on_disk["frames_answered"], 301);
+        let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
+        assert_eq!(
+            csv.lines().next().unwrap(),
+            decoy_hil::hil_run::HIL_TIMESERIES_HEADER
+        );
+        assert_eq!(csv.lines().count(), 302);
+        for plot in [
+            "tensions.png",
+            "tensions.svg",
+            "attitude.png",
+            "attitude.svg",
+        ] {
+            assert!(dir.join(plot).exists(), "{plot}");
+        }
+    }
+    signal(&child, "INT");
+    assert!(child.wait_with_output().unwrap().status.success());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The layout JSON a mirror in another language is checked against.
+#[test]
+fn the_layout_json_describes_every_type() {
+    let out = Command::new(DECOY)
+        .args(["bridge-layout", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["protocol_version"], 1);
+    let types = v["types"].as_array().unwrap();
+    let answer = types.iter().find(|t| t["name"] == "Answer").unwrap();
+    assert_eq!(answer["type_name"], "decoy.bridge.v1.Answer");
+    assert_eq!(answer["size"], 96);
+    assert_eq!(answer["fields"][2]["name"], "output");
+    assert_eq!(answer["fields"][2]["offset"], 24);
+    assert_eq!(v["services"].as_array().unwrap().len(), 7);
+    let text = Command::new(DECOY).arg("bridge-layout").output().unwrap();
+    assert!(
+        String::from_utf8_lossy(&text.stdout)
+            .contains("AircraftState (decoy.bridge.v1.AircraftState): size 104, align 8")
+    );
+}
