@@ -1,7 +1,8 @@
 //! Project automation, run as `cargo xtask <command>` from anywhere in the repo.
 //!
 //! - `setup`: install what the project needs (Rust target `thumbv7em-none-eabihf`,
-//!   QEMU) and say what was found and what was installed.
+//!   QEMU, the Python environment `.venv/`) and say what was found and what was
+//!   installed.
 //! - `test`: `setup`, then every test stage (fmt, clippy, host tests, the solver's
 //!   no_std cross build, the firmware build), failing fast.
 //! - `run`: the main job on the built-in reference system (see [`MAIN_JOB`]).
@@ -10,6 +11,7 @@
 
 mod layering;
 mod process;
+mod python;
 mod setup;
 
 use std::path::{Path, PathBuf};
@@ -234,6 +236,10 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
         Stage {
             name: "host tests",
             action: Action::Run(cargo(root, &["test", "--workspace"])),
+        },
+        Stage {
+            name: "python client (pytest: layout, lockstep, JSBSim F-16)",
+            action: Action::Check(python::test_stage),
         },
         Stage {
             name: "solver no_std cross build",

@@ -187,6 +187,7 @@ pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
             qemu(&mut report, &mut apt)?;
             defmt_print(&mut report)?;
             cargo_machete(&mut report)?;
+            python_env(root, &mut report)?;
             Some(toolchain)
         }
     };
@@ -210,6 +211,19 @@ pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
         println!("target code toolchain: {}", tc.name());
     }
     Ok(toolchain)
+}
+
+/// The Python environment `.venv/` (the bridge's Python client, JSBSim, plots, pytest).
+fn python_env(root: &Path, report: &mut Report) -> Result<()> {
+    match crate::python::ensure(root)? {
+        crate::python::Outcome::Present(pinned) => {
+            report.present.push(format!("Python .venv ({pinned})"))
+        }
+        crate::python::Outcome::Installed(pinned) => report
+            .installed
+            .push(format!("Python .venv ({pinned}, decoy_bridge editable)")),
+    }
+    Ok(())
 }
 
 /// rustfmt and clippy: try `rustup component add`; their absence is not fatal here

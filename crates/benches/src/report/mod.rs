@@ -37,6 +37,27 @@ pub use data::*;
 pub use figures::*;
 pub use render::*;
 
+/// The heading of the host bridge's section of `docs/benchmarks.md`, which
+/// `cargo bench -p host-bridge --bench bridge` measures and a person writes: the
+/// report keeps it (from this heading to the end) when it rewrites the document.
+pub const KEPT_SECTION: &str = "## Host bridge";
+
+/// The part of an existing `docs/benchmarks.md` the report keeps ([`KEPT_SECTION`]
+/// to the end), empty if there is none.
+pub fn kept_section(existing: &str) -> &str {
+    existing
+        .find(&format!("\n{KEPT_SECTION}"))
+        .map_or("", |i| &existing[i + 1..])
+}
+
+/// The rendered report followed by the kept section of `existing`.
+pub fn with_kept_section(rendered: &str, existing: &str) -> String {
+    match kept_section(existing) {
+        "" => rendered.to_owned(),
+        kept => format!("{}\n\n{}", rendered.trim_end_matches('\n'), kept),
+    }
+}
+
 pub use crate::names::{
     BREAKDOWN_CASES, INSTRUCTION_DENSE_STEP_SIZES, INSTRUCTION_STEP_SIZES, System, TENSION_METHODS,
     TENSION_SIZES, Variant, WALL_DENSE_STEP_SIZES, WALL_STEP_SIZES, instr_step_key, wall_step_key,
@@ -362,6 +383,7 @@ mod tests {
             ..Inputs::default()
         });
         let document = include_str!("../../../../docs/benchmarks.md");
+        let md = with_kept_section(&md, document);
         assert_eq!(structure(&md), structure(document));
         // The check can fail: a renamed section is noticed.
         let renamed = md.replace("## Machine", "## Host");

@@ -1,0 +1,430 @@
+"""A client of a running ``decoy bridge``: the same operations as the Rust client.
+
+Services of bridge instance ``NAME`` (docs/bridge.md): ``decoy/NAME/lockstep``
+(request-response, :class:`~decoy_bridge.wire.AircraftState` →
+:class:`~decoy_bridge.wire.Answer`), ``decoy/NAME/state`` (publish-subscribe of
+states, free-running), ``decoy/NAME/outputs`` (publish-subscribe of every answer),
+``decoy/NAME/status`` (publish-subscribe of :class:`~decoy_bridge.wire.Status`),
+``decoy/NAME/commands`` (request-response, :class:`~decoy_bridge.wire.Command` →
+:class:`~decoy_bridge.wire.CommandReply`), and the events ``to-bridge`` (the client
+notifies after sending) and ``from-bridge`` (the bridge notifies after answering).
+
+Every wait blocks in an iceoryx2 WaitSet on the ``from-bridge`` listener with a
+timeout: no spinning. Errors are exceptions of :mod:`decoy_bridge.errors`.
+
+Units and frames of the states and outputs: SI, flat-earth NED world frame
+(altitude = -z), body FRD, quaternion Hamilton scalar first body→NED; the output's
+decoy position is in the aircraft's flight-path frame (x along its velocity,
+y horizontal right, z down) relative to the aircraft reference point.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import iceoryx2 as iox
+
+from . import wire
+from .errors import BridgeError, BridgeTimeout, NoBridge, Rejected, VersionMismatch
+
+DEFAULT_TIMEOUT_S = 2.0
+"""How long an operation waits for the bridge by default, s."""
+
+
+PREFIX_ENV = "DECOY_IOX_PREFIX"
+"""Environment variable: the iceoryx2 file prefix (as the bridge reads it)."""
+ROOT_ENV = "DECOY_IOX_ROOT"
+"""Environment variable: the iceoryx2 root directory (default ``/tmp/iceoryx2/``)."""
+
+
+def make_config(prefix: str | None = None, root: str | None = None) -> Any:
+    """The iceoryx2 configuration the bridge uses: iceoryx2's defaults with the file
+    ``prefix`` and ``root`` directory given, else from ``$DECOY_IOX_PREFIX`` and
+    ``$DECOY_IOX_ROOT`` (docs/bridge.md §5). A bridge and its clients must agree;
+    different prefixes never see each other."""
+    cfg = iox.config.default()
+    prefix = prefix or os.environ.get(PREFIX_ENV)
+    root = root or os.environ.get(ROOT_ENV)
+    if prefix:
+        cfg.global_cfg.prefix = iox.FileName.new(prefix)
+    if root:
+        cfg.global_cfg.root_path = iox.Path.new(root if root.endswith("/") else root + "/")
+    return cfg
+
+
+def _kind(name: str) -> int:
+    return wire.LAYOUT.codes["kind"][name]
+
+
+class Bridge:
+    """A connection to bridge instance ``instance``.
+
+    Args:
+        instance: the bridge's instance name (``decoy bridge --instance NAME``).
+        prefix: the iceoryx2 file prefix the bridge runs with (default
+            ``$DECOY_IOX_PREFIX``, else iceoryx2's).
+        root: the iceoryx2 root directory (default ``$DECOY_IOX_ROOT``, else ``/tmp/iceoryx2/``).
+        timeout_s: default time limit of every wait, s.
+        node_name: this client's iceoryx2 node name (default ``decoy-py-<pid>``).
+
+    Raises:
+        NoBridge: no bridge serves ``instance`` (its services do not exist, or have
+            no server: a bridge that died).
+        VersionMismatch: the bridge speaks another protocol version (its type names
+            differ from this package's).
+    """
+
+    def __init__(
+        self,
+        instance: str,
+        *,
+        prefix: str | None = None,
+        root: str | None = None,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        node_name: str | None = None,
+    ):
+        self.instance = instance
+        self.timeout_s = timeout_s
+        self.layout = wire.LAYOUT
+        self._node = (
+            iox.NodeBuilder.new()
+            .name(iox.NodeName.new(node_name or f"decoy-py-{os.getpid()}"))
+            .config(make_config(prefix, root))
+            .create(iox.ServiceType.Ipc)
+        )
+        self._lockstep_svc = self._open_rr("lockstep", wire.AircraftState, wire.Answer)
+        self._commands_svc = self._open_rr("commands", wire.Command, wire.CommandReply)
+        self._state_svc = self._open_ps("state", wire.AircraftState)
+        self._outputs_svc = self._open_ps("outputs", wire.Answer)
+        self._status_svc = self._open_ps("status", wire.Status)
+        self._to_bridge = self._open_event("to-bridge")
+        self._from_bridge = self._open_event("from-bridge")
+
+        self._lockstep = self._lockstep_svc.client_builder().create()
+        self._commands = self._commands_svc.client_builder().create()
+        self._publisher: Any = None
+        self._outputs_sub: Any = None
+        self._status_sub: Any = None
+        self._notifier = self._to_bridge.notifier_builder().create()
+        self._listener = self._from_bridge.listener_builder().create()
+        self._waitset = iox.WaitSetBuilder.new().create(iox.ServiceType.Ipc)
+        self._guard = self._waitset.attach_notification(self._listener)
+        # Each service's samples are numbered 0, 1, 2, ... (+1 each, wrapping).
+        self._seq = -1
+        self._cmd_seq = -1
+        self._state_seq = -1
+        self._ev = {k: iox.EventId.new(v) for k, v in self.layout.event_ids.items()}
+        if self._lockstep_svc.dynamic_config.number_of_servers == 0:
+            raise NoBridge(f"bridge `{instance}` is not running (its services exist but nothing serves them)")
+
+    # --- opening ------------------------------------------------------------------------
+
+    def _name(self, service: str) -> Any:
+        return iox.ServiceName.new(f"decoy/{self.instance}/{service}")
+
+    def _open(self, service: str, builder: Any) -> Any:
+        try:
+            return builder.open()
+        except Exception as e:  # iceoryx2 raises one exception type per builder
+            text = f"{type(e).__name__}: {e}"
+            if "DoesNotExist" in text:
+                raise NoBridge(f"no bridge `{self.instance}` (service decoy/{self.instance}/{service} does not exist)") from e
+            if "Incompatible" in text:
+                raise VersionMismatch(
+                    f"decoy/{self.instance}/{service}: the bridge's types differ from this client's "
+                    f"(protocol v{wire.PROTOCOL_VERSION}); {text}"
+                ) from e
+            raise BridgeError(f"cannot open decoy/{self.instance}/{service}: {text}") from e
+
+    def _open_rr(self, service: str, req: type, resp: type) -> Any:
+        return self._open(service, self._node.service_builder(self._name(service)).request_response(req, resp))
+
+    def _open_ps(self, service: str, payload: type) -> Any:
+        return self._open(service, self._node.service_builder(self._name(service)).publish_subscribe(payload))
+
+    def _open_event(self, service: str) -> Any:
+        return self._open(service, self._node.service_builder(self._name(service)).event())
+
+    # --- waiting -------------------------------------------------------------------------
+
+    def _wait(self, deadline: float) -> None:
+        """Blocks until the bridge notifies or ``deadline`` (time.monotonic) passes."""
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            return
+        _, result = self._waitset.wait_and_process_with_timeout(iox.Duration.from_secs_f64(remaining))
+        if result in (iox.WaitSetRunResult.Interrupt, iox.WaitSetRunResult.TerminationRequest):
+            raise KeyboardInterrupt
+        # Consume the notifications, or the WaitSet wakes at once next time.
+        self._listener.try_wait()
+
+    def _notify(self, event: str) -> None:
+        self._notifier.notify_with_custom_event_id(self._ev[event])
+
+    def _receive_response(self, pending: Any, what: str, timeout_s: float | None) -> Any:
+        deadline = time.monotonic() + (self.timeout_s if timeout_s is None else timeout_s)
+        while True:
+            response = pending.receive()
+            if response is not None:
+                value = type(response.payload().contents).from_buffer_copy(response.payload().contents)
+                response.delete()
+                return value
+            if time.monotonic() >= deadline:
+                if self._lockstep_svc.dynamic_config.number_of_servers == 0:
+                    raise NoBridge(f"bridge `{self.instance}` went away while waiting for {what}")
+                raise BridgeTimeout(
+                    f"bridge `{self.instance}` did not answer {what} within "
+                    f"{self.timeout_s if timeout_s is None else timeout_s:.3f} s"
+                )
+            self._wait(deadline)
+
+    # --- lockstep ------------------------------------------------------------------------
+
+    def request(self, state: Any, timeout_s: float | None = None) -> Any:
+        """Lockstep: sends one aircraft state and waits for its answer.
+
+        ``state`` is a :class:`~decoy_bridge.wire.AircraftState` (its header is
+        filled here: protocol version, kind, the next sequence number) or a mapping
+        accepted by :func:`make_state`.
+
+        Returns:
+            the :class:`~decoy_bridge.wire.Output`.
+
+        Raises:
+            Rejected: the bridge rejected the state (``reason``, ``count``); the
+                controller's state is as if it had never been sent.
+            BridgeTimeout: no answer within ``timeout_s`` (default: the client's).
+            VersionMismatch: the answer's protocol version differs.
+        """
+        answer = self.request_answer(state, timeout_s)
+        return check_answer(answer)
+
+    def request_answer(self, state: Any, timeout_s: float | None = None, *, keep_header: bool = False) -> Any:
+        """Like :meth:`request` but returns the raw :class:`~decoy_bridge.wire.Answer`
+        (output or rejection) without raising on a rejection.
+
+        ``keep_header=True`` sends ``state``'s header as it is (protocol version and
+        kind; the sequence number is still the client's): for testing the bridge's
+        header checks."""
+        msg = state if isinstance(state, wire.AircraftState) else make_state(**state)
+        self._seq = (self._seq + 1) & 0xFFFFFFFF
+        if not keep_header:
+            msg.header.protocol_version = wire.PROTOCOL_VERSION
+            msg.header.kind = _kind("aircraft_state")
+        msg.header.seq = self._seq
+        pending = self._lockstep.loan_uninit().write_payload(msg).send()
+        self._notify("REQUEST")
+        answer = self._receive_response(pending, f"lockstep request {self._seq}", timeout_s)
+        pending.delete()
+        if answer.header.protocol_version != wire.PROTOCOL_VERSION:
+            raise VersionMismatch(
+                f"answer of protocol v{answer.header.protocol_version}, this client speaks v{wire.PROTOCOL_VERSION}"
+            )
+        return answer
+
+    @property
+    def last_seq(self) -> int:
+        """The sequence number of the last lockstep request sent (-1 before any)."""
+        return self._seq
+
+    # --- free-running ---------------------------------------------------------------------
+
+    def publish(self, state: Any) -> int:
+        """Free-running: publishes one aircraft state without waiting; returns its
+        sequence number. The bridge processes samples in order and counts (status
+        ``lost``, ``overruns``) what it could not process in time."""
+        if self._publisher is None:
+            self._publisher = self._state_svc.publisher_builder().create()
+        msg = state if isinstance(state, wire.AircraftState) else make_state(**state)
+        self._state_seq = (self._state_seq + 1) & 0xFFFFFFFF
+        msg.header.protocol_version = wire.PROTOCOL_VERSION
+        msg.header.kind = _kind("aircraft_state")
+        msg.header.seq = self._state_seq
+        self._publisher.loan_uninit().write_payload(msg).send()
+        self._notify("STATE")
+        return self._state_seq
+
+    # --- listening -----------------------------------------------------------------------
+
+    def subscribe_outputs(self) -> None:
+        """Starts receiving every answer the bridge publishes (with the service's
+        small history for late joiners); see :meth:`outputs`."""
+        if self._outputs_sub is None:
+            self._outputs_sub = self._outputs_svc.subscriber_builder().create()
+
+    def outputs(self, timeout_s: float | None = None, at_least: int = 1) -> list[Any]:
+        """The answers published since the last call (:class:`~decoy_bridge.wire.Answer`,
+        in order), waiting up to ``timeout_s`` for ``at_least`` of them.
+
+        Raises:
+            BridgeTimeout: fewer than ``at_least`` arrived in time.
+        """
+        self.subscribe_outputs()
+        return self._drain(self._outputs_sub, at_least, timeout_s, "outputs")
+
+    def status(self, timeout_s: float | None = None) -> Any:
+        """The bridge's latest published :class:`~decoy_bridge.wire.Status`
+        (waiting up to ``timeout_s`` for one)."""
+        if self._status_sub is None:
+            self._status_sub = self._status_svc.subscriber_builder().create()
+        return self._drain(self._status_sub, 1, timeout_s, "a status")[-1]
+
+    def _drain(self, sub: Any, at_least: int, timeout_s: float | None, what: str) -> list[Any]:
+        deadline = time.monotonic() + (self.timeout_s if timeout_s is None else timeout_s)
+        got: list[Any] = []
+        while True:
+            while True:
+                sample = sub.receive()
+                if sample is None:
+                    break
+                c = sample.payload().contents
+                got.append(type(c).from_buffer_copy(c))
+                sample.delete()
+            if len(got) >= at_least:
+                return got
+            if time.monotonic() >= deadline:
+                raise BridgeTimeout(f"bridge `{self.instance}`: {len(got)} of {at_least} {what} within the time limit")
+            self._wait(deadline)
+
+    # --- commands ------------------------------------------------------------------------
+
+    def command(self, name: str, *, profile: str | None = None, rate_radps: float = 0.0, nonce: int = 0,
+                timeout_s: float | None = None) -> Any:
+        """Sends command ``name`` (``reset_to_trim``, ``select_profile``,
+        ``get_status``, ``ping``) and returns the :class:`~decoy_bridge.wire.CommandReply`.
+
+        Raises:
+            Rejected: the bridge rejected the command.
+            BridgeTimeout: no reply in time.
+        """
+        codes = self.layout.codes
+        if name not in codes["command"]:
+            raise ValueError(f"unknown command {name!r}; one of {', '.join(codes['command'])}")
+        cmd = wire.Command()
+        self._cmd_seq = (self._cmd_seq + 1) & 0xFFFFFFFF
+        cmd.header.protocol_version = wire.PROTOCOL_VERSION
+        cmd.header.kind = _kind("command")
+        cmd.header.seq = self._cmd_seq
+        cmd.command = codes["command"][name]
+        if profile is not None:
+            key = profile.replace("-", "_")
+            if key not in codes["profile"]:
+                raise ValueError(f"unknown profile {profile!r}; one of {', '.join(codes['profile'])}")
+            cmd.profile = codes["profile"][key]
+        cmd.rate_milli_radps = round(rate_radps * 1000.0)
+        cmd.nonce = nonce
+        pending = self._commands.loan_uninit().write_payload(cmd).send()
+        self._notify("COMMAND")
+        reply = self._receive_response(pending, f"command {name}", timeout_s)
+        pending.delete()
+        if reply.header.protocol_version != wire.PROTOCOL_VERSION:
+            raise VersionMismatch(f"reply of protocol v{reply.header.protocol_version}")
+        if reply.result != codes["result"]["ok"]:
+            reason = self.layout.code_name("reason", reply.reason)
+            raise Rejected(reason, reply.reason, 0, reply.request_seq, f"command {name} rejected: {reason}")
+        return reply
+
+    def reset_to_trim(self, timeout_s: float | None = None) -> Any:
+        """Command: the controller back to its waiting state; the next state trims."""
+        return self.command("reset_to_trim", timeout_s=timeout_s)
+
+    def ping(self, nonce: int = 0, timeout_s: float | None = None) -> Any:
+        """Command: a round trip; the reply echoes ``nonce``."""
+        return self.command("ping", nonce=nonce, timeout_s=timeout_s)
+
+    def get_status(self, timeout_s: float | None = None) -> Any:
+        """Command: the bridge's :class:`~decoy_bridge.wire.Status` now."""
+        return self.command("get_status", timeout_s=timeout_s).status
+
+    def select_profile(self, profile: str, rate_radps: float = 0.0, timeout_s: float | None = None) -> Any:
+        """Command: select a built-in profile (``streamed``, ``steady``,
+        ``acceleration``, ``pull-up``, ``turn``; rate in rad/s for the last two)."""
+        return self.command("select_profile", profile=profile, rate_radps=rate_radps, timeout_s=timeout_s)
+
+    # --- closing -------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Releases every port, the services and the node (removing the node's files);
+        also on ``with`` exit. The client cannot be used afterwards."""
+        for attr in ("_guard", "_waitset", "_listener", "_notifier", "_publisher", "_outputs_sub", "_status_sub",
+                     "_lockstep", "_commands"):
+            port = getattr(self, attr, None)
+            if port is not None and hasattr(port, "delete"):
+                try:
+                    port.delete()
+                except Exception:
+                    pass
+            setattr(self, attr, None)
+        for attr in ("_lockstep_svc", "_commands_svc", "_state_svc", "_outputs_svc", "_status_svc", "_to_bridge",
+                     "_from_bridge", "_node"):
+            setattr(self, attr, None)
+
+    def __enter__(self) -> "Bridge":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def check_answer(answer: Any) -> Any:
+    """The :class:`~decoy_bridge.wire.Output` of an answer, or :class:`Rejected`."""
+    if answer.header.kind == _kind("output"):
+        return answer.output
+    if answer.header.kind == _kind("rejected"):
+        r = answer.rejection
+        reason = wire.LAYOUT.code_name("reason", r.reason)
+        if reason.lower().replace("_", "") == "wrongversion":
+            raise VersionMismatch(f"state {r.request_seq}: the bridge rejected this client's protocol version "
+                                  f"v{wire.PROTOCOL_VERSION}")
+        raise Rejected(reason, r.reason, r.count, r.request_seq, f"state {r.request_seq} rejected: {reason} (#{r.count})")
+    raise BridgeError(f"answer of unexpected kind {answer.header.kind}")
+
+
+def make_state(
+    time_s: float,
+    position_ned_m: Sequence[float],
+    velocity_ned_mps: Sequence[float],
+    acceleration_ned_mps2: Sequence[float] = (0.0, 0.0, 0.0),
+    attitude_wxyz: Sequence[float] = (1.0, 0.0, 0.0, 0.0),
+    body_rate_radps: Sequence[float] = (0.0, 0.0, 0.0),
+    body_angular_acceleration_radps2: Sequence[float] = (0.0, 0.0, 0.0),
+) -> Any:
+    """An :class:`~decoy_bridge.wire.AircraftState` (header filled when sent).
+
+    Args:
+        time_s: simulation time, s (strictly increasing, at most 0.1 s steps).
+        position_ned_m: reference point, flat-earth NED, m (altitude = -z).
+        velocity_ned_mps: velocity over the ground, NED, m/s.
+        acceleration_ned_mps2: NED, m/s².
+        attitude_wxyz: Hamilton quaternion, scalar first, body (FRD) → NED.
+        body_rate_radps: p, q, r (body FRD), rad/s.
+        body_angular_acceleration_radps2: their derivatives, rad/s².
+    """
+    s = wire.AircraftState()
+    s.time_s = float(time_s)
+    for name, values in (
+        ("position_ned_m", position_ned_m),
+        ("velocity_ned_mps", velocity_ned_mps),
+        ("acceleration_ned_mps2", acceleration_ned_mps2),
+        ("attitude_wxyz", attitude_wxyz),
+        ("body_rate_radps", body_rate_radps),
+        ("body_angular_acceleration_radps2", body_angular_acceleration_radps2),
+    ):
+        arr = getattr(s, name)
+        if len(values) != len(arr):
+            raise ValueError(f"{name}: expected {len(arr)} values, got {len(values)}")
+        for i, v in enumerate(values):
+            arr[i] = float(v)
+    return s
+
+
+def output_dict(out: Any) -> dict[str, Any]:
+    """An :class:`~decoy_bridge.wire.Output` as plain values (see :func:`wire.to_dict`)."""
+    return wire.to_dict(out)
+
+
+_ = ctypes  # ctypes structures come from wire
