@@ -129,8 +129,7 @@ fn run() -> Result<(), String> {
     // The host bridge's section is measured by its own benchmark: kept as it is.
     let existing = std::fs::read_to_string(&out).unwrap_or_default();
     let document = report::with_kept_section(&report::render(&inputs), &existing);
-    std::fs::write(&out, document)
-        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    std::fs::write(&out, document).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     println!(
         "wrote {} and {}.{{png,svg}}",
         out.display(),
