@@ -115,6 +115,37 @@ fn sigint_and_sigterm_end_the_bridge_cleanly() {
     }
 }
 
+/// A bridge stopped (SIGSTOP) and continued (SIGCONT), as a debugger or a job
+/// control shell does: the signal that interrupts its wait is no termination
+/// request, and it serves on (an earlier version took it for SIGINT and exited).
+#[test]
+fn a_stopped_and_continued_bridge_serves_on() {
+    let iso = Isolated::new().unwrap();
+    let child = bridge(&iso, "cont", &["--json"]);
+    let all = frames(20);
+    let mut c = BridgeClient::connect("cont", "cont-client", &iso.config).unwrap();
+    c.simple_command(command::RESET_TO_TRIM).unwrap();
+    for f in &all[..10] {
+        c.step(&from_link_frame(f)).unwrap();
+    }
+    for _ in 0..3 {
+        signal(&child, "STOP");
+        std::thread::sleep(Duration::from_millis(200));
+        signal(&child, "CONT");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    for f in &all[10..] {
+        c.step(&from_link_frame(f)).unwrap();
+    }
+    drop(c);
+    signal(&child, "INT");
+    let (v, out) = summary_of(child);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(v["ended_by"], "SIGINT/SIGTERM");
+    assert_eq!(v["counters"]["accepted"], 21);
+    assert_eq!(iso.leftovers(), Vec::<std::path::PathBuf>::new());
+}
+
 /// A client killed mid-flight: the bridge keeps serving and reports the silence;
 /// a restarted client continues.
 #[test]

@@ -184,7 +184,7 @@ struct Ports {
     from_bridge: Notifier<Ipc>,
     // The services and the node outlive the ports (fields drop in order).
     _services: Services,
-    _node: Node<Ipc>,
+    node: Node<Ipc>,
 }
 
 /// The bridge's state apart from its ports.
@@ -485,7 +485,7 @@ impl Ports {
             to_bridge,
             from_bridge,
             _services: services,
-            _node: node,
+            node,
         })
     }
 
@@ -582,33 +582,42 @@ pub fn run_bridge(
     ready(&engine.status());
     let status_line = options.status_line && std::io::stderr().is_terminal();
     let mut failure = None;
-    let outcome = waitset.wait_and_process(|id| {
-        if id.has_event_from(&wake) {
-            // Consume the notifications, or the WaitSet keeps waking.
-            let _ = ports.to_bridge.try_wait(|_| {});
-        }
-        if let Err(e) = ports.process(&mut engine) {
-            failure = Some(e);
-            return CallbackProgression::Stop;
-        }
-        if options
-            .stop
-            .as_ref()
-            .is_some_and(|s| s.load(Ordering::Relaxed))
-        {
-            return CallbackProgression::Stop;
-        }
-        if id.has_event_from(&tick) {
-            let changed = engine.supervise();
-            if changed || engine.last_status.elapsed() >= STATUS_PERIOD {
-                ports.publish_status(&mut engine);
+    let outcome = loop {
+        let outcome = waitset.wait_and_process(|id| {
+            if id.has_event_from(&wake) {
+                // Consume the notifications, or the WaitSet keeps waking.
+                let _ = ports.to_bridge.try_wait(|_| {});
             }
-            if status_line {
-                engine.status_line();
+            if let Err(e) = ports.process(&mut engine) {
+                failure = Some(e);
+                return CallbackProgression::Stop;
             }
+            if options
+                .stop
+                .as_ref()
+                .is_some_and(|s| s.load(Ordering::Relaxed))
+            {
+                return CallbackProgression::Stop;
+            }
+            if id.has_event_from(&tick) {
+                let changed = engine.supervise();
+                if changed || engine.last_status.elapsed() >= STATUS_PERIOD {
+                    ports.publish_status(&mut engine);
+                }
+                if status_line {
+                    engine.status_line();
+                }
+            }
+            CallbackProgression::Continue
+        });
+        match outcome {
+            // Any signal interrupts the wait, SIGCONT after a SIGSTOP included; only
+            // SIGINT and SIGTERM (which the node records) end the bridge.
+            Ok(WaitSetRunResult::Interrupt)
+                if failure.is_none() && ports.node.wait(Duration::ZERO).is_ok() => {}
+            outcome => break outcome,
         }
-        CallbackProgression::Continue
-    });
+    };
     if status_line {
         eprintln!();
     }
