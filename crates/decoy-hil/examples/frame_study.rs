@@ -106,9 +106,12 @@ fn main() {
             let mut below_diff = 0f64;
             for m in &messages {
                 let rate_before = c.snapshot().wave_rate;
+                // The steps the controller plans for this frame from the previous
+                // one's wave-speed rate (docs/protocol.md §5, restated: 2 steps of
+                // 5 ms at least, ceil(dt rate / 0.8) in f32, at most 20).
                 let predicted = {
                     let w = (0.01f32 * rate_before * (1.0 / 0.8f32)).ceil() as f64;
-                    w.max(2.0).min(20.0)
+                    w.clamp(2.0, 20.0)
                 };
                 let answer = c.handle(*m, &mut decoy_controller::NoCounter);
                 match (m, answer) {
