@@ -31,10 +31,10 @@
 //!   (goal [`CONTROL_STEP_GOAL`]); per RK4 step of a nominal control step at most
 //!   [`RK4_STEP_TARGET`], the benchmark issue's target; and the whole nominal frame
 //!   (validation, steps, outputs) within [`FRAME_BUDGET`], a guard just above the
-//!   measurement. Frames
-//!   where the wave-speed limit takes more steps (docs/protocol.md §5) cost
-//!   proportionally more; their share, the most steps and the costliest frame are
-//!   printed.
+//!   measurement. The costliest frame over ALL the frames of each scenario,
+//!   where the wave-speed limit takes more steps (docs/protocol.md §5) and the
+//!   snatch loads included, within its [`WorstFrame`] guard, printed against
+//!   issue 14's target [`WORST_FRAME_TARGET`] (met in steady flight only).
 //! - **Determinism.** Two runs receive byte-identical streams (the instruction
 //!   counts included, so on the STM32F405 the 168 MHz SysTick's conversion to
 //!   instructions repeats too).
@@ -49,7 +49,8 @@
 //!   host controller gives to the same bytes), QEMU keeps running, and the next
 //!   valid frame is answered exactly as in an undisturbed run.
 //!
-//! Scenario lengths (test time): the acceleration for 10 s (its whole ramp, Mach
+//! Scenario lengths (test time): steady flight and the recorded flight for 10 s;
+//! the acceleration for 10 s (its whole ramp, Mach
 //! 0.6 to 0.8 from t = 2 s to about 8 s); the pull-ups at 0.05, 0.10 and 0.20
 //! rad/s for 10 s (the rotation from 2 s to 7 s and the snatch load when the cable
 //! is jerked taut at about 8.7 s, where a fixed 5 ms step diverges and the
@@ -91,6 +92,14 @@ const F64_TOW_TOLERANCE: f64 = 1.5e-2;
 /// towing-point tension falls to about 15 N between the jerks, where a 1.7 N
 /// difference (measured at 0.10 rad/s) is 6 % of it but 0.4 % of the peak.
 const SNATCH_TOLERANCES: (f64, f64, bool) = (2e-2, 2e-2, true);
+/// The same for the recorded flight (a pull-up into a climbing turn), where f32
+/// and f64 part at the cable's jerk at about 5.8 s: the stepping rule's counts
+/// differ there and the transient, integrated at the wave-speed stability limit,
+/// amplifies the difference to 82 N (15.4 % of the peak, measured). This is the
+/// step-size sensitivity that puts the snatch peaks 3 to 14 % off the converged
+/// solution (tests/host_accuracy.rs); the f32 firmware is still held bit for bit
+/// to the host's f32 controller.
+const RECORDED_TOLERANCES: (f64, f64, bool) = (0.16, 0.20, true);
 
 /// Instructions a whole nominal 10 ms frame (two RK4 steps of 5 ms, the frame's
 /// validation, flight path and outputs with the clearances) may execute, M4: a
@@ -111,6 +120,20 @@ const CONTROL_STEP_TARGET: u32 = 100_000;
 const RK4_STEP_TARGET: u32 = 40_000;
 /// The issue's goal per control step.
 const CONTROL_STEP_GOAL: u32 = 40_000;
+/// Issue 14's target for every frame, the snatch loads included (not met: each
+/// scenario's worst frame is held to a guard just above its measurement, see
+/// [`WorstFrame`], and the gap is printed).
+const WORST_FRAME_TARGET: u32 = 100_000;
+
+/// The guard on the costliest frame of a scenario over ALL its frames (M4 and
+/// STM32F405, whole frames: validation, every RK4 step the stepping rule took,
+/// retries included, outputs): about 1 % above the M4's measurement when this was
+/// written (`cargo decoy hil --scenario NAME --json`, `instructions_per_step_max`,
+/// and this test's output). Only steady flight is within [`WORST_FRAME_TARGET`];
+/// elsewhere the wave-speed limit on the 0.46 m segment at the decoy takes up to
+/// 14 RK4 steps in a frame (firmware/README.md, "The worst frame and the accuracy").
+#[derive(Clone, Copy, Debug)]
+struct WorstFrame(u32);
 
 /// The boards of the f32 controller, each with the whole f32 suite.
 const F32_BOARDS: [Board; 2] = [Board::M4, Board::Stm32f405];
@@ -207,6 +230,7 @@ fn check_scenario(
     label: &str,
     frames: &[AircraftStateFrame],
     outputs_at_least: usize,
+    worst: WorstFrame,
 ) {
     check_scenario_within(
         board,
@@ -214,6 +238,7 @@ fn check_scenario(
         frames,
         outputs_at_least,
         (F64_CONNECTION_TOLERANCE, F64_TOW_TOLERANCE, false),
+        worst,
     );
 }
 
@@ -224,6 +249,7 @@ fn check_scenario_within(
     frames: &[AircraftStateFrame],
     outputs_at_least: usize,
     (connection_tolerance, tow_tolerance, against_peak): (f64, f64, bool),
+    worst: WorstFrame,
 ) {
     let label = &format!("{board}: {label}");
     let (exchanges, _, fps, log) = fly(board, frames);
@@ -330,6 +356,7 @@ fn check_scenario_within(
         nominal_frame_max(&answers)
     );
     check_budget(label, &answers, FRAME_BUDGET);
+    check_worst_frame(label, &answers, worst);
     if board == Board::Stm32f405 {
         check_advisory_log(label, &answers, &log);
     }
@@ -407,17 +434,56 @@ fn check_budget(label: &str, answers: &[DeviceMessage], frame_budget: u32) {
     }
 }
 
+/// The costliest frame of a run, over every frame (not only the nominal ones),
+/// against its guard; printed against [`WORST_FRAME_TARGET`].
+fn check_worst_frame(label: &str, answers: &[DeviceMessage], WorstFrame(guard): WorstFrame) {
+    let stats = flight::instruction_stats(answers);
+    let verdict = if stats.max <= WORST_FRAME_TARGET {
+        "met"
+    } else {
+        "NOT met"
+    };
+    println!(
+        "{label}: worst frame over all {} frames {} instructions (seq {}, at most {} RK4 steps), \
+         mean {:.0}; issue 14's target {WORST_FRAME_TARGET}: {verdict}",
+        stats.steps, stats.max, stats.max_seq, stats.most_rk4_steps, stats.mean
+    );
+    assert!(
+        stats.max <= guard,
+        "{label}: frame seq {} took {} instructions, over the worst-frame guard of {guard}",
+        stats.max_seq,
+        stats.max
+    );
+}
+
+fn steady_matches_the_host_and_fits_the_budget(board: Board) {
+    let frames = frames("steady", None, 10.0);
+    let count = frames.len();
+    check_scenario(
+        board,
+        "steady (10 s)",
+        &frames,
+        count,
+        WorstFrame(WORST_FRAME_TARGET),
+    );
+}
+
 fn acceleration_matches_the_host_and_fits_the_budget(board: Board) {
     check_scenario(
         board,
         "acceleration (10 s)",
         &frames("acceleration", None, 10.0),
         1001,
+        WorstFrame(258_000),
     );
 }
 
 fn pull_ups_match_the_host_and_fit_the_budget(board: Board) {
-    for (rate, t_end) in [(0.05, 10.0), (0.10, 10.0), (0.20, 10.0)] {
+    for (rate, t_end, worst) in [
+        (0.05, 10.0, 258_000),
+        (0.10, 10.0, 493_000),
+        (0.20, 10.0, 844_000),
+    ] {
         let frames = frames("pull-up", Some(rate), t_end);
         let count = frames.len();
         check_scenario_within(
@@ -426,16 +492,36 @@ fn pull_ups_match_the_host_and_fit_the_budget(board: Board) {
             &frames,
             count,
             SNATCH_TOLERANCES,
+            WorstFrame(worst),
         );
     }
 }
 
 fn turns_match_the_host_and_fit_the_budget(board: Board) {
-    for rate in [0.10, 0.20] {
+    for (rate, worst) in [(0.10, 375_000), (0.20, 492_000)] {
         let frames = frames("turn", Some(rate), 5.0);
         let count = frames.len();
-        check_scenario(board, &format!("turn {rate} rad/s (5 s)"), &frames, count);
+        check_scenario(
+            board,
+            &format!("turn {rate} rad/s (5 s)"),
+            &frames,
+            count,
+            WorstFrame(worst),
+        );
     }
+}
+
+fn recorded_flight_matches_the_host_and_fits_the_budget(board: Board) {
+    let frames = frames("recorded", None, 10.0);
+    let count = frames.len();
+    check_scenario_within(
+        board,
+        "recorded flight (10 s)",
+        &frames,
+        count,
+        RECORDED_TOLERANCES,
+        WorstFrame(609_000),
+    );
 }
 
 /// The M7 profile (Cortex-M7, f64 in hardware, `mps2-an500`): the same answers as
@@ -939,6 +1025,16 @@ macro_rules! f32_suite {
 
             /// The board of this module's tests.
             const BOARD: Board = $board;
+
+            #[test]
+            fn steady_matches_the_host_and_fits_the_budget() {
+                super::steady_matches_the_host_and_fits_the_budget(BOARD);
+            }
+
+            #[test]
+            fn recorded_flight_matches_the_host_and_fits_the_budget() {
+                super::recorded_flight_matches_the_host_and_fits_the_budget(BOARD);
+            }
 
             #[test]
             fn acceleration_matches_the_host_and_fits_the_budget() {
