@@ -590,7 +590,7 @@ fn static_margin_text(
     }
     let _ = writeln!(
         s,
-        "The towing point must be ahead of the CG (the aft limit within 5 % of it) below {}",
+        "The towing point must be ahead of the CG (the aft limit within 5 % of it) below a static margin of {}",
         sweep.describe_boundary()
     );
     files_text(&mut s, out, files);

@@ -410,7 +410,7 @@ impl StaticMarginSweep {
     pub fn describe_boundary(&self) -> String {
         match (self.boundary_margin, self.bracket()) {
             (Some(b), Some((lo, hi))) => format!(
-                "static margin {:.1} % of the body length (the aft limit is within 5 % of the CG at {:.1} %, farther behind at {:.1} %)",
+                "{:.1} % of the body length (the aft limit is within 5 % of the CG at {:.1} %, farther behind at {:.1} %)",
                 100.0 * b,
                 100.0 * lo,
                 100.0 * hi
