@@ -882,6 +882,34 @@ fn sweep_errors_are_usage_errors() {
             vec!["sweep", "speed", "--segments", "0"],
             "--segments must be between",
         ),
+        (
+            vec!["sweep", "speed", "--tolerance", "0.01"],
+            "--tolerance does not apply",
+        ),
+        (
+            vec!["sweep", "tow-point", "--margin", "1"],
+            "--margin does not apply",
+        ),
+        (
+            vec!["sweep", "static-margin", "--margin", "1"],
+            "--margin does not apply",
+        ),
+        (
+            vec!["sweep", "pull-up-rate", "--threshold", "0.1"],
+            "--threshold does not apply",
+        ),
+        (
+            vec!["sweep", "pull-up-rate", "--to", "2"],
+            "a pull-up rate must be above 0 and at most 1",
+        ),
+        (
+            vec!["sweep", "pull-up-rate", "--tolerance", "0"],
+            "--tolerance must be a positive rate",
+        ),
+        (
+            vec!["sweep", "static-margin", "--from", "1.5", "--to", "1.5"],
+            "off the body",
+        ),
         (vec!["sweep", "sideways"], "invalid value 'sideways'"),
         (vec!["study", "everything"], "invalid value 'everything'"),
     ] {
