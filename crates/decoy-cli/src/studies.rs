@@ -9,6 +9,10 @@ use decoy_config::SystemConfig;
 use decoy_sim::report::{ReportOptions, Verdict, write_report};
 use decoy_sim::study::{StudySpec, discretisation_study, write_study};
 use decoy_sim::sweep::{
+    PullUpSpec, PullUpSweep, StaticMarginSpec, StaticMarginSweep, pull_up_sweep,
+    static_margin_sweep, write_pull_up_sweep, write_static_margin_sweep,
+};
+use decoy_sim::sweep::{
     SettlingSpec, SettlingSweep, StationVariable, SteadySweep, SteadySweepSpec, SteadyVariable,
     SweepRange, layout, layout_parts, settling_sweep, steady_sweep, write_settling_sweep,
     write_steady_sweep,
@@ -34,6 +38,13 @@ pub enum SweepKind {
     TowPoint,
     /// CG decoy.x_cg at the configured towing point (default 0.05 to 0.5 m by 0.025): settling runs.
     Cg,
+    /// Pull-up rate, rad/s (default 0.02 to 0.2 by 0.02 at Mach 0.6, 9 km, then
+    /// bisection): the largest rate that keeps the cable out of the exhaust plume.
+    PullUpRate,
+    /// Aerodynamic static margin, fraction of the body length (default 0 to 0.45 by
+    /// 0.05, then bisection): the aftmost settling towing point at each, and where
+    /// the paper's towing-point rule holds.
+    StaticMargin,
 }
 
 impl SweepKind {
@@ -43,6 +54,8 @@ impl SweepKind {
             SweepKind::Altitude => "altitude",
             SweepKind::TowPoint => "tow-point",
             SweepKind::Cg => "cg",
+            SweepKind::PullUpRate => "pull-up-rate",
+            SweepKind::StaticMargin => "static-margin",
         }
     }
 }
@@ -90,6 +103,14 @@ pub struct SweepArgs {
     /// The final window judged, s (tow-point, cg; default 2).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     window: Option<f64>,
+    /// Bisection tolerance (pull-up-rate: rad/s, default 0.001; static-margin: the
+    /// towing-point limit, m, default 0.5 % of the body length).
+    #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
+    tolerance: Option<f64>,
+    /// Pull-up-rate: a run keeps clear when its smallest cable-plume clearance is at
+    /// least this, m (default 0).
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    margin: Option<f64>,
     /// Output directory (default: out/sweep-KIND).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -167,6 +188,15 @@ pub fn sweep_command(
         ("--threshold", args.threshold.is_some()),
         ("--window", args.window.is_some()),
     ];
+    let search_flags = [
+        ("--tolerance", args.tolerance.is_some()),
+        ("--margin", args.margin.is_some()),
+    ];
+    if !matches!(args.kind, SweepKind::PullUpRate | SweepKind::StaticMargin) {
+        for (flag, given) in search_flags {
+            not_for(args.kind, flag, given, "pull-up-rate, static-margin")?;
+        }
+    }
     let mut bar = Progress::new("sweeping", json);
     match args.kind {
         SweepKind::Speed | SweepKind::Altitude => {
@@ -188,7 +218,7 @@ pub fn sweep_command(
                 SteadyVariable::Altitude
             };
             for (flag, given) in settling_flags {
-                not_for(args.kind, flag, given, "tow-point, cg")?;
+                not_for(args.kind, flag, given, "tow-point, cg, static-margin")?;
             }
             let (default, mach, altitude) = SteadySweepSpec::paper_range(variable);
             let host = layout_parts(&config.host_layout());
@@ -211,6 +241,61 @@ pub fn sweep_command(
                 return Ok(to_json(&sweep));
             }
             Ok(steady_text(config, &sweep, &out, &files))
+        }
+        SweepKind::PullUpRate => {
+            for (flag, given) in settling_flags {
+                if flag != "--dt" && flag != "--t-end" {
+                    not_for(args.kind, flag, given, "tow-point, cg, static-margin")?;
+                }
+            }
+            let mut spec = PullUpSpec::paper(config);
+            spec.rates = range(args, PullUpSpec::default_range())?;
+            spec.mach = args.mach.unwrap_or(spec.mach);
+            spec.altitude_m = args.altitude.unwrap_or(spec.altitude_m);
+            if let Some(n) = args.segments {
+                spec.segments = n;
+                spec.grading = 1.0;
+            }
+            spec.grading = args.grading.unwrap_or(spec.grading);
+            spec.dt = args.dt.unwrap_or(spec.dt);
+            spec.t_end = args.t_end.unwrap_or(spec.t_end);
+            spec.tolerance_radps = args.tolerance.unwrap_or(spec.tolerance_radps);
+            spec.margin_m = args.margin.unwrap_or(spec.margin_m);
+            let sweep = pull_up_sweep(config, &spec, |f| bar.update(f));
+            bar.finish();
+            let sweep = sweep?;
+            let files = write_pull_up_sweep(&sweep, &out, !args.no_plots)?;
+            if json {
+                return Ok(to_json(&sweep));
+            }
+            Ok(pull_up_text(config, &sweep, &out, &files))
+        }
+        SweepKind::StaticMargin => {
+            not_for(args.kind, "--margin", args.margin.is_some(), "pull-up-rate")?;
+            let mut spec = StaticMarginSpec::paper(config);
+            spec.margins = range(args, StaticMarginSpec::default_range())?;
+            let settling = &mut spec.settling;
+            settling.mach = args.mach.unwrap_or(settling.mach);
+            settling.altitude_m = args.altitude.unwrap_or(settling.altitude_m);
+            if let Some(n) = args.segments {
+                settling.segments = n;
+                settling.grading = 1.0;
+            }
+            settling.grading = args.grading.unwrap_or(settling.grading);
+            settling.dt = args.dt.unwrap_or(settling.dt);
+            settling.t_end = args.t_end.unwrap_or(settling.t_end);
+            settling.pitch_offset_deg = args.pitch_offset.unwrap_or(settling.pitch_offset_deg);
+            settling.threshold_deg = args.threshold.unwrap_or(settling.threshold_deg);
+            settling.window_s = args.window.unwrap_or(settling.window_s);
+            spec.tolerance_m = args.tolerance.unwrap_or(spec.tolerance_m);
+            let sweep = static_margin_sweep(config, &spec, |f| bar.update(f));
+            bar.finish();
+            let sweep = sweep?;
+            let files = write_static_margin_sweep(&sweep, &out, !args.no_plots)?;
+            if json {
+                return Ok(to_json(&sweep));
+            }
+            Ok(static_margin_text(config, &sweep, &out, &files))
         }
         SweepKind::TowPoint | SweepKind::Cg => {
             let variable = if args.kind == SweepKind::TowPoint {
@@ -272,18 +357,26 @@ fn steady_text(
     );
     let _ = writeln!(
         s,
-        "{:>6} {:>10} {:>9} {:>12} {:>11} {:>11} {:>10} {:>10}",
-        "Mach", "altitude", "speed", "T connection", "T towing", "pitch", "CG behind", "CG below"
+        "{:>6} {:>10} {:>9} {:>12} {:>11} {:>11} {:>10} {:>10} {:>10}",
+        "Mach",
+        "altitude",
+        "speed",
+        "T connection",
+        "T towing",
+        "pitch",
+        "CG behind",
+        "CG below",
+        "to plume"
     );
     let _ = writeln!(
         s,
-        "{:>6} {:>10} {:>9} {:>12} {:>11} {:>11} {:>10} {:>10}",
-        "", "[m]", "[m/s]", "[N]", "[N]", "[deg]", "[m]", "[m]"
+        "{:>6} {:>10} {:>9} {:>12} {:>11} {:>11} {:>10} {:>10} {:>10}",
+        "", "[m]", "[m/s]", "[N]", "[N]", "[deg]", "[m]", "[m]", "[m]"
     );
     for p in &sweep.points {
         let _ = writeln!(
             s,
-            "{:>6.3} {:>10.0} {:>9.2} {:>12.3} {:>11.3} {:>11.4} {:>10.3} {:>10.3}",
+            "{:>6.3} {:>10.0} {:>9.2} {:>12.3} {:>11.3} {:>11.4} {:>10.3} {:>10.3} {:>10.3}",
             p.mach,
             p.altitude_m,
             p.speed_mps,
@@ -291,7 +384,8 @@ fn steady_text(
             p.tension_tow_n,
             p.decoy_pitch_deg,
             p.decoy_cg_behind_m,
-            p.decoy_cg_below_m
+            p.decoy_cg_below_m,
+            p.cable_plume_clearance_m
         );
     }
     files_text(&mut s, out, files);
@@ -364,6 +458,141 @@ fn settling_text(
             opt(p.stopped_s, 3)
         );
     }
+    files_text(&mut s, out, files);
+    s
+}
+
+fn pull_up_text(
+    config: &SystemConfig,
+    sweep: &PullUpSweep,
+    out: &Path,
+    files: &[PathBuf],
+) -> String {
+    let spec = &sweep.spec;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Pull-up rate limit for the exhaust plume: {} ({})",
+        sweep.condition(),
+        config.source
+    );
+    let _ = writeln!(
+        s,
+        "  level to t = 2 s, the flight path rotating up for 5 s, then the climb held; {} segments graded {}, dt {} s, {} s;",
+        spec.segments, spec.grading, spec.dt, spec.t_end
+    );
+    let _ = writeln!(
+        s,
+        "  clear: the smallest cable-plume clearance over the run at least {} m; bisection to {} rad/s",
+        spec.margin_m, spec.tolerance_radps
+    );
+    let _ = writeln!(
+        s,
+        "{:>8} {:>6} {:>11} {:>8} {:>8} {:>10} {:>10} {:>10}",
+        "rate", "clear", "clearance", "at t", "along", "peak T", "min depth", "diverged"
+    );
+    let _ = writeln!(
+        s,
+        "{:>8} {:>6} {:>11} {:>8} {:>8} {:>10} {:>10} {:>10}",
+        "[rad/s]", "", "[m]", "[s]", "[m]", "[N]", "[m]", "at [s]"
+    );
+    for p in &sweep.points {
+        let _ = writeln!(
+            s,
+            "{:>8.4} {:>6} {:>11.3} {:>8.3} {:>8.2} {:>10.1} {:>10.2} {:>10}{}",
+            p.rate_radps,
+            if p.clear { "yes" } else { "NO" },
+            p.min_clearance_m,
+            p.t_at_min_clearance_s,
+            p.along_at_min_clearance_m,
+            p.max_tension_connection_n,
+            p.min_decoy_depth_m,
+            p.stopped_s.map_or("-".to_owned(), |t| format!("{t:.3}")),
+            if p.bisection { "  (bisection)" } else { "" }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "Largest rate keeping the cable out of the plume: {}",
+        sweep.describe_limit()
+    );
+    files_text(&mut s, out, files);
+    s
+}
+
+fn static_margin_text(
+    config: &SystemConfig,
+    sweep: &StaticMarginSweep,
+    out: &Path,
+    files: &[PathBuf],
+) -> String {
+    let spec = &sweep.spec.settling;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Towing-point rule against the aerodynamic static margin: x_cg = {} m, body {} m, Mach {} at {} m ({}; its own margin {:.1} %)",
+        sweep.x_cg_m,
+        sweep.length_m,
+        spec.mach,
+        spec.altitude_m,
+        config.source,
+        100.0 * sweep.configured_margin
+    );
+    let _ = writeln!(
+        s,
+        "  the band of towing points that settle from a {:+} deg pitch ({} segments graded {}, dt {} s, {} s; settled: half the peak-to-peak pitch in the last {} s at most {} deg)",
+        spec.pitch_offset_deg,
+        spec.segments,
+        spec.grading,
+        spec.dt,
+        spec.t_end,
+        spec.window_s,
+        spec.threshold_deg
+    );
+    let _ = writeln!(
+        s,
+        "{:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>12} {:>10} {:>5}",
+        "margin",
+        "x_cp",
+        "x_mrp",
+        "fwd x_tow",
+        "aft x_tow",
+        "fwd - cg",
+        "aft - cg",
+        "ahead of CG",
+        "5-20 % ok",
+        "runs"
+    );
+    let _ = writeln!(
+        s,
+        "{:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>12} {:>10} {:>5}",
+        "[% L]", "[m]", "[m]", "[m]", "[m]", "[% L]", "[% L]", "", "", ""
+    );
+    let m = |v: Option<f64>| v.map_or("none".to_owned(), |x| format!("{x:.4}"));
+    let pct = |v: Option<f64>| v.map_or("-".to_owned(), |d| format!("{:+.2}", 100.0 * d));
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    for p in &sweep.points {
+        let _ = writeln!(
+            s,
+            "{:>8.2} {:>8.4} {:>8.4} {:>9} {:>9} {:>9} {:>9} {:>12} {:>10} {:>5}{}",
+            100.0 * p.static_margin,
+            p.x_cp_m,
+            p.x_mrp_m,
+            m(p.x_tow_forward_m),
+            m(p.x_tow_aft_m),
+            pct(p.forward_offset),
+            pct(p.aft_offset),
+            yes(p.must_be_ahead),
+            yes(p.rule_band_settles),
+            p.runs,
+            if p.bisection { "  (bisection)" } else { "" }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "The towing point must be ahead of the CG (the aft limit within 5 % of it) below a static margin of {}",
+        sweep.describe_boundary()
+    );
     files_text(&mut s, out, files);
     s
 }

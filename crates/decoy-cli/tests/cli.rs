@@ -682,11 +682,12 @@ fn trim_and_simulate_keys_mean_the_same() {
         shared >= 4,
         "trim and simulate share the CG and tension keys"
     );
-    // The connection point is 4 m behind and 1 m below the reference point.
+    // The connection point (config/reference-system.toml) is 2 m behind and 1.7 m
+    // below the reference point.
     let behind = num(&trim, "decoy_cg_behind_m") - num(&trim, "decoy_cg_behind_connection_m");
     let below = num(&trim, "decoy_cg_below_m") - num(&trim, "decoy_cg_below_connection_m");
     assert!(
-        (behind - 4.0).abs() < 1e-9 && (below - 1.0).abs() < 1e-9,
+        (behind - 2.0).abs() < 1e-9 && (below - 1.7).abs() < 1e-9,
         "{behind}, {below}"
     );
 }
@@ -796,6 +797,7 @@ fn sweep_speed_json_is_the_table_and_writes_the_files() {
         "decoy_aoa_deg",
         "decoy_cg_behind_m",
         "decoy_cg_below_m",
+        "cable_plume_clearance_m",
     ]
     .into_iter()
     .collect();
@@ -879,6 +881,34 @@ fn sweep_errors_are_usage_errors() {
         (
             vec!["sweep", "speed", "--segments", "0"],
             "--segments must be between",
+        ),
+        (
+            vec!["sweep", "speed", "--tolerance", "0.01"],
+            "--tolerance does not apply",
+        ),
+        (
+            vec!["sweep", "tow-point", "--margin", "1"],
+            "--margin does not apply",
+        ),
+        (
+            vec!["sweep", "static-margin", "--margin", "1"],
+            "--margin does not apply",
+        ),
+        (
+            vec!["sweep", "pull-up-rate", "--threshold", "0.1"],
+            "--threshold does not apply",
+        ),
+        (
+            vec!["sweep", "pull-up-rate", "--to", "2"],
+            "a pull-up rate must be above 0 and at most 1",
+        ),
+        (
+            vec!["sweep", "pull-up-rate", "--tolerance", "0"],
+            "--tolerance must be a positive rate",
+        ),
+        (
+            vec!["sweep", "static-margin", "--from", "1.5", "--to", "1.5"],
+            "off the body",
         ),
         (vec!["sweep", "sideways"], "invalid value 'sideways'"),
         (vec!["study", "everything"], "invalid value 'everything'"),

@@ -42,6 +42,16 @@ pub const BUILTIN_AERO_CSV: &str = include_str!("../../../config/decoy-aero.csv"
 pub const BUILTIN_TOML_NAME: &str = "built-in reference-system.toml";
 /// How errors in the built-in aerodynamic table name their file.
 pub const BUILTIN_AERO_NAME: &str = "built-in decoy-aero.csv";
+/// The second decoy's moment reference point, m from the nose
+/// (`config/weak-stability-decoy.toml`: the reference system with this and the
+/// towing point changed, a weakly stable decoy, static margin 10 % of its length,
+/// under which the paper's towing-point rule holds).
+pub const WEAK_STABILITY_X_MRP: f64 = 0.1715;
+/// The second decoy's towing point, m from the nose: 5 % of the body length ahead
+/// of the CG, as the paper's rule recommends.
+pub const WEAK_STABILITY_X_TOW: f64 = 0.225;
+/// How the built-in weak-stability decoy names itself.
+pub const WEAK_STABILITY_NAME: &str = "built-in weak-stability-decoy.toml";
 /// The only atmosphere model supported (`environment.atmosphere`).
 pub const SUPPORTED_ATMOSPHERE: &str = "ISA-1976";
 /// The header line of the aerodynamic table.
@@ -261,6 +271,19 @@ impl SystemConfig {
         Self::parse(BUILTIN_TOML, BUILTIN_TOML_NAME, |_| {
             Ok((BUILTIN_AERO_NAME.to_owned(), BUILTIN_AERO_CSV.to_owned()))
         })
+    }
+
+    /// The second decoy, built in: the reference system with the decoy's moment
+    /// reference point at [`WEAK_STABILITY_X_MRP`] and its towing point at
+    /// [`WEAK_STABILITY_X_TOW`] (what
+    /// `config/weak-stability-decoy.toml` describes; a test checks they agree).
+    pub fn weak_stability() -> Result<Self, ConfigError> {
+        let mut config = Self::builtin()?;
+        config.decoy.x_mrp = WEAK_STABILITY_X_MRP;
+        config.decoy.x_tow = WEAK_STABILITY_X_TOW;
+        config.source = WEAK_STABILITY_NAME.to_owned();
+        config.validate()?;
+        Ok(config)
     }
 
     /// Loads a system TOML file; `decoy.aero_table` is resolved relative to the
@@ -716,8 +739,9 @@ mod tests {
     fn builtin_parses_and_builds_models() {
         let config = SystemConfig::builtin().unwrap();
         assert_eq!(config.environment.atmosphere, "ISA-1976");
-        assert_eq!(config.aircraft.connection_point, [-4.0, 0.0, 1.0]);
-        assert_eq!(config.aircraft.exhaust_half_angle_deg, 5.0);
+        assert_eq!(config.aircraft.connection_point, [-2.0, 0.0, 1.7]);
+        assert_eq!(config.aircraft.exhaust_half_angle_deg, 3.0);
+        assert_eq!(config.aircraft.exhaust_length, 35.0);
         assert_eq!(config.aircraft.envelope_radius, 1.6);
         assert_eq!(config.cable.allowable_tension, 1200.0);
         assert_eq!(config.decoy.inertia_cg, [0.0025, 0.27, 0.27]);
@@ -755,6 +779,23 @@ mod tests {
         let file = SystemConfig::from_file(&path).unwrap();
         assert_eq!(file.cable, builtin.cable);
         assert_eq!(file.aero_rows, builtin.aero_rows);
+    }
+
+    #[test]
+    fn weak_stability_file_is_the_builtin_weak_decoy() {
+        let reference = SystemConfig::builtin().unwrap();
+        let weak = SystemConfig::weak_stability().unwrap();
+        assert!(weak.decoy.x_mrp < reference.decoy.x_mrp);
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/weak-stability-decoy.toml");
+        let file = SystemConfig::from_file(&path).unwrap();
+        // The file repeats the reference system's sections: they must agree, so
+        // that `--config config/weak-stability-decoy.toml` flies what the report does.
+        assert_eq!(file.environment, weak.environment);
+        assert_eq!(file.aircraft, weak.aircraft);
+        assert_eq!(file.cable, weak.cable);
+        assert_eq!(file.decoy, weak.decoy);
+        assert_eq!(file.aero_rows, weak.aero_rows);
     }
 
     #[test]

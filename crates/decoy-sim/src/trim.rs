@@ -52,6 +52,9 @@ pub struct TrimPoint {
     pub decoy_cg_behind_m: f64,
     /// Decoy CG below the flight path (the decoy's depth), m.
     pub decoy_cg_below_m: f64,
+    /// Smallest distance from the cable (every joint and segment midpoint) to the
+    /// exhaust plume's surface, m (negative inside), as `decoy simulate` measures it.
+    pub cable_plume_clearance_m: f64,
     /// Decoy CG behind the cable's connection point along the flight path, m.
     #[serde(skip)]
     pub decoy_cg_behind_connection_m: f64,
@@ -200,6 +203,12 @@ fn trim_point_with<const N: usize>(
             }
         })
         .collect();
+    let plume = crate::geometry::plume_from_config::<f64>(&config.aircraft);
+    let (cable_plume_clearance_m, _) = crate::geometry::cable_plume_clearance(
+        &plume,
+        &aircraft,
+        (0..=n).map(|j| out.joint_position(j)),
+    );
     let connection = out.joint_position(0);
     let (pitch, aoa, cg, from_connection) = match out.decoy() {
         Some(d) => (
@@ -227,6 +236,7 @@ fn trim_point_with<const N: usize>(
         decoy_aoa_deg: aoa,
         decoy_cg_behind_m: -cg.x,
         decoy_cg_below_m: cg.z,
+        cable_plume_clearance_m,
         decoy_cg_behind_connection_m: -from_connection.x,
         decoy_cg_below_connection_m: from_connection.z,
         cable,

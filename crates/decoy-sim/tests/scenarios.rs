@@ -675,9 +675,10 @@ fn outputs_have_their_documented_shape() {
     assert_eq!(rows.len(), 4 * 17);
     let times: Vec<f64> = rows.iter().step_by(17).map(|r| r[0]).collect();
     assert_eq!(times, [0.0, 1.0, 2.0, 2.5]);
-    // Joint 0 is the connection point: 4 m behind, 1 m below the reference point
-    // in level flight at t = 0; the last joint is 100 m along the cable.
-    assert!((rows[0][3] - 4.0).abs() < 1e-6 && (rows[0][5] - 1.0).abs() < 1e-6);
+    // Joint 0 is the connection point (the configuration's, behind and below the
+    // reference point in level flight at t = 0); the last joint is 100 m along the cable.
+    let connection = config().aircraft.connection_point;
+    assert!((rows[0][3] + connection[0]).abs() < 1e-6 && (rows[0][5] - connection[2]).abs() < 1e-6);
     assert!((rows[16][2] - 100.0).abs() < 1e-6);
     for name in decoy_sim::PLOT_NAMES {
         for ext in ["png", "svg"] {
@@ -700,12 +701,15 @@ fn straight_initial_state_trails_behind_the_connection_point() {
     let first = &rows[0];
     // Decoy along the flight direction, level, just below the connection point.
     assert!(first[column("decoy_pitch_deg")].abs() < 1e-9);
-    assert!((first[column("decoy_cg_below_m")] - 1.0).abs() < 1e-6);
-    assert!(first[column("decoy_cg_behind_m")] > 104.0);
+    let below_connection = config().aircraft.connection_point[2];
+    assert!((first[column("decoy_cg_below_m")] - below_connection).abs() < 1e-6);
+    // Behind the connection point by the cable's 100 m and the decoy's towing point
+    // to CG distance.
+    assert!(first[column("decoy_cg_behind_m")] > 100.0 - config().aircraft.connection_point[0]);
     let cable = std::fs::read_to_string(out.out_dir.join("cable.csv")).unwrap();
     for line in cable.lines().skip(1).take(17) {
         let below: f64 = line.split(',').nth(5).unwrap().parse().unwrap();
-        assert!((below - 1.0).abs() < 1e-9, "{line}");
+        assert!((below - below_connection).abs() < 1e-9, "{line}");
     }
 }
 

@@ -4,8 +4,10 @@
 use decoy_config::SystemConfig;
 use decoy_sim::study::{StudySpec, Tolerances, discretisation_study};
 use decoy_sim::sweep::{
-    SettlingSpec, StationVariable, SteadySweepSpec, SteadyVariable, SweepRange, settling_sweep,
-    steady_sweep, write_settling_sweep, write_steady_sweep,
+    PullUpSpec, SettlingSpec, StaticMarginSpec, StationVariable, SteadySweepSpec, SteadyVariable,
+    SweepRange, centre_of_pressure_offset, pull_up_sweep, settling_sweep, static_margin,
+    static_margin_sweep, steady_sweep, with_static_margin, write_pull_up_sweep,
+    write_settling_sweep, write_steady_sweep,
 };
 
 fn config() -> SystemConfig {
@@ -200,4 +202,85 @@ fn settling_errors_name_the_source_of_the_time_step() {
         ("command line", "--dt"),
         "{e}"
     );
+}
+
+/// The pull-up search flies the grid, bisects between the last clear rate and the
+/// first that enters the plume, and reports a limit bracketed by a clear run and a
+/// run in the plume; the reference installation's limit is the paper's 0.10 rad/s
+/// or a little above.
+#[test]
+fn pull_up_rate_search_brackets_the_limit() {
+    let config = config();
+    let mut spec = PullUpSpec::paper(&config);
+    spec.rates = vec![0.06, 0.14];
+    spec.tolerance_radps = 0.02;
+    let sweep = pull_up_sweep(&config, &spec, |_| {}).unwrap();
+    let (limit, entering) = (
+        sweep.limit_radps.unwrap(),
+        sweep.first_entering_radps.unwrap(),
+    );
+    assert!(entering - limit <= 0.02 + 1e-9 && entering > limit);
+    assert!(
+        (0.09..=0.125).contains(&limit),
+        "{}",
+        sweep.describe_limit()
+    );
+    let at = |r: f64| sweep.points.iter().find(|p| p.rate_radps == r).unwrap();
+    assert!(at(limit).clear && at(limit).min_clearance_m >= 0.0);
+    assert!(!at(entering).clear && at(entering).min_clearance_m < 0.0);
+    assert!(sweep.points.iter().filter(|p| p.bisection).count() >= 2);
+    // Faster is closer, and steady flight at Mach 0.6 is well clear.
+    let clearances: Vec<f64> = sweep.points.iter().map(|p| p.min_clearance_m).collect();
+    assert!(decreasing(&clearances), "{clearances:?}");
+    assert!(sweep.points[0].initial_clearance_m > 1.0);
+    let dir = out_dir("pull-up-rate");
+    let files = write_pull_up_sweep(&sweep, &dir, false).unwrap();
+    assert_eq!(files.len(), 2);
+    let table = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    assert!(table.starts_with(decoy_sim::sweep::PULL_UP_SWEEP_HEADER));
+    assert_eq!(table.lines().count(), sweep.points.len() + 1);
+}
+
+/// The static margin is the centre of pressure behind the CG over the body length:
+/// 41 % for the reference decoy, 10 % for the weak-stability decoy; moving the
+/// moment reference point sets it, and a margin that would put the point off the
+/// body is a usage error.
+#[test]
+fn static_margin_of_the_two_decoys() {
+    let reference = config();
+    let weak = SystemConfig::weak_stability().unwrap();
+    let offset = centre_of_pressure_offset(&reference).unwrap();
+    assert!((offset - 0.1885).abs() < 1e-3, "{offset}");
+    assert!((static_margin(&reference).unwrap() - 0.409).abs() < 1e-3);
+    assert!((static_margin(&weak).unwrap() - 0.10).abs() < 1e-3);
+    let moved = with_static_margin(&reference, 0.10).unwrap();
+    assert!((moved.decoy.x_mrp - weak.decoy.x_mrp).abs() < 1e-3);
+    assert!((static_margin(&moved).unwrap() - 0.10).abs() < 1e-12);
+    let e = with_static_margin(&reference, 1.5).unwrap_err();
+    assert!(e.is_usage() && e.to_string().contains("x_mrp"), "{e}");
+}
+
+/// The settled band of towing points of the weak-stability decoy's margin
+/// straddles its CG closely (the aft limit within the rule's 5 %), and the
+/// reference decoy's margin settles far behind its CG.
+#[test]
+fn static_margin_study_finds_the_band() {
+    let config = config();
+    let mut spec = StaticMarginSpec::paper(&config);
+    spec.margins = vec![0.10, 0.40];
+    spec.tolerance_m = 0.02;
+    spec.boundary_bisections = 0;
+    let sweep = static_margin_sweep(&config, &spec, |_| {}).unwrap();
+    let [weak, stiff] = &sweep.points[..] else {
+        panic!("two margins, no bisection: {:?}", sweep.points);
+    };
+    let (fwd, aft) = (weak.forward_offset.unwrap(), weak.aft_offset.unwrap());
+    assert!(fwd < 0.0 && fwd > -0.2, "{fwd}");
+    assert!(aft.abs() <= 0.05, "{aft}");
+    assert!(weak.must_be_ahead && !weak.rule_band_settles);
+    assert!(stiff.aft_offset.unwrap() > 0.15 && !stiff.must_be_ahead);
+    assert!(stiff.rule_band_settles);
+    assert_eq!(sweep.bracket(), Some((0.10, 0.40)));
+    let b = sweep.boundary_margin.unwrap();
+    assert!(b > 0.10 && b < 0.40, "{b}");
 }

@@ -211,27 +211,30 @@ pub(super) fn claims(data: &Data) -> Vec<Claim> {
         Verdict::of(closes),
         "",
     );
-    let safe: Vec<String> = data
-        .pull_ups
-        .iter()
-        .filter(|m| m.trace.min_cable_clearance_to_exhaust_m >= 0.0)
-        .map(|m| trim_number(m.rate, 2))
-        .collect();
+    let search = &data.pull_up_limit;
+    let in_advice = search
+        .limit_radps
+        .zip(search.first_entering_radps)
+        .is_some_and(|(lo, _)| (0.10..=0.125).contains(&lo));
     push(
         "Pull-up: keep the rate below 0.10 rad/s to keep the cable out of the exhaust (a limit that depends on the plume)",
         "< 0.10 rad/s",
-        if safe.is_empty() {
-            format!(
-                "the cable enters the plume at every rate flown ({rates} rad/s); in steady flight it clears it by {steady_clearance:.2} m"
-            )
+        format!(
+            "largest rate keeping the cable out of the plume: {} (`decoy sweep pull-up-rate`, Mach {}, {} km, 5 s rotation)",
+            search.describe_limit(),
+            trim_number(search.spec.mach, 2),
+            trim_number(search.spec.altitude_m / 1000.0, 1)
+        ),
+        if in_advice {
+            Verdict::Agrees
         } else {
-            format!(
-                "the cable stays out of the plume at {} rad/s",
-                safe.join(", ")
-            )
+            Verdict::Partly
         },
-        Verdict::Partly,
-        "a limit exists, but for the reference plume (60 m, 5° half-angle) it lies below the slowest rate flown: the steady cable passes close to the plume's far end",
+        if in_advice {
+            "for this installation's plume (its length and spread are the configuration's; the paper: the limit depends on the engine state)"
+        } else {
+            "a limit exists, but not at the paper's 0.10 rad/s: it depends on the plume and the installation"
+        },
     );
     let peaks: Vec<f64> = data
         .pull_ups
@@ -338,7 +341,70 @@ pub(super) fn claims(data: &Data) -> Vec<Claim> {
         } else {
             Verdict::Agrees
         },
-        "the reference decoy's aerodynamic pitch stiffness (centre of pressure 0.65 m from the nose) dominates the tension's moment: the limit is the tow point and CG nearing the centre of pressure",
+        "the reference decoy's aerodynamic pitch stiffness (centre of pressure 0.65 m from the nose, static margin 40 %) dominates the tension's moment: the limit is the tow point and CG nearing the centre of pressure",
+    );
+    let (weak_tow_text, _) = settled_range(&data.weak_tow_point);
+    let (weak_cg_text, _) = settled_range(&data.weak_cg);
+    let weak = &data.weak.decoy;
+    // The aft end of the settled run of towing points at the configured CG.
+    let aft_limit = data
+        .weak_tow_point
+        .points
+        .iter()
+        .filter(|p| p.settling.settled)
+        .map(|p| p.x_tow_m)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let at_cg =
+        aft_limit.is_finite() && ((aft_limit - weak.x_cg) / weak.length).abs() <= 0.05 + 1e-9;
+    let five_ahead = data
+        .weak_tow_point
+        .points
+        .iter()
+        .filter(|p| ((p.x_cg_m - p.x_tow_m) / weak.length - 0.05).abs() < 0.02)
+        .all(|p| p.settling.settled);
+    let twenty_ahead = data
+        .weak_tow_point
+        .points
+        .iter()
+        .filter(|p| {
+            let d = (p.x_cg_m - p.x_tow_m) / weak.length;
+            (0.05 - 1e-9..=0.20 + 1e-9).contains(&d)
+        })
+        .all(|p| p.settling.settled);
+    push(
+        "The same, for a weakly stable decoy (`config/weak-stability-decoy.toml`); 5-20 % ahead of the CG recommended",
+        "yes",
+        format!(
+            "static margin {:.1} %: at x_cg = {} m it {weak_tow_text}; at x_tow = {} m it {weak_cg_text}",
+            100.0 * data.margins.1,
+            trim_number(data.weak_tow_point.fixed_station_m, 3),
+            trim_number(data.weak_cg.fixed_station_m, 3)
+        ),
+        if at_cg && five_ahead && twenty_ahead {
+            Verdict::Agrees
+        } else if at_cg && five_ahead {
+            Verdict::Partly
+        } else {
+            Verdict::Disagrees
+        },
+        if at_cg && five_ahead && !twenty_ahead {
+            "the aft limit is the CG and 5 % ahead settles, as the paper says; but towed more than about 9 % ahead this weakly stable decoy keeps a slow oscillation (section 5.3)"
+        } else if at_cg && five_ahead {
+            "held by the cable's pull, which restores only with the towing point ahead of the CG"
+        } else {
+            "see section 5.3"
+        },
+    );
+    let boundary = &data.static_margin;
+    push(
+        "(beyond the paper) For which decoys the towing point must be ahead of the CG",
+        "not examined",
+        format!(
+            "below an aerodynamic static margin of {} (`decoy sweep static-margin`)",
+            boundary.describe_boundary()
+        ),
+        Verdict::of(boundary.boundary_margin.is_some()),
+        "a finding, not a reproduction: above that margin the decoy's aerodynamics holds it and the towing point may sit behind the CG",
     );
     let pairs: Vec<(f64, f64)> = [&data.tow_point, &data.cg]
         .iter()

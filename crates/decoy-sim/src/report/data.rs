@@ -11,8 +11,10 @@ use crate::record::settling_time;
 use crate::scenario::Scenario;
 use crate::study::{DiscretisationStudy, StudyRow, StudySpec, discretisation_study};
 use crate::sweep::{
-    SettlingSpec, SettlingSweep, StationVariable, SteadySweep, SteadySweepSpec, SteadyVariable,
-    classify_settling, layout_parts, settling_sweep, steady_sweep, trim_number, trim_point,
+    PullUpSpec, PullUpSweep, SettlingSpec, SettlingSweep, StaticMarginSpec, StaticMarginSweep,
+    StationVariable, SteadySweep, SteadySweepSpec, SteadyVariable, classify_settling, layout_parts,
+    pull_up_sweep, settling_sweep, static_margin, static_margin_sweep, steady_sweep, trim_number,
+    trim_point,
 };
 use crate::trace::{Trace, TraceOptions, trace};
 
@@ -40,6 +42,18 @@ pub(super) struct Data {
     pub(super) pull_ups: Vec<Manoeuvre>,
     pub(super) tow_point: SettlingSweep,
     pub(super) cg: SettlingSweep,
+    /// The search for the largest pull-up rate that keeps the cable out of the plume.
+    pub(super) pull_up_limit: PullUpSweep,
+    /// The second decoy (weak static stability).
+    pub(super) weak: SystemConfig,
+    /// Its towing-point and CG settling sweeps.
+    pub(super) weak_tow_point: SettlingSweep,
+    pub(super) weak_cg: SettlingSweep,
+    /// The static margins of the reference and the weak decoys.
+    pub(super) margins: (f64, f64),
+    /// The towing-point limit against the static margin (the configured decoy's
+    /// aerodynamics, its centre of pressure moved).
+    pub(super) static_margin: StaticMarginSweep,
 }
 
 /// Runs every case of the report: the steady sweeps, the discretisation study,
@@ -66,7 +80,7 @@ pub(super) fn collect<F: FnMut(f64)>(
     let study = discretisation_study(
         config,
         &StudySpec::default_for(config),
-        progress.stage(0.45),
+        progress.stage(0.39),
     )?;
 
     let turn_mach = 0.8;
@@ -137,6 +151,7 @@ pub(super) fn collect<F: FnMut(f64)>(
         let trace = run("pull-up", options, &mut progress.stage(0.01))?;
         pull_ups.push(Manoeuvre { rate, trace });
     }
+    let pull_up_limit = pull_up_sweep(config, &PullUpSpec::paper(config), progress.stage(0.06))?;
     let tow_point = settling_sweep(
         config,
         &SettlingSpec::paper(StationVariable::TowPoint, config),
@@ -146,6 +161,23 @@ pub(super) fn collect<F: FnMut(f64)>(
         config,
         &SettlingSpec::paper(StationVariable::Cg, config),
         progress.stage(0.02),
+    )?;
+    let weak = SystemConfig::weak_stability()?;
+    let weak_tow_point = settling_sweep(
+        &weak,
+        &SettlingSpec::paper(StationVariable::TowPoint, &weak),
+        progress.stage(0.02),
+    )?;
+    let weak_cg = settling_sweep(
+        &weak,
+        &SettlingSpec::paper(StationVariable::Cg, &weak),
+        progress.stage(0.02),
+    )?;
+    let margins = (static_margin(config)?, static_margin(&weak)?);
+    let static_margin = static_margin_sweep(
+        config,
+        &StaticMarginSpec::paper(config),
+        progress.stage(0.1),
     )?;
 
     Ok(Data {
@@ -163,6 +195,12 @@ pub(super) fn collect<F: FnMut(f64)>(
         pull_ups,
         tow_point,
         cg,
+        pull_up_limit,
+        weak,
+        weak_tow_point,
+        weak_cg,
+        margins,
+        static_margin,
     })
 }
 

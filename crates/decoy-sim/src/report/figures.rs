@@ -124,10 +124,21 @@ pub(super) fn figures(data: &Data) -> Vec<(String, Vec<Plot>)> {
             ),
         ],
     ));
-    for (prefix, sweep) in [("tow-point", &data.tow_point), ("cg", &data.cg)] {
+    for (stem, panels) in data.pull_up_limit.plots() {
+        figures.push((format!("pull-up-limit-{stem}"), panels));
+    }
+    for (prefix, sweep) in [
+        ("tow-point", &data.tow_point),
+        ("cg", &data.cg),
+        ("weak-tow-point", &data.weak_tow_point),
+        ("weak-cg", &data.weak_cg),
+    ] {
         for (stem, panels) in sweep.plots() {
             figures.push((format!("{prefix}-{stem}"), panels));
         }
+    }
+    for (stem, panels) in data.static_margin.plots() {
+        figures.push((format!("static-margin-{stem}"), panels));
     }
     for (stem, panels) in data.study.plots() {
         figures.push((format!("discretisation-{stem}"), panels));

@@ -48,6 +48,8 @@ pub(super) fn render(
         "Models: the host model, {host} (the paper's converged discretisation), RK4 at {dt_ms} ms, for the steady trims, the acceleration and the turns; the embedded model, {embedded}, for the pull-up rates and the towing-point and CG runs (section 6 shows it reproduces the host model). Positions are relative to the aircraft reference point in the flight-path frame (`docs/outputs.md`): *below* the flight path, *outward* from the turn.\n"
     );
 
+    installation(&mut s, config, data);
+
     let _ = writeln!(s, "## Summary\n");
     let _ = writeln!(
         s,
@@ -85,9 +87,9 @@ pub(super) fn render(
         let _ = writeln!(s, "{title}\n");
         let _ = writeln!(
             s,
-            "| {first} | speed [m/s] | connection tension [N] | towing tension [N] | decoy pitch [deg] | decoy AoA [deg] | decoy CG behind [m] | decoy depth [m] |"
+            "| {first} | speed [m/s] | connection tension [N] | towing tension [N] | decoy pitch [deg] | decoy AoA [deg] | decoy CG behind [m] | decoy depth [m] | cable-plume clearance [m] |"
         );
-        let _ = writeln!(s, "|---:|---:|---:|---:|---:|---:|---:|---:|");
+        let _ = writeln!(s, "|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
         for p in &sweep.points {
             let v = match sweep.spec.variable {
                 SteadyVariable::Speed => trim_number(p.mach, 2),
@@ -95,14 +97,15 @@ pub(super) fn render(
             };
             let _ = writeln!(
                 s,
-                "| {v} | {:.1} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {:.3} |",
+                "| {v} | {:.1} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {:.3} | {:.2} |",
                 p.speed_mps,
                 p.tension_connection_n,
                 p.tension_tow_n,
                 p.decoy_pitch_deg,
                 p.decoy_aoa_deg,
                 p.decoy_cg_behind_m,
-                p.decoy_cg_below_m
+                p.decoy_cg_below_m,
+                p.cable_plume_clearance_m
             );
         }
         let _ = writeln!(s);
@@ -117,7 +120,11 @@ pub(super) fn render(
             &format!("{prefix}-tension-profiles"),
             "Tension along the cable",
         );
-        figure(&mut s, &format!("{prefix}-decoy"), "Decoy pitch and depth");
+        figure(
+            &mut s,
+            &format!("{prefix}-decoy"),
+            "Decoy pitch and depth, and the cable's clearance to the exhaust plume",
+        );
         figure(
             &mut s,
             &format!("{prefix}-tensions"),
@@ -234,11 +241,7 @@ pub(super) fn render(
         "pull-up",
         "Pull-up: connection tension, cable clearance to the plume, decoy depth",
     );
-    let _ = writeln!(
-        s,
-        "The faster the pull-up, the higher the tension, the closer the decoy comes to the flight path (at 0.20 rad/s it swings above it when the cable snaps taut) and the deeper the cable cuts into the plume, as the paper says. In the reference system the steady cable at Mach 0.6 passes {:.2} m from the widening plume near its far end, so even 0.05 rad/s takes it in: the paper's 0.10 rad/s advice belongs to its own plume (it says so: the limit depends on the engine state).\n",
-        data.pull_ups[0].trace.samples[0].exhaust_clearance
-    );
+    pull_up_limit(&mut s, data);
 
     // 4. Turn.
     let _ = writeln!(s, "## 4. Level turn (Figs. 30-31)\n");
@@ -311,49 +314,12 @@ pub(super) fn render(
         trim_number(spec.threshold_deg, 3),
         trim_number(spec.threshold_deg, 3)
     );
-    for (title, sweep) in [
-        ("### 5.1 Towing point", &data.tow_point),
-        ("### 5.2 CG", &data.cg),
+    for (title, prefix, sweep) in [
+        ("### 5.1 Towing point", "tow-point", &data.tow_point),
+        ("### 5.2 CG", "cg", &data.cg),
     ] {
         let _ = writeln!(s, "{title}\n");
-        let _ = writeln!(
-            s,
-            "| x_tow [m] | x_cg [m] | trim | trim pitch [deg] | trim tension [N] | settled | settling time [s] | final amplitude [deg] | diverged at [s] |"
-        );
-        let _ = writeln!(s, "|---:|---:|:---|---:|---:|:---|---:|---:|---:|");
-        let opt = |v: Option<f64>, d: usize| v.map_or("-".to_owned(), |v| format!("{v:.d$}"));
-        for p in &sweep.points {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} | {} | {:.4} | {} |",
-                trim_number(p.x_tow_m, 3),
-                trim_number(p.x_cg_m, 3),
-                if p.trim_exists { "yes" } else { "no" },
-                opt(p.trim_pitch_deg, 3),
-                opt(p.trim_tension_connection_n, 1),
-                if p.settling.settled { "yes" } else { "**no**" },
-                opt(p.settling.settling_time_s, 3),
-                p.settling.final_amplitude_deg,
-                opt(p.stopped_s, 3)
-            );
-        }
-        let _ = writeln!(s);
-        let prefix = sweep.spec.variable.name();
-        figure(
-            &mut s,
-            &format!("{prefix}-settling"),
-            "Settling time (gaps: not settled) and the final pitch amplitude",
-        );
-        figure(
-            &mut s,
-            &format!("{prefix}-trim"),
-            "Decoy pitch and connection tension at trim",
-        );
-        figure(
-            &mut s,
-            &format!("{prefix}-pitch-histories"),
-            "Decoy pitch after the perturbation",
-        );
+        settling_table(&mut s, prefix, sweep);
     }
     let _ = writeln!(
         s,
@@ -361,6 +327,8 @@ pub(super) fn render(
         trim_number(config.decoy.cm_q, 3),
         trim_number(spec.threshold_deg, 3)
     );
+
+    weak_decoy(&mut s, config, data);
 
     // 6. Discretisation.
     let study = &data.study;
@@ -405,7 +373,7 @@ pub(super) fn render(
     s.push_str(&study.embedded.justification(study.configured_embedded));
     let _ = writeln!(
         s,
-        "\n## Regenerating\n\n`{}` runs every case above and rewrites this file and `{FIGURES_DIR}/`. The individual studies have their own commands with tables (CSV) and plots: `decoy sweep speed|altitude|tow-point|cg`, `decoy study discretisation`, `decoy simulate --scenario acceleration|pull-up|turn` (see `docs/sweeps.md` and `docs/outputs.md`).",
+        "\n## Regenerating\n\n`{}` runs every case above and rewrites this file and `{FIGURES_DIR}/`. The individual studies have their own commands with tables (CSV) and plots: `decoy sweep speed|altitude|tow-point|cg|pull-up-rate|static-margin`, `decoy study discretisation`, `decoy simulate --scenario acceleration|pull-up|turn` (see `docs/sweeps.md` and `docs/outputs.md`).",
         options.command
     );
     s
@@ -427,4 +395,262 @@ pub(super) fn rates_of(manoeuvres: &[Manoeuvre]) -> String {
         .map(|m| trim_number(m.rate, 2))
         .collect::<Vec<_>>()
         .join(" / ")
+}
+
+/// A settling sweep's table and its three figures (stems `<prefix>-...`).
+fn settling_table(s: &mut String, prefix: &str, sweep: &crate::sweep::SettlingSweep) {
+    let _ = writeln!(
+        s,
+        "| x_tow [m] | x_cg [m] | trim | trim pitch [deg] | trim tension [N] | settled | settling time [s] | final amplitude [deg] | diverged at [s] |"
+    );
+    let _ = writeln!(s, "|---:|---:|:---|---:|---:|:---|---:|---:|---:|");
+    let opt = |v: Option<f64>, d: usize| v.map_or("-".to_owned(), |v| format!("{v:.d$}"));
+    for p in &sweep.points {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {:.4} | {} |",
+            trim_number(p.x_tow_m, 3),
+            trim_number(p.x_cg_m, 3),
+            if p.trim_exists { "yes" } else { "no" },
+            opt(p.trim_pitch_deg, 3),
+            opt(p.trim_tension_connection_n, 1),
+            if p.settling.settled { "yes" } else { "**no**" },
+            opt(p.settling.settling_time_s, 3),
+            p.settling.final_amplitude_deg,
+            opt(p.stopped_s, 3)
+        );
+    }
+    let _ = writeln!(s);
+    figure(
+        s,
+        &format!("{prefix}-settling"),
+        "Settling time (gaps: not settled) and the final pitch amplitude",
+    );
+    figure(
+        s,
+        &format!("{prefix}-trim"),
+        "Decoy pitch and connection tension at trim",
+    );
+    figure(
+        s,
+        &format!("{prefix}-pitch-histories"),
+        "Decoy pitch after the perturbation",
+    );
+}
+
+/// The installation: where the cable leaves the aircraft, the plume, the
+/// envelope, and the steady clearance over the paper's envelope.
+fn installation(s: &mut String, config: &SystemConfig, data: &Data) {
+    let a = &config.aircraft;
+    let v = |p: [f64; 3]| {
+        format!(
+            "({}, {}, {})",
+            trim_number(p[0], 3),
+            trim_number(p[1], 3),
+            trim_number(p[2], 3)
+        )
+    };
+    let end_radius =
+        a.exhaust_nozzle_radius + a.exhaust_length * a.exhaust_half_angle_deg.to_radians().tan();
+    let (speed_min, speed_at) = smallest_clearance(&data.speed.points);
+    let (altitude_min, altitude_at) = smallest_clearance(&data.altitude.points);
+    let _ = writeln!(
+        s,
+        "**The installation** (`[aircraft]` of the configuration, aircraft body axes FRD from its reference point; the configuration's comments give the reasons): the cable leaves the aircraft at {} m, the engine nozzle's exit is centred at {} m with radius {} m, and the hot part of the exhaust jet is taken as a cone along {} widening at {}° half-angle for {} m (radius {:.2} m at its end); the collision envelope is a capsule of radius {} m from {} to {} m. In steady level flight the cable clears that plume by at least {:.2} m from Mach 0.5 to 0.9 at 9 km ({}) and {:.2} m from 3 to 12 km at Mach 0.7 ({}); the design asked for at least 1 m everywhere, so that a monitor of the exhaust requirement stays quiet in steady flight and speaks only in manoeuvres (section 3).\n",
+        v(a.connection_point),
+        v(a.exhaust_nozzle),
+        trim_number(a.exhaust_nozzle_radius, 3),
+        v(a.exhaust_axis),
+        trim_number(a.exhaust_half_angle_deg, 3),
+        trim_number(a.exhaust_length, 3),
+        end_radius,
+        trim_number(a.envelope_radius, 3),
+        v(a.envelope_fore),
+        v(a.envelope_aft),
+        speed_min,
+        speed_at,
+        altitude_min,
+        altitude_at,
+    );
+}
+
+/// The smallest steady cable-plume clearance of a sweep and where, in words.
+pub(super) fn smallest_clearance(points: &[crate::sweep::TrimPoint]) -> (f64, String) {
+    points
+        .iter()
+        .map(|p| {
+            (
+                p.cable_plume_clearance_m,
+                format!(
+                    "least at Mach {}, {} km",
+                    trim_number(p.mach, 2),
+                    trim_number(p.altitude_m / 1000.0, 1)
+                ),
+            )
+        })
+        .fold((f64::INFINITY, String::new()), |best, c| {
+            if c.0 < best.0 { c } else { best }
+        })
+}
+
+/// Section 3's search for the largest rate that keeps the cable out of the plume.
+fn pull_up_limit(s: &mut String, data: &Data) {
+    let sweep = &data.pull_up_limit;
+    let spec = &sweep.spec;
+    let steady = data.pull_ups[0].trace.samples[0].exhaust_clearance;
+    let _ = writeln!(
+        s,
+        "The faster the pull-up, the higher the tension, the closer the decoy comes to the flight path (at 0.20 rad/s it swings above it when the cable snaps taut about 1.5 s after the rotation stops) and the closer the cable comes to the exhaust plume, as the paper says. In steady flight at Mach 0.6 the cable passes {steady:.2} m from the plume. The rotating aircraft carries its nozzle and plume round with it while the cable, dragged through the air, lags below the old flight path; when the rotation stops the cable swings up toward the new flight path and overshoots, and it is then that it comes closest to the plume.\n"
+    );
+    let _ = writeln!(s, "### 3.1 The rate limit (`decoy sweep pull-up-rate`)\n");
+    let _ = writeln!(
+        s,
+        "The same pull-up at every rate from {} to {} rad/s by {}, then a bisection between the fastest rate that stays clear and the next, which does not, down to {} rad/s; *clear* means the smallest cable-plume clearance over the whole run (every step, every joint and segment midpoint, {} s) is at least {} m. {}, dt {} ms.\n",
+        trim_number(spec.rates.first().copied().unwrap_or(f64::NAN), 4),
+        trim_number(spec.rates.last().copied().unwrap_or(f64::NAN), 4),
+        trim_number(spec.rates.get(1).map_or(0.0, |r| r - spec.rates[0]), 4),
+        trim_number(spec.tolerance_radps, 4),
+        trim_number(spec.t_end, 2),
+        trim_number(spec.margin_m, 3),
+        describe_layout(&data.embedded),
+        trim_number(spec.dt * 1000.0, 6)
+    );
+    let _ = writeln!(
+        s,
+        "| rate [rad/s] | clear | smallest clearance [m] | at t [s] | along the cable [m] | peak connection tension [N] | smallest decoy depth [m] |"
+    );
+    let _ = writeln!(s, "|---:|:---|---:|---:|---:|---:|---:|");
+    for p in &sweep.points {
+        let _ = writeln!(
+            s,
+            "| {}{} | {} | {:.3} | {:.2} | {:.1} | {:.1} | {:.2} |",
+            trim_number(p.rate_radps, 5),
+            if p.bisection { " (bisection)" } else { "" },
+            if p.clear { "yes" } else { "**no**" },
+            p.min_clearance_m,
+            p.t_at_min_clearance_s,
+            p.along_at_min_clearance_m,
+            p.max_tension_connection_n,
+            p.min_decoy_depth_m
+        );
+    }
+    let _ = writeln!(s);
+    figure(
+        s,
+        "pull-up-limit-limit",
+        "Smallest cable-plume clearance against the pull-up rate, and the limit",
+    );
+    figure(
+        s,
+        "pull-up-limit-clearance-histories",
+        "Cable-plume clearance during the pull-up at the grid's rates",
+    );
+    let _ = writeln!(
+        s,
+        "The largest rate that keeps the cable out of the plume is **{}**: the paper's advice (below 0.10 rad/s) holds for this installation. As the paper says, the limit belongs to the plume: a longer or wider hot jet (afterburner) lowers it, a shorter one raises it (`decoy --config` with another `[aircraft]`, then `decoy sweep pull-up-rate`).\n",
+        sweep.describe_limit()
+    );
+}
+
+/// Section 5.3-5.4: the weakly stable decoy, and where the rule starts to hold.
+fn weak_decoy(s: &mut String, config: &SystemConfig, data: &Data) {
+    let (stiff, weak) = data.margins;
+    let w = &data.weak.decoy;
+    let _ = writeln!(
+        s,
+        "### 5.3 A weakly stable decoy: the towing point must be ahead of the CG\n"
+    );
+    let _ = writeln!(
+        s,
+        "The second decoy (`config/weak-stability-decoy.toml`, also built in; `decoy --config config/weak-stability-decoy.toml sweep tow-point`) is the reference decoy with its aerodynamic moment reference point moved forward to x_mrp = {} m (the reference decoy's: {} m): the same forces, acting nearer the nose, as on a body whose fins sit near mid-body. Its *aerodynamic static margin*, the centre of pressure behind the CG (x_mrp - L Cm/CN at the table's first angle) as a fraction of the body length, is {:.1} % against the reference decoy's {:.1} %. Its towing point is x_tow = {} m, {:.1} % of the body length ahead of the CG. Everything else, and the runs, as in 5.1-5.2.\n",
+        trim_number(w.x_mrp, 4),
+        trim_number(config.decoy.x_mrp, 4),
+        100.0 * weak,
+        100.0 * stiff,
+        trim_number(w.x_tow, 4),
+        100.0 * (w.x_cg - w.x_tow) / w.length
+    );
+    for (title, prefix, sweep) in [
+        ("#### Towing point", "weak-tow-point", &data.weak_tow_point),
+        ("#### CG", "weak-cg", &data.weak_cg),
+    ] {
+        let _ = writeln!(s, "{title}\n");
+        settling_table(s, prefix, sweep);
+    }
+    let limit = |sweep: &crate::sweep::SettlingSweep| super::data::settled_range(sweep).0;
+    let _ = writeln!(
+        s,
+        "With its aerodynamics too weak to hold it alone, this decoy is held by the cable's pull, whose moment about the CG restores only while the towing point is ahead of the CG: at x_cg = {} m it {}; at x_tow = {} m it {}. The aft limit is the paper's (its decoy failed for x_tow > 0.26 m at x_cg = 0.27 m and for x_cg < 0.13 m at x_tow = 0.12 m, i.e. about 1 % of the body length ahead of the CG): the towing point must be ahead of the CG, or at most a few per cent behind it, and the rule's 5 % ahead settles. The forward limit is nearer than the rule's 20 %: towed further ahead, the weakly stable decoy keeps a slow pitch oscillation (a period of about 16 s, the cable and decoy swinging together) instead of settling, where the paper saw the settling time grow with |x_cg - x_tow| and advised staying below 20 %. Moving the CG instead also changes the static margin (the centre of pressure stays at {} m): a CG further forward makes the decoy stiffer, so that it settles even with the CG ahead of the towing point, and moving it aft makes the decoy weaker, so that it stops settling once the CG lies a few per cent of the body length behind the towing point (where the margin has fallen below about 9 % and the forward limit has reached the towing point).\n",
+        trim_number(data.weak_tow_point.fixed_station_m, 3),
+        limit(&data.weak_tow_point),
+        trim_number(data.weak_cg.fixed_station_m, 3),
+        limit(&data.weak_cg),
+        trim_number(w.x_cg + weak * w.length, 3),
+    );
+    let sweep = &data.static_margin;
+    let _ = writeln!(
+        s,
+        "### 5.4 Where the rule starts to hold: the static margin (`decoy sweep static-margin`)\n"
+    );
+    let spec = &sweep.spec.settling;
+    let _ = writeln!(
+        s,
+        "For each aerodynamic static margin (the reference decoy with its moment reference point moved so that the centre of pressure lies that far behind its CG of {} m), the band of towing points at which the decoy settles: the stations every 5 % of the body length from the nose to the tail, then the two ends of the run of settled stations nearest the CG by bisection to {} m (the settling run of 5.1: Mach {}, {} km, +{} deg, {} s). The first part of the rule (*the towing point must be ahead of the CG*) holds where the aft end lies within the rule's 5 % of the CG; the second (*5-20 % ahead is fine*) where the band covers 5 to 20 % ahead.\n",
+        trim_number(sweep.x_cg_m, 3),
+        trim_number(sweep.spec.tolerance_m, 4),
+        trim_number(spec.mach, 2),
+        trim_number(spec.altitude_m / 1000.0, 1),
+        trim_number(spec.pitch_offset_deg, 2),
+        trim_number(spec.t_end, 2)
+    );
+    let _ = writeln!(
+        s,
+        "| static margin [% L] | centre of pressure [m] | x_mrp [m] | settled band of x_tow [m] | its ends from the CG [% L] (negative: ahead) | towing point must be ahead of the CG | 5-20 % ahead settles |"
+    );
+    let _ = writeln!(s, "|---:|---:|---:|---:|---:|:---|:---|");
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    for p in &sweep.points {
+        let (band, ends) = match (
+            p.x_tow_forward_m,
+            p.x_tow_aft_m,
+            p.forward_offset,
+            p.aft_offset,
+        ) {
+            (Some(f), Some(a), Some(df), Some(da)) => (
+                format!("{f:.3} to {a:.3}"),
+                format!("{:+.1} to {:+.1}", 100.0 * df, 100.0 * da),
+            ),
+            _ => ("none settles".to_owned(), "-".to_owned()),
+        };
+        let _ = writeln!(
+            s,
+            "| {:.2}{} | {:.4} | {:.4} | {band} | {ends} | {} | {} |",
+            100.0 * p.static_margin,
+            if p.bisection { " (bisection)" } else { "" },
+            p.x_cp_m,
+            p.x_mrp_m,
+            yes(p.must_be_ahead),
+            yes(p.rule_band_settles)
+        );
+    }
+    let _ = writeln!(s);
+    figure(
+        s,
+        "static-margin-limit",
+        "The band of towing points at which the decoy settles, against the aerodynamic static margin",
+    );
+    let behind = data
+        .tow_point
+        .points
+        .iter()
+        .filter(|p| p.settling.settled)
+        .map(|p| p.x_tow_m - p.x_cg_m)
+        .fold(0.0, f64::max);
+    let _ = writeln!(
+        s,
+        "**Finding beyond the paper:** the towing point must be ahead of the CG (the aft limit within 5 % of the body length of it) only for a decoy whose aerodynamic static margin is below {}. Above it the decoy's own aerodynamic moment holds it and the towing point may sit well behind the CG (the reference decoy, at {:.1} %, settles with it up to {} m behind); below it the cable's pull decides and the paper's limit applies. The band of settling towing points narrows about the CG as the margin falls, from both ends: the same weak stiffness that makes the CG the aft limit makes a far-forward towing point oscillate, so the rule's 20 % ahead needs a margin of about 20 %, where the aft limit has already moved behind the CG: no single margin satisfies both halves of the rule with this decoy's aerodynamics and damping. What let the paper's decoy do both is not in the surviving text (its decoy data were lost); in this model more pitch damping does not remove the forward oscillation (cm_q of -200 and -500 instead of -80, tried at a 5 % margin). Its text says its aerodynamic centre lies far behind the CG, but its towing-point results are those of a decoy held by its cable.\n",
+        sweep.describe_boundary(),
+        100.0 * stiff,
+        trim_number(behind, 3)
+    );
 }

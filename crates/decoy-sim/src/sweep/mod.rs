@@ -17,7 +17,9 @@
 //! [`write_steady_sweep`] and [`write_settling_sweep`] write the tables (CSV) and
 //! plots (PNG + SVG); the columns are documented in `docs/sweeps.md`.
 
+mod pull_up;
 mod settling;
+mod static_margin;
 mod steady;
 
 use std::path::{Path, PathBuf};
@@ -31,9 +33,18 @@ use crate::format::{format_number, format_value};
 use crate::scenario::{check_grading, check_segments};
 
 pub use crate::trim::{CablePoint, TrimPoint, trim_point};
+pub use pull_up::{
+    PULL_UP_HISTORY_HEADER, PULL_UP_SWEEP_HEADER, PullUpPoint, PullUpSpec, PullUpSweep,
+    pull_up_sweep, write_pull_up_sweep,
+};
 pub use settling::{
     SETTLING_PITCH_HEADER, SETTLING_SWEEP_HEADER, Settling, SettlingPoint, SettlingSpec,
     SettlingSweep, StationVariable, classify_settling, settling_sweep, write_settling_sweep,
+};
+pub use static_margin::{
+    MarginPoint, RULE_MAX_AHEAD, RULE_MIN_AHEAD, STATIC_MARGIN_HEADER, StaticMarginSpec,
+    StaticMarginSweep, centre_of_pressure_offset, static_margin, static_margin_sweep,
+    with_static_margin, write_static_margin_sweep,
 };
 pub use steady::{
     STEADY_CABLE_HEADER, STEADY_SWEEP_HEADER, SteadySweep, SteadySweepSpec, SteadyVariable,

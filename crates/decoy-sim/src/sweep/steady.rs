@@ -165,7 +165,7 @@ pub fn steady_sweep(
 }
 
 /// The header of a steady sweep's `sweep.csv`.
-pub const STEADY_SWEEP_HEADER: &str = "mach,altitude_m,speed_mps,tension_connection_N,tension_tow_N,tension_max_N,decoy_pitch_deg,decoy_aoa_deg,decoy_cg_behind_m,decoy_cg_below_m";
+pub const STEADY_SWEEP_HEADER: &str = "mach,altitude_m,speed_mps,tension_connection_N,tension_tow_N,tension_max_N,decoy_pitch_deg,decoy_aoa_deg,decoy_cg_behind_m,decoy_cg_below_m,cable_plume_clearance_m";
 /// The header of a steady sweep's `cable.csv`.
 pub const STEADY_CABLE_HEADER: &str = "mach,altitude_m,joint,along_m,behind_m,below_m,tension_N";
 
@@ -185,6 +185,7 @@ impl SteadySweep {
                 p.decoy_aoa_deg,
                 p.decoy_cg_behind_m,
                 p.decoy_cg_below_m,
+                p.cable_plume_clearance_m,
             ];
             s.push_str(&csv_row(&row));
         }
@@ -297,6 +298,15 @@ impl SteadySweep {
                 "depth [m]",
                 "depth",
                 self.points.iter().map(|p| p.decoy_cg_below_m).collect(),
+            ),
+            one(
+                format!("Cable clearance to the exhaust plume ({fixed})"),
+                "clearance [m]",
+                "smallest cable-plume clearance",
+                self.points
+                    .iter()
+                    .map(|p| p.cable_plume_clearance_m)
+                    .collect(),
             ),
         ];
         let tensions = vec![
