@@ -337,7 +337,9 @@ fn check_scenario_within(
 
 /// The advisory line's changes the firmware logged (`advisory line asserted:
 /// seq=N ...` or `deasserted`), as (seq, asserted), must be exactly the outputs at
-/// which the hazard flags go from clear to set or back (the line starts low).
+/// which the management report's advisory line (a monitor at warning or worse, or
+/// a look-ahead advisory: `Management::advisory_line`) goes from clear to set or
+/// back (the line starts low).
 fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
     let logged: Vec<(u32, bool)> = log
         .lines()
@@ -351,23 +353,17 @@ fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
     let mut expected = Vec::new();
     let mut asserted = false;
     for out in flight::outputs(answers) {
-        let hazard = out.flags & advisory_hazards() != 0;
-        if hazard != asserted {
-            expected.push((out.seq, hazard));
-            asserted = hazard;
+        let line = out.management.advisory_line();
+        if line != asserted {
+            expected.push((out.seq, line));
+            asserted = line;
         }
     }
     assert_eq!(
         logged, expected,
-        "{label}: the advisory line's logged changes (seq, asserted) differ from the hazard flags' changes"
+        "{label}: the advisory line's logged changes (seq, asserted) differ from the management reports' changes"
     );
-    println!("{label}: advisory line changes {logged:?} (seq, asserted), as the hazard flags");
-}
-
-/// The hazard flags that assert the advisory line (the firmware's
-/// `advisory::HAZARDS`; the firmware is not a host crate, so it is restated).
-fn advisory_hazards() -> u16 {
-    StatusFlags::OVER_TENSION | StatusFlags::CABLE_IN_PLUME | StatusFlags::DECOY_NEAR_AIRCRAFT
+    println!("{label}: advisory line changes {logged:?} (seq, asserted), as the management reports");
 }
 
 /// The most instructions a whole nominal frame took.
@@ -593,6 +589,7 @@ impl Probe {
                 let mut masked = out;
                 masked.instructions = 0;
                 masked.step_instructions = 0;
+                masked.management_instructions = 0;
                 masked.flags &= !StatusFlags::RECOVERED;
                 assert_eq!(
                     masked, reference,
@@ -683,6 +680,7 @@ fn without_instructions(mut m: DeviceMessage) -> DeviceMessage {
     if let DeviceMessage::Output(o) = &mut m {
         o.instructions = 0;
         o.step_instructions = 0;
+        o.management_instructions = 0;
     }
     m
 }

@@ -1,0 +1,387 @@
+//! The look-ahead: a copy of the controller's solution flown forward over a
+//! horizon with the aircraft holding its current manoeuvre, and what it predicts
+//! for each requirement (the worst margin over the horizon and when, if at all,
+//! the margin falls below zero).
+//!
+//! **The held manoeuvre** ([`HeldManoeuvre`]), from the aircraft's state at the
+//! prediction's start (t0): the body rates stay constant in the body frame (the
+//! attitude keeps rotating at them; angular acceleration zero); the velocity
+//! direction turns with the body (the angle of attack and sideslip are held); the
+//! along-path acceleration (the acceleration's component along the velocity) is
+//! held, so the speed changes linearly (floored at half the initial speed); the
+//! normal acceleration (the rest of the acceleration, the load factor) is held in
+//! the body frame, turning with it. The position, which enters the solution only
+//! through the air density, is p0 + v0 τ + a0 τ²/2 + j0 τ³/6 (j0 the rate of
+//! change of that acceleration at t0; 5 m off after 3 s of a 0.2 rad/s pull-up).
+//!
+//! **The work** is spread over frames: each accepted State frame, after its
+//! Output is computed (the real-time solution is never changed or delayed by the
+//! prediction), runs at most `prediction_steps_per_frame` RK4 steps of the copy.
+//! A prediction starts from the solution of the frame after the previous one
+//! completed, so a new one completes every horizon / (steps per frame x step)
+//! frames; a violation it finds on the way is reported at once (the advisory
+//! does not wait for the rest of the horizon). Each step is at most `prediction_max_step_s` and at most the
+//! controller's wave-speed limit ([`crate::controller::WAVE_STEP_FACTOR`]) at the
+//! copy's last tensions. A step that fails ends the prediction at the time reached.
+//!
+//! The copy is a second solver of capacity `P` on the same model; a model with
+//! more than `P` segments has no look-ahead (its reports say so: no prediction
+//! ever completes).
+
+use nalgebra::UnitQuaternion;
+use solver_core::{AircraftState, FlightPath, Model, Real, Solver, State, Vec3};
+
+use crate::controller::WAVE_STEP_FACTOR;
+use crate::geometry::Geometry;
+use crate::monitor::{ManagementConfig, Measures};
+
+/// The shortest look-ahead step, s: a step that fails at this length ends the
+/// prediction at the time reached.
+const MIN_STEP_S: f64 = 2.5e-4;
+
+/// The aircraft holding the manoeuvre it flies at t0 (see the module's documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldManoeuvre<T: Real> {
+    t0: f64,
+    position: Vec3<T>,
+    velocity: Vec3<T>,
+    acceleration: Vec3<T>,
+    attitude: UnitQuaternion<T>,
+    body_rate: Vec3<T>,
+    /// Body rate in NED at t0.
+    rate_ned: Vec3<T>,
+    speed: T,
+    direction: Vec3<T>,
+    along: T,
+    normal: Vec3<T>,
+    /// Rate of change of the acceleration at t0, NED (the position's third term).
+    jerk: Vec3<T>,
+}
+
+impl<T: Real> HeldManoeuvre<T> {
+    /// The manoeuvre `aircraft` flies at time `t0`.
+    pub fn new(t0: f64, aircraft: &AircraftState<T>) -> Self {
+        let attitude = aircraft.rotation();
+        let speed = aircraft.velocity.norm();
+        let direction = if speed > T::zero() {
+            aircraft.velocity / speed
+        } else {
+            attitude * Vec3::x()
+        };
+        let along = aircraft.acceleration.dot(&direction);
+        let rate_ned = attitude * aircraft.angular_rate;
+        let normal = aircraft.acceleration - direction * along;
+        HeldManoeuvre {
+            t0,
+            position: aircraft.position,
+            velocity: aircraft.velocity,
+            acceleration: aircraft.acceleration,
+            attitude,
+            body_rate: aircraft.angular_rate,
+            rate_ned,
+            speed,
+            direction,
+            along,
+            normal,
+            jerk: rate_ned.cross(&(direction * along + normal)),
+        }
+    }
+}
+
+impl<T: Real> FlightPath<T> for HeldManoeuvre<T> {
+    fn state_at(&self, t: f64) -> AircraftState<T> {
+        let tau = T::lit(t - self.t0);
+        // The body's rotation since t0, in NED: constant body rates are a
+        // constant NED rate too (the rate's axis turns with the body about itself).
+        let turn = UnitQuaternion::from_scaled_axis(self.rate_ned * tau);
+        let attitude = turn * self.attitude;
+        let direction = turn * self.direction;
+        let speed = (self.speed + self.along * tau).max(self.speed * T::lit(0.5));
+        let half = T::lit(0.5);
+        let q = attitude.into_inner();
+        AircraftState {
+            position: self.position
+                + self.velocity * tau
+                + self.acceleration * (half * tau * tau)
+                + self.jerk * (tau * tau * tau * T::lit(1.0 / 6.0)),
+            velocity: direction * speed,
+            acceleration: direction * self.along + turn * self.normal,
+            attitude: [q.w, q.i, q.j, q.k],
+            angular_rate: self.body_rate,
+            angular_acceleration: Vec3::zeros(),
+        }
+    }
+}
+
+/// What one completed prediction found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prediction<T: Real> {
+    /// Time of the state it started from, s.
+    pub from: f64,
+    /// Horizon reached, s (the configured one unless a step failed).
+    pub horizon: f64,
+    /// Smallest margin over the horizon, per requirement (posture, collision,
+    /// tension, exhaust; units of [`crate::monitor`]).
+    pub worst: [T; 4],
+    /// Time at which each margin first falls below zero, s (absolute).
+    pub violation_at: [Option<f64>; 4],
+}
+
+/// A prediction under way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Running<T: Real> {
+    path: HeldManoeuvre<T>,
+    from: f64,
+    worst: [T; 4],
+    violation_at: [Option<f64>; 4],
+    /// Pitch and yaw ranges over the prediction, rad: [min, max] per axis.
+    ranges: [[T; 2]; 2],
+    /// Wave-speed rate of the copy's last evaluation, 1/s.
+    wave_rate: T,
+}
+
+/// The look-ahead: the copy, the prediction under way and the last completed one.
+#[derive(Clone, Debug)]
+pub struct Lookahead<T: Real, const P: usize> {
+    solver: Option<Solver<T, P>>,
+    running: Option<Running<T>>,
+    last: Option<Prediction<T>>,
+    /// Steps taken by the last call to [`Lookahead::work`].
+    pub last_steps: u32,
+}
+
+impl<T: Real, const P: usize> PartialEq for Lookahead<T, P> {
+    fn eq(&self, other: &Self) -> bool {
+        self.running == other.running
+            && self.last == other.last
+            && self.solver.as_ref().map(|s| *s.state()) == other.solver.as_ref().map(|s| *s.state())
+    }
+}
+
+impl<T: Real, const P: usize> Lookahead<T, P> {
+    /// A look-ahead for `model` (none if it has more than `P` segments).
+    pub fn new<const N: usize>(model: &Model<T, N>) -> Self {
+        let solver = if model.segment_count() <= P {
+            Model::<T, P>::new(*model.params())
+                .ok()
+                .and_then(|m| Solver::new(m, State::default()).ok())
+        } else {
+            None
+        };
+        Lookahead {
+            solver,
+            running: None,
+            last: None,
+            last_steps: 0,
+        }
+    }
+
+    /// Whether there is a copy to fly (the model fits `P`).
+    pub fn available(&self) -> bool {
+        self.solver.is_some()
+    }
+
+    /// Forgets every prediction (a new run).
+    pub fn reset(&mut self) {
+        self.running = None;
+        self.last = None;
+    }
+
+    /// The last completed prediction.
+    pub fn last(&self) -> Option<&Prediction<T>> {
+        self.last.as_ref()
+    }
+
+    /// Whether a prediction is under way.
+    pub fn is_running(&self) -> bool {
+        self.running.is_some()
+    }
+
+    /// The violations the prediction under way has found so far (absolute
+    /// times): an advisory need not wait for the whole horizon.
+    pub fn running_violations(&self) -> [Option<f64>; 4] {
+        self.running.map_or([None; 4], |r| r.violation_at)
+    }
+
+    /// One frame's slice of work: starts a prediction from `state` (the accepted
+    /// solution at its time, `aircraft` the aircraft there, `wave_rate` its
+    /// wave-speed rate, `measures` its measures) if none is under way, then takes
+    /// at most the configured steps. Returns the steps taken.
+    pub fn work<const N: usize>(
+        &mut self,
+        state: &State<T, N>,
+        aircraft: &AircraftState<T>,
+        wave_rate: T,
+        measures: &Measures<T>,
+        geometry: &Geometry<T>,
+        config: &ManagementConfig<T>,
+    ) -> u32 {
+        self.last_steps = 0;
+        let Some(solver) = self.solver.as_mut() else {
+            return 0;
+        };
+        let mut running = match self.running {
+            Some(r) => r,
+            None => {
+                let n = solver.model().segment_count();
+                let mut copy = State::<T, P>::default();
+                copy.time = state.time;
+                copy.directions[..n].copy_from_slice(&state.directions[..n]);
+                copy.rates[..n].copy_from_slice(&state.rates[..n]);
+                copy.decoy_attitude = state.decoy_attitude;
+                copy.decoy_rate = state.decoy_rate;
+                if solver.set_state(copy).is_err() {
+                    return 0;
+                }
+                let [p, y] = measures.pitch_yaw;
+                let mut r = Running {
+                    path: HeldManoeuvre::new(state.time, aircraft),
+                    from: state.time,
+                    worst: [T::lit(f64::INFINITY); 4],
+                    violation_at: [None; 4],
+                    ranges: [[p, p], [y, y]],
+                    wave_rate,
+                };
+                r.take(measures, config);
+                r
+            }
+        };
+        let end = running.from + config.horizon_s;
+        let mut steps = 0;
+        let mut done = false;
+        while steps < config.prediction_steps_per_frame {
+            let t = solver.state().time;
+            let remaining = end - t;
+            if remaining <= 1e-9 {
+                done = true;
+                break;
+            }
+            let wave = if running.wave_rate > T::zero() {
+                WAVE_STEP_FACTOR / running.wave_rate.to_f64()
+            } else {
+                f64::INFINITY
+            };
+            let h = config.prediction_max_step_s.min(wave).min(remaining);
+            steps += 1;
+            let before = *solver.state();
+            let stepped = solver.step(&running.path, h).and_then(|()| {
+                let aircraft = running.path.state_at(solver.state().time);
+                let out = solver.outputs(&running.path)?;
+                Ok((
+                    Measures::of(&out, &aircraft, geometry, config),
+                    wave_rate_of(solver),
+                ))
+            });
+            match stepped {
+                Ok((m, rate)) => {
+                    running.take(&m, config);
+                    running.wave_rate = rate;
+                }
+                Err(_) if h > MIN_STEP_S => {
+                    // A snatch load raised the tensions within the step: again
+                    // from the step's start with a step as short as the wave
+                    // speed then asks, at most half (this counts as a step).
+                    let _ = solver.set_state(before);
+                    running.wave_rate = running.wave_rate.max(T::lit(2.0 * WAVE_STEP_FACTOR / h));
+                }
+                Err(_) => {
+                    done = true;
+                    break;
+                }
+            }
+        }
+        self.last_steps = steps;
+        if done || solver.state().time >= end - 1e-9 {
+            self.last = Some(Prediction {
+                from: running.from,
+                horizon: solver.state().time - running.from,
+                worst: running.worst,
+                violation_at: running.violation_at,
+            });
+            self.running = None;
+        } else {
+            self.running = Some(running);
+        }
+        steps
+    }
+}
+
+impl<T: Real> Running<T> {
+    /// Takes one predicted state's measures.
+    fn take(&mut self, m: &Measures<T>, config: &ManagementConfig<T>) {
+        let mut margins = m.instant_margins(config);
+        let half = T::lit(0.5);
+        let mut amplitude = T::zero();
+        for (axis, range) in self.ranges.iter_mut().enumerate() {
+            range[0] = range[0].min(m.pitch_yaw[axis]);
+            range[1] = range[1].max(m.pitch_yaw[axis]);
+            amplitude = amplitude.max((range[1] - range[0]) * half);
+        }
+        margins[0] = margins[0].min(config.amplitude_limit - amplitude);
+        for (k, margin) in margins.into_iter().enumerate() {
+            self.worst[k] = self.worst[k].min(margin);
+            if margin < T::zero() && self.violation_at[k].is_none() {
+                self.violation_at[k] = Some(m.time);
+            }
+        }
+    }
+}
+
+/// max_i c_i / l_i (1/s) of the solver's last evaluation (as the controller's).
+pub(crate) fn wave_rate_of<T: Real, const N: usize>(solver: &Solver<T, N>) -> T {
+    let model = solver.model();
+    let out = solver.last_outputs();
+    let larger = |a: T, b: T| if b > a { b } else { a };
+    let mut worst = T::zero();
+    let mut upstream = out.joint_force(0).norm_squared();
+    for (i, l) in model.lengths().iter().enumerate() {
+        let downstream = out.joint_force(i + 1).norm_squared();
+        let l2 = *l * *l;
+        worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
+        upstream = downstream;
+    }
+    (worst.square_root() / model.params().cable.linear_density).square_root()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use solver_core::profiles::{LevelTurn, PullUp};
+
+    /// Holding a constant-rate manoeuvre reproduces it: a pull-up and a
+    /// coordinated turn extrapolated from one instant follow the profile.
+    #[test]
+    fn a_held_constant_manoeuvre_is_the_manoeuvre() {
+        let pull = PullUp {
+            altitude: 9000.0,
+            speed: 180.0,
+            start: 0.0,
+            rate: 0.2,
+            duration: 100.0,
+        };
+        let turn = LevelTurn {
+            altitude: 9000.0,
+            speed: 240.0,
+            start: 0.0,
+            rate: 0.2,
+            gravity: 9.80665,
+        };
+        let paths: [&dyn FlightPath<f64>; 2] = [&pull, &turn];
+        for path in paths {
+            let held = HeldManoeuvre::new(1.0, &path.state_at(1.0));
+            for tau in [0.5, 1.0, 2.0, 3.0] {
+                let a: AircraftState<f64> = held.state_at(1.0 + tau);
+                let b = path.state_at(1.0 + tau);
+                assert!((a.velocity - b.velocity).norm() < 1e-6 * 240.0, "{tau}");
+                assert!((a.acceleration - b.acceleration).norm() < 1e-3, "{tau}");
+                let qa = a.rotation();
+                let qb = b.rotation();
+                assert!(qa.angle_to(&qb) < 1e-6, "{tau}");
+                // Position to third order: V w^3 tau^4 / 24, 5 m after 3 s at
+                // 0.2 rad/s (the altitude enters only through the air density).
+                let bound = 240.0 * 0.008 * tau.powi(4) / 24.0 * 1.1 + 1e-6;
+                assert!((a.position - b.position).norm() < bound, "{tau}");
+            }
+        }
+    }
+}
