@@ -18,7 +18,8 @@
 //! Output is computed (the real-time solution is never changed or delayed by the
 //! prediction), runs at most `prediction_steps_per_frame` RK4 steps of the copy.
 //! A prediction starts from the solution of the frame after the previous one
-//! completed, so a new one completes every horizon / (steps per frame x step)
+//! completed (or at once when the aircraft leaves the manoeuvre the prediction
+//! holds: [`HeldManoeuvre::departs_from`]), so a new one completes every horizon / (steps per frame x step)
 //! frames; a violation it finds on the way is reported at once (the advisory
 //! does not wait for the rest of the horizon). Each step is at most `prediction_max_step_s` and at most the
 //! controller's wave-speed limit ([`crate::controller::WAVE_STEP_FACTOR`]) at the
@@ -85,6 +86,37 @@ impl<T: Real> HeldManoeuvre<T> {
             normal,
             jerk: rate_ned.cross(&(direction * along + normal)),
         }
+    }
+}
+
+/// A change of body rate beyond which the aircraft flies another manoeuvre, rad/s.
+pub const MANOEUVRE_CHANGE_RADPS: f64 = 0.05;
+/// A change of acceleration beyond which the aircraft flies another manoeuvre, m/s².
+pub const MANOEUVRE_CHANGE_MPS2: f64 = 5.0;
+
+impl<T: Real> HeldManoeuvre<T> {
+    /// Whether `aircraft` (at a later time) no longer flies this manoeuvre: its
+    /// body rate differs by more than [`MANOEUVRE_CHANGE_RADPS`] or its
+    /// acceleration by more than [`MANOEUVRE_CHANGE_MPS2`] from the held ones
+    /// at its time.
+    pub fn departs_from(&self, aircraft: &AircraftState<T>) -> bool {
+        let rate = (aircraft.angular_rate - self.body_rate).norm();
+        let held = self.acceleration_at(aircraft);
+        let accel = (aircraft.acceleration - held).norm();
+        rate > T::lit(MANOEUVRE_CHANGE_RADPS) || accel > T::lit(MANOEUVRE_CHANGE_MPS2)
+    }
+
+    /// The held acceleration with the velocity direction of `aircraft`: the
+    /// along-path part along it and the normal part turned as the body turned.
+    fn acceleration_at(&self, aircraft: &AircraftState<T>) -> Vec3<T> {
+        let turn = aircraft.rotation() * self.attitude.inverse();
+        let speed = aircraft.velocity.norm();
+        let direction = if speed > T::zero() {
+            aircraft.velocity / speed
+        } else {
+            turn * self.direction
+        };
+        direction * self.along + turn * self.normal
     }
 }
 
@@ -220,7 +252,12 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
         let Some(solver) = self.solver.as_mut() else {
             return 0;
         };
-        let mut running = match self.running {
+        // A prediction whose manoeuvre the aircraft no longer flies (the pull-up
+        // stopped rotating, a turn began) is abandoned for a new one from now.
+        let running = self
+            .running
+            .filter(|r| !r.path.departs_from(aircraft));
+        let mut running = match running {
             Some(r) => r,
             None => {
                 let n = solver.model().segment_count();
@@ -273,6 +310,15 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
                 ))
             });
             match stepped {
+                // The tensions at the step's end ask for a shorter step than
+                // taken (they rose within it, a snatch): again from the step's
+                // start with what they ask (as the controller's own rule does).
+                Ok((_, rate))
+                    if h > MIN_STEP_S && T::lit(h) * rate > T::lit(WAVE_STEP_FACTOR) =>
+                {
+                    let _ = solver.set_state(before);
+                    running.wave_rate = rate;
+                }
                 Ok((m, rate)) => {
                     running.take(&m, config);
                     running.wave_rate = rate;

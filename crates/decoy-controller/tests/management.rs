@@ -92,14 +92,15 @@ fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); 4] {
 
 const NAMES: [&str; 4] = decoy_link::REQUIREMENTS;
 
-/// The least advisory lead asserted, s. The issue asks 1 s; measured on the
-/// sensible installation: 0.20 rad/s pull-up, exhaust advised 0.88 s before the
-/// violation (9.59 s, 2.6 s after the rotation stops, when the cable, slack
-/// after the snatch, whips up into the plume). The prediction of the held climb
-/// that sees it starts at 7.5 s, but the snatch's tensions cut the look-ahead's
-/// steps to 2.6 ms (the wave-speed limit of the 0.46 m shortest segment), so 3 s
-/// of prediction take about 1 s of flight instead of 0.5 s.
-const LEAST_LEAD_S: f64 = 0.85;
+/// The least advisory lead asserted, s (the issue's). Measured on the sensible
+/// installation: 0.20 rad/s pull-up, exhaust advised at 7.89 s, 1.70 s before the
+/// violation at 9.59 s (2.6 s after the rotation stops, when the cable, slack
+/// after the snatch, whips up into the plume): the prediction of the held climb
+/// restarts when the rotation stops (7.0 s) and reports the violation as soon as
+/// it reaches it. (Without the restart, waiting for the rotation's prediction
+/// to complete: 0.88 s; the snatch's tensions cut the look-ahead's steps to
+/// 2.6 ms, so its 3 s take about 1 s of flight.)
+const LEAST_LEAD_S: f64 = 1.0;
 
 /// In the paper's pull-up and turn at 0.20 rad/s the look-ahead advises before
 /// every violation (at least [`LEAST_LEAD_S`] ahead), and something is violated
@@ -213,7 +214,8 @@ fn the_look_ahead_covers_3_s_and_refreshes_every_half_second() {
 
 /// The predicted worst margins against the margins actually reached over the
 /// same horizon, in the 0.20 rad/s pull-up (the prediction holds the manoeuvre,
-/// so it is compared while the manoeuvre lasts: from 2 s to 7 s - 3 s).
+/// so it is compared where the manoeuvre is held over the whole horizon: the
+/// rotation from 2 s to 7 s, the climb after it, snatch included).
 #[test]
 fn predicted_margins_against_the_margins_reached() {
     let outputs = fly_profile::<f32>(
@@ -221,19 +223,28 @@ fn predicted_margins_against_the_margins_reached() {
         Profile::PullUp {
             rate_milli_radps: 200,
         },
-        10.0,
+        12.0,
     );
     let mut compared = 0;
-    let mut worst_error = [0.0f64; 4];
+    // Largest |predicted - reached| per requirement, in the rotation and in
+    // the climb after it (the snatch).
+    let mut worst_error = [[0.0f64; 4]; 2];
     let mut seen = -1.0;
     for o in &outputs {
         let m = &o.management;
         let from = m.prediction_from_s;
-        if from < 2.05 || from == seen || from + f64::from(m.prediction_horizon_s) > 7.0 {
+        let until = from + f64::from(m.prediction_horizon_s);
+        let phase = if from > 2.05 && until <= 7.0 {
+            0
+        } else if from > 7.05 && until <= 12.0 {
+            1
+        } else {
+            continue;
+        };
+        if from == seen {
             continue;
         }
         seen = from;
-        let until = from + f64::from(m.prediction_horizon_s);
         for k in 1..4 {
             let reached = outputs
                 .iter()
@@ -241,7 +252,7 @@ fn predicted_margins_against_the_margins_reached() {
                 .map(|p| f64::from(p.management.reports()[k].margin))
                 .fold(f64::INFINITY, f64::min);
             let predicted = f64::from(m.reports()[k].predicted_worst_margin);
-            worst_error[k] = worst_error[k].max((predicted - reached).abs());
+            worst_error[phase][k] = worst_error[phase][k].max((predicted - reached).abs());
             println!(
                 "from {from:.2} s: {} predicted {predicted:.3}, reached {reached:.3}",
                 NAMES[k]
@@ -249,12 +260,22 @@ fn predicted_margins_against_the_margins_reached() {
         }
         compared += 1;
     }
-    println!("largest |predicted - reached|: collision, tension, exhaust {:?}", &worst_error[1..]);
+    println!(
+        "largest |predicted - reached| (collision m, tension N, exhaust m): rotation {:?}, climb and snatch {:?}",
+        &worst_error[0][1..],
+        &worst_error[1][1..]
+    );
     assert!(compared >= 2, "{compared} predictions compared");
-    // The prediction starts from the same state and flies the same manoeuvre, so
-    // only the held-manoeuvre extrapolation (none here: a constant-rate pull-up
-    // is held exactly) and the larger prediction step separate them.
-    assert!(worst_error[3] < 0.05, "exhaust {:?}", worst_error);
-    assert!(worst_error[1] < 0.05, "collision {:?}", worst_error);
-    assert!(worst_error[2] < 0.02 * 1200.0, "tension {:?}", worst_error);
+    // The prediction starts from the same state and flies the same manoeuvre
+    // (a constant-rate pull-up and a straight climb are held exactly), so only
+    // its step separates them: within millimetres and a newton in the rotation.
+    let [rotation, climb] = worst_error;
+    assert!(rotation[1] < 0.01 && rotation[3] < 0.01, "{rotation:?}");
+    assert!(rotation[2] < 1.0, "{rotation:?}");
+    // In the snatch after the rotation the cable's path to the plume is
+    // predicted within 0.15 m, but its peak tension, a jerk of a slack cable,
+    // depends on the step (the look-ahead's is at most 6 ms, the controller's
+    // 5 ms): the predicted peak differs by up to 1,200 N (measured 1,182 N; a
+    // tension advisory comes at 7.53 s that no violation follows).
+    assert!(climb[1] < 0.05 && climb[3] < 0.15, "{climb:?}");
 }

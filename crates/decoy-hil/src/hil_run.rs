@@ -625,9 +625,7 @@ fn write_timeseries(
         text.push_str(&format!(",{}", m.advisories));
         for v in m.violation_in {
             text.push(',');
-            if v.is_finite() {
-                text.push_str(&format_value(v));
-            }
+            text.push_str(&format_value(if v.is_finite() { v } else { -1.0 }));
         }
         text.push('\n');
     }

@@ -119,10 +119,8 @@ impl Sample {
         row.push_str(&format!(",{}", m.advisories));
         for v in m.violation_in {
             row.push(',');
-            // Empty where no violation is predicted.
-            if v.is_finite() {
-                row.push_str(&format_value(v));
-            }
+            // -1 where no violation is predicted (as on the wire).
+            row.push_str(&format_value(if v.is_finite() { v } else { -1.0 }));
         }
         row.push('\n');
         row

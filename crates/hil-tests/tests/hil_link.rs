@@ -103,6 +103,9 @@ const FRAME_BUDGET_M7: u32 = 128_000;
 /// The firmware issue's target per control step, for the solver's share
 /// (`step_instructions`) of a nominal step; measured 74,000 to 74,640.
 const CONTROL_STEP_TARGET: u32 = 100_000;
+/// Most instructions of decoy management (monitors and one look-ahead slice)
+/// per 10 ms frame on the M4 (issue 13: at most 400,000 of prediction per frame).
+const MANAGEMENT_BUDGET: u32 = 400_000;
 /// The benchmark issue's target per RK4 step (16 graded segments, f32, M4), for
 /// the RK4 steps of a nominal control step (`step_instructions / 2`; the first
 /// stage of a frame reuses the previous frame's output evaluation, `Solver::step`);
@@ -380,6 +383,29 @@ fn nominal_frame_max(answers: &[DeviceMessage]) -> u32 {
 fn check_budget(label: &str, answers: &[DeviceMessage], frame_budget: u32) {
     let stats = flight::instruction_stats(answers);
     assert!(stats.nominal_steps > 0, "{label}: no nominal control step");
+    // Decoy management (the monitors and the look-ahead's slice, after the
+    // solution) within its budget on every frame, whatever the manoeuvre; and it
+    // does run (a slice of look-ahead steps on every frame after the trim).
+    let outputs = flight::outputs(answers);
+    let worst = outputs
+        .iter()
+        .max_by_key(|o| o.management_instructions)
+        .map(|o| (o.management_instructions, o.seq, o.prediction_steps))
+        .unwrap_or_default();
+    println!(
+        "{label}: decoy management at most {} instructions per frame (seq {}, {} look-ahead steps), budget {MANAGEMENT_BUDGET}",
+        worst.0, worst.1, worst.2
+    );
+    assert!(
+        worst.0 <= MANAGEMENT_BUDGET,
+        "{label}: decoy management took {} instructions at seq {}, over {MANAGEMENT_BUDGET}",
+        worst.0,
+        worst.1
+    );
+    assert!(
+        outputs.iter().skip(1).all(|o| o.prediction_steps > 0 || o.management_instructions == 0),
+        "{label}: a frame ran no look-ahead step"
+    );
     assert!(
         stats.nominal_solver_max <= CONTROL_STEP_TARGET,
         "{label}: the solver took {} instructions in a nominal control step, over {CONTROL_STEP_TARGET}",
