@@ -948,6 +948,25 @@ mod tests {
     }
 
     #[test]
+    fn the_management_section_is_optional_and_checked() {
+        let config = SystemConfig::builtin().unwrap();
+        // The reference file states the defaults explicitly.
+        assert_eq!(config.management, ManagementSection::default());
+        // Without the section: the same values.
+        let start = BUILTIN_TOML.find("[management]").unwrap();
+        let without = SystemConfig::from_str(&BUILTIN_TOML[..start], BUILTIN_AERO_CSV).unwrap();
+        assert_eq!(without.management, config.management);
+        // A warning threshold above the caution one is named.
+        let bad = BUILTIN_TOML.replace("warning_m = 0.25", "warning_m = 0.75");
+        let e = SystemConfig::from_str(&bad, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(e.to_string().contains("management.exhaust.caution_m"), "{e}");
+        // The usable angle of attack of the reference table: where its restoring
+        // moment stops growing, 40 degrees.
+        let params = config.params().unwrap();
+        assert!((params.usable_angle_of_attack().to_degrees() - 40.0).abs() < 1e-9);
+    }
+
+    #[test]
     fn builtin_parses_and_builds_models() {
         let config = SystemConfig::builtin().unwrap();
         assert_eq!(config.environment.atmosphere, "ISA-1976");

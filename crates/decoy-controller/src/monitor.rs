@@ -277,10 +277,20 @@ impl<T: Real> Measures<T> {
         let mut tension_min = tension_max;
         // NED to body, formed once for every point.
         let to_body_matrix = aircraft.rotation().to_rotation_matrix().into_inner().transpose();
-        let envelope = |p: &Vec3<T>| {
-            geometry
-                .envelope
-                .clearance(&(to_body_matrix * (p - aircraft.position)))
+        // A point farther from the capsule's centre than the best clearance so
+        // far plus the capsule's half length and radius cannot be nearer: it is
+        // skipped (the result is the same as checking every point).
+        let e = &geometry.envelope;
+        let centre = (e.fore + e.aft) * T::lit(0.5);
+        let reach = (e.aft - e.fore).norm() * T::lit(0.5) + e.radius;
+        let envelope = |p: &Vec3<T>, best: T| {
+            let b = to_body_matrix * (p - aircraft.position);
+            let limit = best + reach;
+            if (b - centre).norm_squared() > limit * limit * T::lit(1.001) {
+                best
+            } else {
+                best.min(e.clearance(&b))
+            }
         };
         // Far beyond any aircraft: what is reported when nothing is checked.
         let mut clearance = T::lit(1e6);
@@ -295,17 +305,17 @@ impl<T: Real> Measures<T> {
             let l = (p - previous).norm();
             if along + l * half >= config.cable_exclusion {
                 let mid = (previous + p) * half;
-                clearance = clearance.min(envelope(&mid));
+                clearance = envelope(&mid, clearance);
             }
             along += l;
             if along >= config.cable_exclusion {
-                clearance = clearance.min(envelope(&p));
+                clearance = envelope(&p, clearance);
             }
             previous = p;
         }
         let (pitch_yaw, aoa) = match out.decoy() {
             Some(d) => {
-                clearance = clearance.min(envelope(&d.cg_position));
+                clearance = envelope(&d.cg_position, clearance);
                 // The air's velocity relative to the decoy, body axes: the
                 // body's pitch and yaw relative to its airflow.
                 let v = d.attitude.inverse_transform_vector(&(d.cg_velocity - config.wind));
