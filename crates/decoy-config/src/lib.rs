@@ -305,7 +305,7 @@ impl Default for ManagementSection {
     fn default() -> Self {
         ManagementSection {
             horizon_s: 3.0,
-            prediction_steps_per_frame: 5,
+            prediction_steps_per_frame: 4,
             prediction_max_step_s: 0.006,
             posture: PostureSection {
                 amplitude_limit_deg: 10.0,

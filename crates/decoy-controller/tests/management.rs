@@ -92,18 +92,19 @@ fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); 4] {
 
 const NAMES: [&str; 4] = decoy_link::REQUIREMENTS;
 
-/// The least advisory lead asserted, s (the issue asks 1 s). Measured on the
-/// sensible installation, 0.20 rad/s pull-up: exhaust advised at 8.79 s, 0.80 s
-/// before the violation at 9.59 s (2.6 s after the rotation stops, when the
+/// The least advisory lead asserted, s (the issue asks 1 s: NOT met with the
+/// M4's budget). Measured on the sensible installation, 0.20 rad/s pull-up: the
+/// exhaust is violated at 9.59 s (2.6 s after the rotation stops, when the
 /// cable, slack after the snatch, whips up into the plume). The prediction of
 /// the held climb restarts when the rotation stops (7.0 s) and reports the
-/// violation as soon as it reaches it, but with 5 look-ahead steps per frame
-/// (the M4's instruction budget) and the snatch's tensions cutting the steps to
-/// 2.6 ms (the wave-speed limit of the 0.46 m shortest segment), it flies only
-/// 13 ms per 10 ms frame there. With 10 steps per frame (729,000 instructions
-/// per frame on the M4, over the budget) the advisory comes at 7.89 s, 1.70 s
-/// ahead. A coarser prediction model would buy the difference (not done).
-const LEAST_LEAD_S: f64 = 0.75;
+/// violation as soon as it reaches it; how soon depends on the look-ahead steps
+/// per frame, because the snatch's tensions cut the steps to 2.6 ms (the
+/// wave-speed limit of the 0.46 m shortest segment): advised 0.35 s ahead with
+/// 4 steps per frame (the reference, within 400,000 instructions on the M4),
+/// 0.80 s with 5 (406,160 instructions), 1.70 s with 10 (729,000). A coarser
+/// prediction model (longer shortest segment, cheaper step) would buy the
+/// difference; not done.
+const LEAST_LEAD_S: f64 = 0.3;
 
 /// In the paper's pull-up and turn at 0.20 rad/s the look-ahead advises before
 /// every violation (at least [`LEAST_LEAD_S`] ahead), and something is violated
@@ -192,7 +193,7 @@ fn the_acceleration_case_gives_no_advisory() {
 }
 
 /// The look-ahead flies at least 3 s ahead and completes a prediction at least
-/// every 1.0 s of flight in steady flight (the issue asks 0.5 s: 5 steps of 6 ms
+/// every 1.25 s of flight in steady flight (the issue asks 0.5 s: 4 steps of 6 ms
 /// per frame are what 400,000 instructions buy on the Cortex-M4, see
 /// `config/reference-system.toml`).
 #[test]
@@ -207,7 +208,7 @@ fn the_look_ahead_covers_3_s_and_refreshes_every_second() {
     starts.dedup();
     assert!(starts.len() >= 4, "{starts:?}");
     for w in starts.windows(2) {
-        assert!(w[1] - w[0] <= 1.0 + 1e-9, "{starts:?}");
+        assert!(w[1] - w[0] <= 1.25 + 1e-9, "{starts:?}");
     }
     for o in &outputs {
         if o.management.prediction_from_s >= 0.0 {
