@@ -95,11 +95,15 @@ const SNATCH_TOLERANCES: (f64, f64, bool) = (2e-2, 2e-2, true);
 /// The same for the recorded flight (a pull-up into a climbing turn), where f32
 /// and f64 part at the cable's jerk at about 5.8 s: the stepping rule's counts
 /// differ there and the transient, integrated at the wave-speed stability limit,
-/// amplifies the difference to 82 N (15.4 % of the peak, measured). This is the
+/// amplifies the difference to 113.6 N at the connection and 114.8 N at the towing
+/// point (20.8 % and 21.0 % of the peak, measured with the installation of
+/// `config/`, the cable leaving 2 m aft and 1.7 m below the engine axis; 82 N,
+/// 15.4 %, with the earlier installation). Both runs are deterministic, so these
+/// are exact numbers, not a noise band. This is the
 /// step-size sensitivity that puts the snatch peaks 3 to 14 % off the converged
 /// solution (tests/host_accuracy.rs); the f32 firmware is still held bit for bit
 /// to the host's f32 controller.
-const RECORDED_TOLERANCES: (f64, f64, bool) = (0.16, 0.20, true);
+const RECORDED_TOLERANCES: (f64, f64, bool) = (0.22, 0.22, true);
 
 /// Instructions a whole nominal 10 ms frame (two RK4 steps of 5 ms, the frame's
 /// validation, flight path and outputs with the clearances) may execute, M4: a
