@@ -79,9 +79,11 @@ pub mod event {
     pub const STATE: usize = 2;
     /// To the bridge: a command was sent.
     pub const COMMAND: usize = 3;
-    /// From the bridge: a lockstep answer was sent.
+    /// From the bridge: a lockstep answer was sent, and its copy published on
+    /// the outputs service (one notification for both).
     pub const ANSWER: usize = 11;
-    /// From the bridge: an answer was published on the outputs service.
+    /// From the bridge: answers to free-running samples were published on the
+    /// outputs service.
     pub const OUTPUT: usize = 12;
     /// From the bridge: a status was published.
     pub const STATUS: usize = 13;

@@ -527,9 +527,11 @@ impl Ports {
             if let Ok(r) = active.loan_uninit() {
                 let _ = r.write_payload(answer).send();
             }
-            self.notify(event::ANSWER);
+            // The copy on `outputs` goes out before the one notification, which
+            // announces both: one event per lockstep frame (a listener is woken
+            // by any id, so `OUTPUT` would only wake the client a second time).
             self.publish(&answer);
-            self.notify(event::OUTPUT);
+            self.notify(event::ANSWER);
         }
         let mut any = false;
         while let Some(sample) = self.state.receive().map_err(|e| ipc(format!("{e:?}")))? {
