@@ -187,23 +187,25 @@ fn log_answer(answer: &DeviceMessage, accepted: &mut u32) {
     }
 }
 
-/// Drives the advisory line from an Output's flags and logs each change (under
+/// Drives the advisory line from an Output's management report and logs each change (under
 /// QEMU, whose GPIO is a stub, the log is the only trace of the line).
 #[cfg(feature = "board-stm32f405")]
 fn drive_advisory(advisory: &mut Advisory<board::AdvisoryPin>, answer: &DeviceMessage) {
     let DeviceMessage::Output(o) = answer else {
         return;
     };
-    match advisory.update(o.flags) {
+    match advisory.update(&o.management) {
         Ok(Some(true)) => defmt::info!(
-            "advisory line asserted: seq={=u32} flags={=u16:#x}",
+            "advisory line asserted: seq={=u32} level={=u8} advisories={=u8:#x}",
             o.seq,
-            o.flags
+            o.management.worst_level().index(),
+            o.management.advisories
         ),
         Ok(Some(false)) => defmt::info!(
-            "advisory line deasserted: seq={=u32} flags={=u16:#x}",
+            "advisory line deasserted: seq={=u32} level={=u8} advisories={=u8:#x}",
             o.seq,
-            o.flags
+            o.management.worst_level().index(),
+            o.management.advisories
         ),
         Ok(None) => {}
         Err(never) => match never {},

@@ -5,4 +5,7 @@
 //! resulting `SystemParams` as the constant [`SYSTEM`]; the firmware builds
 //! everything from it with the host's own conversion.
 
+// The generated constant names these types unqualified (their derived `Debug` form).
+use decoy_controller::{ManagementParams, Thresholds};
+
 include!(concat!(env!("OUT_DIR"), "/system.rs"));

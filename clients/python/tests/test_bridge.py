@@ -165,7 +165,8 @@ def test_version_mismatch_is_named(bridge, tmp_path):
     client.close()
     desc = json.loads(json.dumps(wire.LAYOUT.raw))
     for t in desc["types"]:
-        t["type_name"] = t["type_name"].replace(".v1.", ".v99.")
+        t["type_name"] = t["type_name"].replace(f".v{wire.LAYOUT.protocol_version}.", ".v99.")
+        assert ".v99." in t["type_name"], t["type_name"]
     other = wire.build_types(desc)
     import iceoryx2 as iox
 

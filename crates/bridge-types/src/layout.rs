@@ -29,7 +29,7 @@ pub struct FieldLayout {
 pub struct TypeLayout {
     /// The Rust name (`Answer`).
     pub name: &'static str,
-    /// The iceoryx2 type name (`decoy.bridge.v1.Answer`), which a mirror's
+    /// The iceoryx2 type name (`decoy.bridge.v2.Answer`), which a mirror's
     /// `type_name()` must return.
     pub type_name: &'static str,
     /// `size_of`, bytes.
@@ -119,6 +119,20 @@ pub fn layouts() -> LayoutDescription {
             ]
         ),
         layout!(
+            MonitorReport,
+            [
+                (margin, "f32", 1),
+                (worst_margin, "f32", 1),
+                (predicted_worst_margin, "f32", 1),
+                (time_to_violation_s, "f32", 1),
+                (cautions, "u32", 1),
+                (warnings, "u32", 1),
+                (violations, "u32", 1),
+                (level, "u8", 1),
+                (reserved, "u8", 3),
+            ]
+        ),
+        layout!(
             Output,
             [
                 (time_s, "f64", 1),
@@ -134,7 +148,16 @@ pub fn layouts() -> LayoutDescription {
                 (steps, "u16", 1),
                 (instructions, "u32", 1),
                 (step_instructions, "u32", 1),
-                (reserved, "u32", 1),
+                (management_instructions, "u32", 1),
+                (prediction_from_s, "f64", 1),
+                (prediction_horizon_s, "f32", 1),
+                (prediction_steps, "u16", 1),
+                (advisories, "u8", 1),
+                (reserved, "u8", 1),
+                (posture, "MonitorReport", 1),
+                (collision, "MonitorReport", 1),
+                (tension, "MonitorReport", 1),
+                (exhaust, "MonitorReport", 1),
             ]
         ),
         layout!(
@@ -357,7 +380,7 @@ mod tests {
     #[test]
     fn descriptions_cover_every_byte_without_padding() {
         let d = layouts();
-        assert_eq!(d.types.len(), 9);
+        assert_eq!(d.types.len(), 10);
         for t in &d.types {
             let mut next = 0;
             for f in &t.fields {
@@ -378,11 +401,11 @@ mod tests {
             assert_eq!(next, t.size, "{} has bytes no field describes", t.name);
             assert_eq!(t.size % t.align, 0);
             assert!(
-                t.type_name.starts_with("decoy.bridge.v1."),
+                t.type_name.starts_with("decoy.bridge.v2."),
                 "{}",
                 t.type_name
             );
-            assert_eq!(&t.type_name["decoy.bridge.v1.".len()..], t.name);
+            assert_eq!(&t.type_name["decoy.bridge.v2.".len()..], t.name);
         }
     }
 
@@ -393,9 +416,10 @@ mod tests {
         let size = |n: &str| layouts().types.iter().find(|t| t.name == n).unwrap().size;
         assert_eq!(size("Header"), 8);
         assert_eq!(size("AircraftState"), 104);
-        assert_eq!(size("Output"), 72);
+        assert_eq!(size("MonitorReport"), 32);
+        assert_eq!(size("Output"), 216);
         assert_eq!(size("Rejection"), 16);
-        assert_eq!(size("Answer"), 96);
+        assert_eq!(size("Answer"), 240);
         assert_eq!(size("Counters"), 144);
         assert_eq!(size("Status"), 256);
         assert_eq!(size("Command"), 24);
@@ -414,6 +438,6 @@ mod tests {
         assert_eq!(codes("kind"), 6);
         assert!(d.codes.iter().all(|c| c.1 != "?"));
         let json = serde_json::to_string(&d).unwrap();
-        assert!(json.contains("\"type_name\":\"decoy.bridge.v1.AircraftState\""));
+        assert!(json.contains("\"type_name\":\"decoy.bridge.v2.AircraftState\""));
     }
 }

@@ -4,7 +4,7 @@
 //! one description of the services). Every type is `#[repr(C)]`, plain numbers
 //! with no pointers and **no implicit padding** (every gap is an explicit
 //! `reserved` field, zero on send), `ZeroCopySend`, and carries a fixed iceoryx2
-//! type name with the bridge protocol version in it (`decoy.bridge.v1.Answer`):
+//! type name with the bridge protocol version in it (`decoy.bridge.v2.Answer`):
 //! iceoryx2 refuses to connect a port whose type name, size or alignment differ.
 //! Every sample starts with a [`Header`] (protocol version, kind, sequence number).
 //!
@@ -33,7 +33,7 @@ pub use layout::{FieldLayout, LayoutDescription, TypeLayout, layouts};
 pub use wire::*;
 
 /// The bridge protocol version: in every [`Header`] and every type name.
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// The prefix of every service name: `decoy/<instance>/<service>`.
 pub const SERVICE_ROOT: &str = "decoy";

@@ -40,7 +40,7 @@ pub mod kind {
 /// The head of every sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Header")]
+#[type_name("decoy.bridge.v2.Header")]
 pub struct Header {
     /// [`PROTOCOL_VERSION`] of the sender.
     pub protocol_version: u16,
@@ -70,7 +70,7 @@ impl Header {
 /// these bits. Validation is the controller's (docs/protocol.md §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.AircraftState")]
+#[type_name("decoy.bridge.v2.AircraftState")]
 pub struct AircraftState {
     /// `kind` = [`kind::AIRCRAFT_STATE`]; `seq` = the frame's sequence number.
     pub header: Header,
@@ -95,7 +95,7 @@ pub struct AircraftState {
 /// protocol version), never moved.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Output")]
+#[type_name("decoy.bridge.v2.Output")]
 pub struct Output {
     /// Time of the outputs, s (the state's `time_s`).
     pub time_s: f64,
@@ -129,14 +129,65 @@ pub struct Output {
     pub instructions: u32,
     /// Of `instructions`, the solver's integration alone.
     pub step_instructions: u32,
+    /// Instructions of the decoy management after the solution (the monitors
+    /// and one look-ahead slice; qemu backend, 0 from the host); not in
+    /// `instructions`.
+    pub management_instructions: u32,
+    /// Time of the state the last completed look-ahead started from, s (-1
+    /// before the first completes).
+    pub prediction_from_s: f64,
+    /// Horizon of the last completed look-ahead, s (0 before the first).
+    pub prediction_horizon_s: f32,
+    /// Look-ahead RK4 steps taken in this frame's slice.
+    pub prediction_steps: u16,
+    /// Requirements the look-ahead predicts violated within its horizon if
+    /// the aircraft holds its manoeuvre (bits: posture 1, collision 2,
+    /// tension 4, exhaust 8).
+    pub advisories: u8,
     /// Zero.
-    pub reserved: u32,
+    pub reserved: u8,
+    /// (1) Decoy posture stable: margin in rad.
+    pub posture: MonitorReport,
+    /// (2) Decoy and cable clear of the aircraft: margin in m.
+    pub collision: MonitorReport,
+    /// (3) Cable tension within the allowable and above slack: margin in N.
+    pub tension: MonitorReport,
+    /// (4) Cable out of the exhaust plume: margin in m.
+    pub exhaust: MonitorReport,
+}
+
+/// One requirement's monitor and prediction in an [`Output`] (docs/outputs.md,
+/// "Decoy management"): the margin in the requirement's own unit, negative
+/// when violated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[repr(C)]
+#[type_name("decoy.bridge.v2.MonitorReport")]
+pub struct MonitorReport {
+    /// The margin now.
+    pub margin: f32,
+    /// The smallest margin since the run started (trim or reset).
+    pub worst_margin: f32,
+    /// The smallest margin the last completed look-ahead predicts over its
+    /// horizon (the margin now before one completes).
+    pub predicted_worst_margin: f32,
+    /// Seconds from this frame until the predicted violation; -1 for none.
+    pub time_to_violation_s: f32,
+    /// Rises to caution or worse since the run started.
+    pub cautions: u32,
+    /// Rises to warning or worse since the run started.
+    pub warnings: u32,
+    /// Rises to violated since the run started.
+    pub violations: u32,
+    /// The level now: 0 normal, 1 caution, 2 warning, 3 violated.
+    pub level: u8,
+    /// Zero.
+    pub reserved: [u8; 3],
 }
 
 /// Why a state or a command was rejected.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Rejection")]
+#[type_name("decoy.bridge.v2.Rejection")]
 pub struct Rejection {
     /// `header.seq` of the rejected request.
     pub request_seq: u32,
@@ -154,7 +205,7 @@ pub struct Rejection {
 /// service's sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Answer")]
+#[type_name("decoy.bridge.v2.Answer")]
 pub struct Answer {
     /// `kind` = [`kind::OUTPUT`] or [`kind::REJECTED`]; `seq` = the bridge's
     /// answer number (+1 per answer on the service, wrapping; a gap on the
@@ -169,7 +220,7 @@ pub struct Answer {
 /// The counters of a bridge since it started (u64, never reset).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, serde::Serialize)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Counters")]
+#[type_name("decoy.bridge.v2.Counters")]
 pub struct Counters {
     /// States answered by an output.
     pub accepted: u64,
@@ -218,7 +269,7 @@ pub struct Counters {
 /// command reply.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Status")]
+#[type_name("decoy.bridge.v2.Status")]
 pub struct Status {
     /// `kind` = [`kind::STATUS`]; `seq` = the bridge's status number.
     pub header: Header,
@@ -260,7 +311,7 @@ pub struct Status {
 /// A command (request of the commands service).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.Command")]
+#[type_name("decoy.bridge.v2.Command")]
 pub struct Command {
     /// `kind` = [`kind::COMMAND`].
     pub header: Header,
@@ -281,7 +332,7 @@ pub struct Command {
 /// The reply to a [`Command`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v1.CommandReply")]
+#[type_name("decoy.bridge.v2.CommandReply")]
 pub struct CommandReply {
     /// `kind` = [`kind::COMMAND_REPLY`]; `seq` = the bridge's reply number.
     pub header: Header,

@@ -533,6 +533,7 @@ fn simulate_text(
         "  decoy CG to the aircraft      {:>10.3} m",
         r.min_decoy_clearance_to_aircraft_m
     );
+    write_management(&mut s, &r.management);
     let speed = if r.wall_s > 0.0 {
         format!(" ({:.0}x real time)", r.t_end / r.wall_s)
     } else {
@@ -548,6 +549,35 @@ fn simulate_text(
         let _ = writeln!(s, "  {name}");
     }
     s
+}
+
+/// The decoy-management block of a human summary: per requirement the worst
+/// margin, the first violation, the first look-ahead advisory and its lead.
+fn write_management(s: &mut String, m: &decoy_sim::ManagementSummary) {
+    let _ = writeln!(
+        s,
+        "Decoy management (worst margin; first violation; first advisory; lead)"
+    );
+    let units = decoy_sim::management::MARGIN_UNITS;
+    for ((name, r), unit) in m.entries().into_iter().zip(units) {
+        let time = |t: Option<f64>| t.map_or_else(|| "none".to_owned(), |t| format!("t = {t} s"));
+        let worst = r
+            .worst_margin
+            .map_or_else(|| "unknown".to_owned(), |w| format!("{w:>10.3} {unit}"));
+        let lead = match (r.advisory_lead_s, r.first_violation_s, r.first_advisory_s) {
+            (Some(l), _, _) if l >= 0.0 => format!("advised {l} s before"),
+            (Some(l), _, _) => format!("advised {} s AFTER the violation", -l),
+            (None, Some(_), None) => "NOT advised".to_owned(),
+            (None, None, Some(_)) => "advisory, no violation".to_owned(),
+            _ => "-".to_owned(),
+        };
+        let _ = writeln!(
+            s,
+            "  {name:<10} {worst:>14}; violated {}; advisory {}; {lead}",
+            time(r.first_violation_s),
+            time(r.first_advisory_s)
+        );
+    }
 }
 
 // ---------------------------------------------------------------- hil
@@ -637,6 +667,12 @@ fn hil_text(config: &SystemConfig, run: &HilRun) -> String {
         bytes(h.ram_peak_bytes),
         h.ram_budget_bytes
     );
+    let _ = writeln!(
+        s,
+        "Decoy management                     max {} instructions per frame (monitors and look-ahead slice), {} predictions completed, horizon {} s",
+        h.management_instructions_max, h.predictions_completed, h.prediction_horizon_s
+    );
+    write_management(&mut s, &r.management);
     let _ = writeln!(s, "Files written to {}:", run.out_dir.display());
     for file in &run.files {
         let name = file.file_name().map_or_else(

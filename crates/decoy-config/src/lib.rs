@@ -26,7 +26,9 @@
 
 use std::path::{Path, PathBuf};
 
-pub use decoy_controller::{AeroRows, ControllerConfig, SystemParams};
+pub use decoy_controller::{
+    AeroRows, ControllerConfig, ManagementParams, SystemParams, Thresholds,
+};
 use serde::{Deserialize, Serialize};
 use solver_core::aero::AERO_TABLE_CAPACITY;
 use solver_core::{
@@ -222,6 +224,268 @@ pub struct SolverConfig {
     pub time_step_host: f64,
 }
 
+/// `[management]`: the decoy-management monitors and the look-ahead. Optional in
+/// a file: without it, the reference values ([`ManagementSection::default`],
+/// the same as `config/reference-system.toml`'s).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ManagementSection {
+    /// Look-ahead horizon, s.
+    pub horizon_s: f64,
+    /// Look-ahead RK4 steps per frame.
+    pub prediction_steps_per_frame: u32,
+    /// Longest look-ahead RK4 step, s.
+    pub prediction_max_step_s: f64,
+    /// Segments of the look-ahead's model (graded as the embedded model; at
+    /// most `decoy_controller::PREDICTION_CAPACITY`).
+    pub prediction_segments: usize,
+    /// `[management.posture]`.
+    pub posture: PostureSection,
+    /// `[management.collision]`.
+    pub collision: CollisionSection,
+    /// `[management.tension]`.
+    pub tension: TensionSection,
+    /// `[management.exhaust]`.
+    pub exhaust: ExhaustSection,
+}
+
+/// `[management.posture]`, degrees and seconds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PostureSection {
+    /// Largest acceptable pitch/yaw oscillation amplitude, deg.
+    pub amplitude_limit_deg: f64,
+    /// Sliding window of the oscillation amplitude, s.
+    pub window_s: f64,
+    /// Caution below this margin, deg.
+    pub caution_deg: f64,
+    /// Warning below this margin, deg.
+    pub warning_deg: f64,
+    /// Hysteresis, deg.
+    pub hysteresis_deg: f64,
+}
+
+/// `[management.collision]`, metres.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CollisionSection {
+    /// Required clearance of the decoy and cable to the aircraft's capsule, m.
+    pub min_clearance_m: f64,
+    /// Cable length from the connection point not checked, m.
+    pub cable_exclusion_m: f64,
+    /// Caution below this margin, m.
+    pub caution_m: f64,
+    /// Warning below this margin, m.
+    pub warning_m: f64,
+    /// Hysteresis, m.
+    pub hysteresis_m: f64,
+}
+
+/// `[management.tension]`, newtons (the allowable is `cable.allowable_tension`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TensionSection {
+    /// Over-tension side: caution below this margin to the allowable, N.
+    pub caution_n: f64,
+    /// Over-tension side: warning below this margin, N.
+    pub warning_n: f64,
+    /// Over-tension side: hysteresis, N.
+    pub hysteresis_n: f64,
+    /// Tension below which the cable counts as slack (violated), N.
+    pub slack_n: f64,
+    /// Slack side: caution when the lowest tension is less than this above `slack_n`, N.
+    pub slack_caution_n: f64,
+    /// Slack side: warning below this margin, N.
+    pub slack_warning_n: f64,
+    /// Slack side: hysteresis, N.
+    pub slack_hysteresis_n: f64,
+}
+
+/// `[management.exhaust]`, metres.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExhaustSection {
+    /// Required clearance of the cable to the plume, m.
+    pub min_clearance_m: f64,
+    /// Caution below this margin, m.
+    pub caution_m: f64,
+    /// Warning below this margin, m.
+    pub warning_m: f64,
+    /// Hysteresis, m.
+    pub hysteresis_m: f64,
+}
+
+impl Default for ManagementSection {
+    /// The reference values (`config/reference-system.toml` states them and why).
+    fn default() -> Self {
+        ManagementSection {
+            horizon_s: 3.0,
+            prediction_steps_per_frame: 5,
+            prediction_max_step_s: 0.013,
+            prediction_segments: 12,
+            posture: PostureSection {
+                amplitude_limit_deg: 10.0,
+                window_s: 2.0,
+                caution_deg: 5.0,
+                warning_deg: 2.5,
+                hysteresis_deg: 0.5,
+            },
+            collision: CollisionSection {
+                min_clearance_m: 1.0,
+                cable_exclusion_m: 10.0,
+                caution_m: 3.0,
+                warning_m: 1.5,
+                hysteresis_m: 0.25,
+            },
+            tension: TensionSection {
+                caution_n: 300.0,
+                warning_n: 150.0,
+                hysteresis_n: 20.0,
+                slack_n: 2.0,
+                slack_caution_n: 8.0,
+                slack_warning_n: 4.0,
+                slack_hysteresis_n: 1.0,
+            },
+            exhaust: ExhaustSection {
+                min_clearance_m: 0.0,
+                caution_m: 0.5,
+                warning_m: 0.25,
+                hysteresis_m: 0.05,
+            },
+        }
+    }
+}
+
+impl ManagementSection {
+    /// The plain values, SI (angles in rad).
+    pub fn params(&self) -> ManagementParams {
+        let (p, c, t, e) = (&self.posture, &self.collision, &self.tension, &self.exhaust);
+        ManagementParams {
+            posture: Thresholds {
+                caution: p.caution_deg.to_radians(),
+                warning: p.warning_deg.to_radians(),
+                hysteresis: p.hysteresis_deg.to_radians(),
+            },
+            posture_amplitude_limit: p.amplitude_limit_deg.to_radians(),
+            posture_window_s: p.window_s,
+            collision: Thresholds {
+                caution: c.caution_m,
+                warning: c.warning_m,
+                hysteresis: c.hysteresis_m,
+            },
+            collision_min_clearance: c.min_clearance_m,
+            collision_cable_exclusion: c.cable_exclusion_m,
+            tension: Thresholds {
+                caution: t.caution_n,
+                warning: t.warning_n,
+                hysteresis: t.hysteresis_n,
+            },
+            slack_tension: t.slack_n,
+            slack: Thresholds {
+                caution: t.slack_caution_n,
+                warning: t.slack_warning_n,
+                hysteresis: t.slack_hysteresis_n,
+            },
+            exhaust: Thresholds {
+                caution: e.caution_m,
+                warning: e.warning_m,
+                hysteresis: e.hysteresis_m,
+            },
+            exhaust_min_clearance: e.min_clearance_m,
+            horizon_s: self.horizon_s,
+            prediction_steps_per_frame: self.prediction_steps_per_frame,
+            prediction_max_step_s: self.prediction_max_step_s,
+            prediction_segments: self.prediction_segments,
+        }
+    }
+
+    fn validate(&self, c: &Checker<'_>) -> Result<(), ConfigError> {
+        c.range("management.horizon_s", self.horizon_s, 0.1, 30.0)?;
+        if !(1..=64).contains(&self.prediction_steps_per_frame) {
+            return Err(c.invalid(
+                "management.prediction_steps_per_frame",
+                format!(
+                    "must be between 1 and 64, got {}",
+                    self.prediction_steps_per_frame
+                ),
+            ));
+        }
+        c.range(
+            "management.prediction_max_step_s",
+            self.prediction_max_step_s,
+            1e-4,
+            0.05,
+        )?;
+        if !(1..=decoy_controller::PREDICTION_CAPACITY).contains(&self.prediction_segments) {
+            return Err(c.invalid(
+                "management.prediction_segments",
+                format!(
+                    "must be between 1 and {} (the look-ahead's capacity), got {}",
+                    decoy_controller::PREDICTION_CAPACITY,
+                    self.prediction_segments
+                ),
+            ));
+        }
+        let p = &self.posture;
+        c.positive(
+            "management.posture.amplitude_limit_deg",
+            p.amplitude_limit_deg,
+        )?;
+        c.range(
+            "management.posture.window_s",
+            p.window_s,
+            4.0 * decoy_controller::monitor::POSTURE_SAMPLE_S,
+            decoy_controller::monitor::MAX_POSTURE_WINDOW_S,
+        )?;
+        c.levels(
+            "management.posture",
+            "deg",
+            p.caution_deg,
+            p.warning_deg,
+            p.hysteresis_deg,
+        )?;
+        let k = &self.collision;
+        c.non_negative("management.collision.min_clearance_m", k.min_clearance_m)?;
+        c.non_negative(
+            "management.collision.cable_exclusion_m",
+            k.cable_exclusion_m,
+        )?;
+        c.levels(
+            "management.collision",
+            "m",
+            k.caution_m,
+            k.warning_m,
+            k.hysteresis_m,
+        )?;
+        let t = &self.tension;
+        c.non_negative("management.tension.slack_n", t.slack_n)?;
+        c.levels(
+            "management.tension",
+            "n",
+            t.caution_n,
+            t.warning_n,
+            t.hysteresis_n,
+        )?;
+        c.levels(
+            "management.tension.slack",
+            "n",
+            t.slack_caution_n,
+            t.slack_warning_n,
+            t.slack_hysteresis_n,
+        )?;
+        let e = &self.exhaust;
+        c.finite("management.exhaust.min_clearance_m", e.min_clearance_m)?;
+        c.levels(
+            "management.exhaust",
+            "m",
+            e.caution_m,
+            e.warning_m,
+            e.hysteresis_m,
+        )?;
+        Ok(())
+    }
+}
+
 /// One row of the decoy aerodynamic table.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AeroRow {
@@ -257,6 +521,9 @@ pub struct SystemConfig {
     pub decoy: DecoyConfig,
     /// Discretisation and time step.
     pub solver: SolverConfig,
+    /// Decoy management: monitors and look-ahead (optional: the reference values).
+    #[serde(default)]
+    pub management: ManagementSection,
     /// The decoy aerodynamic table read from `decoy.aero_table`.
     #[serde(skip)]
     pub aero_rows: Vec<AeroRow>,
@@ -402,6 +669,7 @@ impl SystemConfig {
             10.0,
         )?;
         c.positive("solver.time_step_host", s.time_step_host)?;
+        self.management.validate(&c)?;
         Ok(())
     }
 
@@ -463,6 +731,7 @@ impl SystemConfig {
             aero_row_count: self.aero_rows.len(),
             segments_embedded: s.segments_embedded,
             grading_ratio_embedded: s.grading_ratio_embedded,
+            management: self.management.params(),
         })
     }
 
@@ -597,6 +866,27 @@ impl Checker<'_> {
         } else {
             Err(self.invalid(field, format!("must not be negative, got {v}")))
         }
+    }
+    /// Caution, warning and hysteresis of a monitor (`<table>.caution_<unit>`, ...):
+    /// finite, 0 <= warning <= caution, hysteresis >= 0.
+    fn levels(
+        &self,
+        table: &str,
+        unit: &str,
+        caution: f64,
+        warning: f64,
+        hysteresis: f64,
+    ) -> Result<(), ConfigError> {
+        self.non_negative(&format!("{table}.warning_{unit}"), warning)?;
+        self.non_negative(&format!("{table}.hysteresis_{unit}"), hysteresis)?;
+        self.finite(&format!("{table}.caution_{unit}"), caution)?;
+        if caution < warning {
+            return Err(self.invalid(
+                &format!("{table}.caution_{unit}"),
+                format!("must not be below the warning threshold {warning}, got {caution}"),
+            ));
+        }
+        Ok(())
     }
     fn range(&self, field: &str, v: f64, lo: f64, hi: f64) -> Result<(), ConfigError> {
         self.finite(field, v)?;
@@ -733,6 +1023,28 @@ mod tests {
     fn with(from: &str, to: &str) -> String {
         assert!(BUILTIN_TOML.contains(from), "test edit `{from}` not found");
         BUILTIN_TOML.replacen(from, to, 1)
+    }
+
+    #[test]
+    fn the_management_section_is_optional_and_checked() {
+        let config = SystemConfig::builtin().unwrap();
+        // The reference file states the defaults explicitly.
+        assert_eq!(config.management, ManagementSection::default());
+        // Without the section: the same values.
+        let start = BUILTIN_TOML.find("[management]").unwrap();
+        let without = SystemConfig::from_str(&BUILTIN_TOML[..start], BUILTIN_AERO_CSV).unwrap();
+        assert_eq!(without.management, config.management);
+        // A warning threshold above the caution one is named.
+        let bad = BUILTIN_TOML.replace("warning_m = 0.25", "warning_m = 0.75");
+        let e = SystemConfig::from_str(&bad, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(
+            e.to_string().contains("management.exhaust.caution_m"),
+            "{e}"
+        );
+        // The usable angle of attack of the reference table: where its restoring
+        // moment stops growing, 40 degrees.
+        let params = config.params().unwrap();
+        assert!((params.usable_angle_of_attack().to_degrees() - 40.0).abs() < 1e-9);
     }
 
     #[test]

@@ -9,11 +9,14 @@ use solver_core::{
 };
 
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
+use crate::lookahead::Lookahead;
+use crate::monitor::{ManagementConfig, Measures, Monitors};
 use crate::path::FramePath;
 use crate::validate::{is_finite, validate_streamed};
 use decoy_link::{
-    AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello, HostMessage,
-    OutputFrame, PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
+    Advisories, AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello,
+    HostMessage, Management, OutputFrame, PROTOCOL_VERSION, Profile, RejectReason, Rejected,
+    StatusFlags, StatusFrame,
 };
 use decoy_link::{Decoder, FrameError};
 
@@ -41,6 +44,11 @@ pub const CONTROL_PERIOD_US: u32 = 10_000;
 pub const DECOY_NEAR_AIRCRAFT_M: f64 = 1.0;
 /// The highest built-in profile rate accepted, mrad/s.
 pub const MAX_PROFILE_RATE_MILLI_RADPS: u16 = 1000;
+
+/// Segment capacity of the look-ahead's copy of the solution, a model of half
+/// the controller's segments (`lookahead::prediction_params`; a model whose copy
+/// needs more segments has no look-ahead).
+pub const PREDICTION_CAPACITY: usize = 12;
 
 /// Altitude of the built-in profiles, m.
 const PROFILE_ALTITUDE_M: f64 = 9000.0;
@@ -84,6 +92,8 @@ pub struct ControllerConfig<T: Real> {
     pub geometry: Geometry<T>,
     /// Allowable connection tension, N (OVER_TENSION above it).
     pub allowable_tension_n: T,
+    /// The monitors' thresholds and the look-ahead's horizon and slice.
+    pub management: ManagementConfig<T>,
 }
 
 /// Why a controller could not be built.
@@ -145,12 +155,20 @@ pub struct ControllerSnapshot<T: Real, const N: usize> {
     /// The wave-speed rate max_i c_i / l_i (1/s) of the last accepted frame's
     /// outputs, which sets the next frame's step count (docs/protocol.md §5).
     pub wave_rate: T,
+    /// The monitors and look-ahead as the last Output reported them.
+    pub management: Management,
 }
 
-/// The decoy controller with a solver of capacity `N` in precision `T`.
+/// The decoy controller with a solver of capacity `N` in precision `T`, and a
+/// look-ahead copy of capacity `M`.
 #[derive(Clone, Debug)]
-pub struct Controller<T: Real, const N: usize> {
+pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPACITY> {
     solver: Solver<T, N>,
+    management: ManagementConfig<T>,
+    monitors: Monitors<T>,
+    lookahead: Lookahead<T, M>,
+    /// The management report of the last Output.
+    last_management: Management,
     geometry: Geometry<T>,
     allowable_tension_n: T,
     profile: Profile,
@@ -171,7 +189,7 @@ pub struct Controller<T: Real, const N: usize> {
     last_activity_ms: Option<u32>,
 }
 
-impl<T: Real, const N: usize> Controller<T, N> {
+impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// A controller without a configuration yet, as a constant of all zero bits
     /// (its solver is [`Solver::UNCONFIGURED`]): for a controller that must not
     /// pass through the stack (37.5 KB in f64 with room for 64 segments), put this
@@ -185,6 +203,10 @@ impl<T: Real, const N: usize> Controller<T, N> {
     /// wrong with it first), so it never steps its solver.
     pub const UNCONFIGURED: Self = Controller {
         solver: Solver::UNCONFIGURED,
+        management: ManagementConfig::ZERO,
+        monitors: Monitors::NEW,
+        lookahead: Lookahead::UNCONFIGURED,
+        last_management: Management::ZERO,
         geometry: Geometry::ZERO,
         allowable_tension_n: T::ZERO,
         profile: Profile::Streamed,
@@ -216,16 +238,15 @@ impl<T: Real, const N: usize> Controller<T, N> {
         Ok(controller)
     }
 
-    /// [`Controller::new`] with an already built model.
+    /// [`Controller::new`] with an already built model (`config.params` is not
+    /// used: `model` was built from it).
     pub fn from_model(
         model: Model<T, N>,
-        geometry: Geometry<T>,
-        allowable_tension_n: T,
+        config: &ControllerConfig<T>,
     ) -> Result<Self, ControllerError> {
         Self::new(ControllerConfig {
             params: *model.params(),
-            geometry,
-            allowable_tension_n,
+            ..*config
         })
     }
 
@@ -245,6 +266,11 @@ impl<T: Real, const N: usize> Controller<T, N> {
         self.solver
             .configure(&config.params)
             .map_err(ControllerError::Config)?;
+        self.lookahead
+            .configure(&config.params, config.management.prediction_segments);
+        self.management = config.management;
+        self.monitors.reset();
+        self.last_management = self.monitors.report();
         self.geometry = config.geometry;
         self.allowable_tension_n = allowable_tension_n;
         self.profile = Profile::Streamed;
@@ -309,7 +335,25 @@ impl<T: Real, const N: usize> Controller<T, N> {
             recovered_pending: self.recovered_pending,
             hazard_flags: self.hazard_flags,
             wave_rate: self.wave_rate,
+            management: self.last_management,
         }
+    }
+
+    /// The monitors' and the look-ahead's report of the last Output.
+    pub fn management(&self) -> &Management {
+        &self.last_management
+    }
+
+    /// The look-ahead (its last completed prediction).
+    pub fn lookahead(&self) -> &Lookahead<T, M> {
+        &self.lookahead
+    }
+
+    /// Forgets the monitors' history and every prediction (a new run).
+    fn reset_management(&mut self) {
+        self.monitors.reset();
+        self.lookahead.reset();
+        self.last_management = self.monitors.report();
     }
 
     /// The current [`StatusFlags`] bits (as in a Status frame).
@@ -424,7 +468,10 @@ impl<T: Real, const N: usize> Controller<T, N> {
 
     fn on_command(&mut self, command: Command) -> DeviceMessage {
         match command {
-            Command::ResetToTrim => self.run = None,
+            Command::ResetToTrim => {
+                self.run = None;
+                self.reset_management();
+            }
             Command::SelectProfile(profile) => {
                 let rate = match profile {
                     Profile::PullUp { rate_milli_radps } | Profile::Turn { rate_milli_radps } => {
@@ -438,6 +485,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
                 self.profile = profile;
                 self.builtin = self.builtin_path();
                 self.run = None;
+                self.reset_management();
             }
             Command::GetStatus => {}
             Command::Ping { nonce } => {
@@ -488,7 +536,22 @@ impl<T: Real, const N: usize> Controller<T, N> {
         let step_instructions = counter.elapsed(integration);
         match result {
             Ok((run, steps, path)) => match self.output(frame, steps, path.as_ref()) {
-                Ok(mut output) => {
+                Ok((mut output, aircraft)) => {
+                    let solution_instructions = counter.elapsed(start);
+                    // Decoy management, after the real-time solution is complete
+                    // (counted apart): the measures of the output evaluation,
+                    // the monitors, then one slice of the look-ahead.
+                    let management = counter.now();
+                    let measures = Measures::of(
+                        &self.solver.last_outputs(),
+                        &aircraft,
+                        &self.geometry,
+                        &self.management,
+                    );
+                    if !measures.is_finite(&self.management) {
+                        self.restore(saved);
+                        return self.reject(seq, RejectReason::SolverFailure);
+                    }
                     self.run = Some(run);
                     self.wave_rate = self.last_wave_rate();
                     self.accepted();
@@ -500,8 +563,22 @@ impl<T: Real, const N: usize> Controller<T, N> {
                         self.recovered_pending = false;
                         output.flags |= StatusFlags::RECOVERED;
                     }
-                    output.instructions = counter.elapsed(start);
+                    output.instructions = solution_instructions;
                     output.step_instructions = step_instructions;
+                    self.monitors.update(&measures, &self.management);
+                    self.lookahead.work(
+                        self.solver.state(),
+                        self.solver.model().lengths(),
+                        &aircraft,
+                        self.wave_rate,
+                        &measures,
+                        &self.geometry,
+                        &self.management,
+                    );
+                    output.management_instructions = counter.elapsed(management);
+                    output.prediction_steps = self.lookahead.last_steps as u16;
+                    output.management = self.management_report(frame.time_s);
+                    self.last_management = output.management;
                     DeviceMessage::Output(output)
                 }
                 Err(_) => {
@@ -730,7 +807,33 @@ impl<T: Real, const N: usize> Controller<T, N> {
         Ok(())
     }
 
-    /// The Output frame at the solver's current state.
+    /// The management report at frame time `now`: the monitors, and the last
+    /// completed prediction (times to violation from `now`).
+    fn management_report(&self, now: f64) -> Management {
+        let mut report = self.monitors.report();
+        let running = self.lookahead.running_violations();
+        let last = self.lookahead.last();
+        if let Some(p) = last {
+            report.prediction_from_s = p.from;
+            report.prediction_horizon_s = p.horizon as f32;
+        }
+        let mut advisories = 0;
+        for (k, r) in report.reports_mut().into_iter().enumerate() {
+            if let Some(p) = last {
+                r.predicted_worst_margin = p.worst[k].to_f64() as f32;
+            }
+            // The prediction under way, from a later state, first; else the
+            // last completed one.
+            if let Some(at) = running[k].or(last.and_then(|p| p.violation_at[k])) {
+                r.time_to_violation_s = (at - now).max(0.0) as f32;
+                advisories |= Advisories::bit(k);
+            }
+        }
+        report.advisories = advisories;
+        report
+    }
+
+    /// The Output frame at the solver's current state and the aircraft's state.
     ///
     /// `streamed` is the path of a streamed run (None: the built-in profile's).
     fn output(
@@ -738,7 +841,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         frame: &AircraftStateFrame,
         steps: u16,
         streamed: Option<&FramePath<T>>,
-    ) -> Result<OutputFrame, SolveError> {
+    ) -> Result<(OutputFrame, AircraftState<T>), SolveError> {
         let t = self.solver.state().time;
         let builtin = self.builtin;
         let (aircraft, out) = match (&builtin, streamed) {
@@ -805,6 +908,9 @@ impl<T: Real, const N: usize> Controller<T, N> {
             instructions: 0,
             step_instructions: 0,
             steps,
+            management_instructions: 0,
+            prediction_steps: 0,
+            management: Management::default(),
         };
         // Never a non-finite value in an accepted frame, whatever the precision
         // (narrowing an f64 beyond f32's range included): the frame is rejected as
@@ -812,7 +918,7 @@ impl<T: Real, const N: usize> Controller<T, N> {
         if !output_is_finite(&output, has_decoy) {
             return Err(SolveError::NonFinite { joint: 0 });
         }
-        Ok(output)
+        Ok((output, aircraft))
     }
 }
 

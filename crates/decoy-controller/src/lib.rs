@@ -13,6 +13,10 @@
 //! - [`path`]: [`FramePath`], the flight path between two State frames.
 //! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
 //!   and the aircraft (the host's `decoy simulate` uses the same code).
+//! - [`monitor`]: the decoy-management monitors (posture, collision, tension,
+//!   exhaust): margins, levels with hysteresis, worst margins and counts.
+//! - [`lookahead`]: the prediction flown forward with the aircraft holding its
+//!   manoeuvre, in fixed slices per frame.
 //! - [`controller`]: [`Controller`], the pure state machine.
 //! - [`serve`]: the controller's main loop over any byte link (`embedded-io`
 //!   `Read + ReadReady + Write`) and [`serve::Clock`]: the firmware's loop, which a
@@ -28,6 +32,8 @@
 
 pub mod controller;
 pub mod geometry;
+pub mod lookahead;
+pub mod monitor;
 pub mod params;
 pub mod path;
 pub mod serve;
@@ -36,8 +42,10 @@ pub mod validate;
 pub use controller::{
     CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,
     DECOY_NEAR_AIRCRAFT_M, InstructionCounter, MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S,
-    MAX_TIME_JUMP_S, NoCounter, SILENCE_MS, TIME_TOLERANCE_S,
+    MAX_TIME_JUMP_S, NoCounter, PREDICTION_CAPACITY, SILENCE_MS, TIME_TOLERANCE_S,
 };
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
+pub use lookahead::{HeldManoeuvre, Lookahead, Prediction};
+pub use monitor::{ManagementConfig, ManagementParams, Measures, Monitors, Thresholds};
 pub use params::{AeroRows, SystemParams};
 pub use path::FramePath;

@@ -21,6 +21,7 @@ use solver_core::{
 
 use crate::controller::ControllerConfig;
 use crate::geometry::{Envelope, ExhaustPlume, Geometry};
+use crate::monitor::{ManagementConfig, ManagementParams, usable_angle_of_attack};
 
 /// Rows `[alpha_deg, cl, cd, cm]` of the decoy's aerodynamic table, room for the
 /// solver's table capacity ([`SystemParams::aero_row_count`] of them are used).
@@ -96,6 +97,8 @@ pub struct SystemParams {
     pub segments_embedded: usize,
     /// `solver.grading_ratio_embedded`: length ratio of consecutive segments.
     pub grading_ratio_embedded: f64,
+    /// `[management]`: the monitors' thresholds, the look-ahead's horizon and slice.
+    pub management: ManagementParams,
 }
 
 /// A configuration triple as a solver vector in `T`.
@@ -196,8 +199,26 @@ impl SystemParams {
         }
     }
 
-    /// The controller's configuration with `layout`: the model, the geometry and
-    /// the allowable tension.
+    /// The usable total angle of attack of the decoy's table, rad
+    /// ([`usable_angle_of_attack`]).
+    pub fn usable_angle_of_attack(&self) -> f64 {
+        usable_angle_of_attack(&self.aero_rows[..self.aero_row_count.min(self.aero_rows.len())])
+    }
+
+    /// The management configuration in `T`.
+    pub fn management<T: Real>(&self) -> ManagementConfig<T> {
+        ManagementConfig {
+            wind: vec3(self.wind_ned),
+            ..ManagementConfig::new(
+                &self.management,
+                self.allowable_tension,
+                self.usable_angle_of_attack(),
+            )
+        }
+    }
+
+    /// The controller's configuration with `layout`: the model, the geometry,
+    /// the allowable tension and the management configuration.
     pub fn controller_config<T: Real>(
         &self,
         layout: SegmentLayout<T>,
@@ -206,6 +227,7 @@ impl SystemParams {
             params: self.model_params(layout)?,
             geometry: self.geometry(),
             allowable_tension_n: T::lit(self.allowable_tension),
+            management: self.management(),
         })
     }
 }

@@ -212,6 +212,22 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
     }
 }
 
+/// The aircraft state `state` at `time_s` as the State frame numbered `seq` a host
+/// sends (velocities, accelerations, attitude and rates narrowed to f32).
+pub fn state_frame(seq: u32, time_s: f64, state: &AircraftState<f64>) -> AircraftStateFrame {
+    let f32s = |v: &Vec3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    AircraftStateFrame {
+        seq,
+        time_s,
+        position_ned_m: [state.position.x, state.position.y, state.position.z],
+        velocity_ned_mps: f32s(&state.velocity),
+        acceleration_ned_mps2: f32s(&state.acceleration),
+        attitude_wxyz: state.attitude.map(|q| q as f32),
+        body_rate_radps: f32s(&state.angular_rate),
+        body_angular_acceleration_radps2: f32s(&state.angular_acceleration),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use decoy_config::SystemConfig;
 use decoy_controller::{Controller, NoCounter};
 use decoy_link::{AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame};
-use solver_core::{AircraftState, FlightPath, Real};
+use solver_core::{FlightPath, Real};
 
 use crate::link::{LinkError, Session};
 
@@ -18,20 +18,9 @@ pub const CONTROL_PERIOD_S: f64 = 0.01;
 /// Segment capacity of the controller on the target and on the host.
 pub const CONTROLLER_CAPACITY: usize = 64;
 
-/// The aircraft state of `path` at `time_s` as a frame numbered `seq`.
-pub fn state_frame(seq: u32, time_s: f64, state: &AircraftState<f64>) -> AircraftStateFrame {
-    let f32s = |v: &solver_core::Vec3<f64>| [v.x as f32, v.y as f32, v.z as f32];
-    AircraftStateFrame {
-        seq,
-        time_s,
-        position_ned_m: [state.position.x, state.position.y, state.position.z],
-        velocity_ned_mps: f32s(&state.velocity),
-        acceleration_ned_mps2: f32s(&state.acceleration),
-        attitude_wxyz: state.attitude.map(|q| q as f32),
-        body_rate_radps: f32s(&state.angular_rate),
-        body_angular_acceleration_radps2: f32s(&state.angular_acceleration),
-    }
-}
+/// The aircraft state of `path` at `time_s` as a frame numbered `seq` (the
+/// controller crate's conversion, which `decoy simulate` uses too).
+pub use decoy_controller::path::state_frame;
 
 /// Frames `0..=count` of `path`, frame k at t = k [`CONTROL_PERIOD_S`] (computed
 /// as a product, not a running sum, so the times carry no accumulated error).
@@ -198,6 +187,7 @@ pub fn compare(firmware: &[DeviceMessage], host: &[DeviceMessage]) -> (Agreement
                 agreement.outputs += 1;
                 let mut a_masked = *a;
                 a_masked.instructions = b.instructions;
+                a_masked.management_instructions = b.management_instructions;
                 a_masked.step_instructions = b.step_instructions;
                 if a_masked == *b {
                     agreement.identical += 1;

@@ -29,7 +29,7 @@ pub const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
 pub const MAX_STEP_S: f64 = decoy_controller::MAX_STEP_S;
 
 /// The header of `decoy hil`'s `timeseries.csv` (see `docs/outputs.md`).
-pub const HIL_TIMESERIES_HEADER: &str = "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N";
+pub const HIL_TIMESERIES_HEADER: &str = "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N,prediction_steps,management_instructions,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories,posture_violation_in_s,collision_violation_in_s,tension_violation_in_s,exhaust_violation_in_s";
 
 /// What `decoy hil` runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -80,6 +80,14 @@ pub struct HilSummary {
     pub instructions_per_step_max: u32,
     /// Mean instructions per 10 ms control step.
     pub instructions_per_step_mean: f64,
+    /// Most instructions one frame's decoy management took (monitors and the
+    /// look-ahead's slice, after the Output's solution;
+    /// `OutputFrame::management_instructions`).
+    pub management_instructions_max: u32,
+    /// Look-ahead predictions that completed during the run.
+    pub predictions_completed: usize,
+    /// Horizon of the last completed prediction, s (0: none completed).
+    pub prediction_horizon_s: f64,
     /// State frames sent to the firmware (the `ResetToTrim` command before them is
     /// not counted: like with like with `frames_answered`).
     pub frames_sent: usize,
@@ -351,6 +359,15 @@ pub fn run_hil(
         precision_bits: hello.precision_bits,
         instructions_per_step_max: stats.max,
         instructions_per_step_mean: stats.mean,
+        management_instructions_max: flight::outputs(&answers)
+            .iter()
+            .map(|o| o.management_instructions)
+            .max()
+            .unwrap_or(0),
+        predictions_completed: predictions_completed(&answers),
+        prediction_horizon_s: flight::outputs(&answers)
+            .last()
+            .map_or(0.0, |o| f64::from(o.management.prediction_horizon_s)),
         // Like with like: the State frames sent and the Outputs answering them (the
         // ResetToTrim command before them is neither).
         frames_sent: sent
@@ -401,6 +418,14 @@ pub fn run_hil(
             &rows,
             &out_dir,
         )?);
+        files.extend(
+            decoy_sim::write_management_plot(
+                &format!("{} (HIL, {})", plan.name, options.board),
+                &firmware_samples,
+                &out_dir,
+            )
+            .map_err(|e| HilError::Output(e.to_string()))?,
+        );
     }
     if let Some((t_s, reason)) = stop {
         return Err(HilError::Stopped {
@@ -547,7 +572,23 @@ pub fn sample(out: &OutputFrame, frame: &AircraftStateFrame, lateral_sign: f64) 
         decoy_clearance: f64::from(out.decoy_clearance_aircraft_m),
         speed: (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt(),
         altitude: -frame.position_ned_m[2],
+        management: decoy_sim::ManagementSample::of_report(&out.management),
     }
+}
+
+/// How many look-ahead predictions completed: the number of distinct
+/// `prediction_from_s` the Outputs reported.
+fn predictions_completed(answers: &[DeviceMessage]) -> usize {
+    let mut count = 0;
+    let mut last = -1.0;
+    for o in &flight::outputs(answers) {
+        let from = o.management.prediction_from_s;
+        if from >= 0.0 && from != last {
+            count += 1;
+            last = from;
+        }
+    }
+    count
 }
 
 /// Writes `decoy hil`'s `timeseries.csv` ([`HIL_TIMESERIES_HEADER`]): the
@@ -595,6 +636,19 @@ pub fn write_timeseries(
             text.push(',');
             text.push_str(&format_value(v));
         }
+        text.push_str(&format!(
+            ",{},{}",
+            fw.prediction_steps, fw.management_instructions
+        ));
+        let m = &s.management;
+        for k in 0..4 {
+            text.push_str(&format!(",{},{}", m.levels[k], format_value(m.margins[k])));
+        }
+        text.push_str(&format!(",{}", m.advisories));
+        for v in m.violation_in {
+            text.push(',');
+            text.push_str(&format_value(if v.is_finite() { v } else { -1.0 }));
+        }
         text.push('\n');
     }
     fs::write(path, text)
@@ -607,6 +661,9 @@ mod tests {
 
     #[test]
     fn the_header_has_a_column_per_value() {
-        assert_eq!(HIL_TIMESERIES_HEADER.split(',').count(), 2 + 13 + 3 + 6);
+        assert_eq!(
+            HIL_TIMESERIES_HEADER.split(',').count(),
+            2 + 13 + 3 + 6 + 2 + 13
+        );
     }
 }

@@ -39,7 +39,7 @@ pub use framing::{
     Decoder, EncodeError, FrameDecoder, FrameError, MAX_FRAME_BYTES, MAX_WIRE_BYTES, crc32, encode,
 };
 pub use messages::{
-    AircraftStateFrame, BOARD_NAME_CAPACITY, BoardInfo, BoardName, Command, Counters,
-    DeviceMessage, Hello, HostMessage, OutputFrame, PROTOCOL_VERSION, Profile, RejectReason,
-    Rejected, StatusFlags, StatusFrame,
+    Advisories, AircraftStateFrame, BOARD_NAME_CAPACITY, BoardInfo, BoardName, Command, Counters,
+    DeviceMessage, Hello, HostMessage, Management, MonitorLevel, MonitorReport, OutputFrame,
+    PROTOCOL_VERSION, Profile, REQUIREMENTS, RejectReason, Rejected, StatusFlags, StatusFrame,
 };

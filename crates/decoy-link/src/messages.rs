@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 2;
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -136,7 +136,176 @@ pub struct OutputFrame {
     pub step_instructions: u32,
     /// RK4 steps taken for this frame (0 for the frame that trimmed).
     pub steps: u16,
+    /// Instructions of this frame's decoy management, run after the real-time
+    /// solution is complete (not in [`OutputFrame::instructions`]): the monitors'
+    /// measures and update, and this frame's slice of the look-ahead.
+    pub management_instructions: u32,
+    /// Look-ahead RK4 steps taken in this frame's slice.
+    pub prediction_steps: u16,
+    /// The decoy-management monitors and the look-ahead (docs/protocol.md §3,
+    /// "Management").
+    pub management: Management,
 }
+
+/// The level of one monitor: its margin against the configured thresholds
+/// (`[management]`), with hysteresis on the way down.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum MonitorLevel {
+    /// Margin at or above the caution threshold.
+    #[default]
+    Normal,
+    /// Margin below the caution threshold.
+    Caution,
+    /// Margin below the warning threshold.
+    Warning,
+    /// Margin below zero: the requirement is violated.
+    Violated,
+}
+
+impl MonitorLevel {
+    /// The level as a number: 0 normal, 1 caution, 2 warning, 3 violated.
+    pub fn index(self) -> u8 {
+        self as u8
+    }
+
+    /// The level's name in lower case.
+    pub fn name(self) -> &'static str {
+        match self {
+            MonitorLevel::Normal => "normal",
+            MonitorLevel::Caution => "caution",
+            MonitorLevel::Warning => "warning",
+            MonitorLevel::Violated => "violated",
+        }
+    }
+}
+
+/// One requirement's monitor and prediction, as reported in every Output.
+///
+/// The margin is in the requirement's own unit (posture rad, collision m,
+/// tension N, exhaust m); negative means violated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MonitorReport {
+    /// The level now.
+    pub level: MonitorLevel,
+    /// The margin now.
+    pub margin: f32,
+    /// The smallest margin since the run started (trim or reset).
+    pub worst_margin: f32,
+    /// Times the level rose to caution or worse since the run started.
+    pub cautions: u32,
+    /// Times the level rose to warning or worse since the run started.
+    pub warnings: u32,
+    /// Times the level rose to violated since the run started.
+    pub violations: u32,
+    /// The smallest margin the last completed look-ahead predicts over its
+    /// horizon (the margin now if no prediction has completed yet).
+    pub predicted_worst_margin: f32,
+    /// Seconds from this frame's time until the last completed look-ahead
+    /// predicts the margin to fall below zero; -1 when it predicts none within
+    /// its horizon (or no prediction has completed yet).
+    pub time_to_violation_s: f32,
+}
+
+/// The four monitors of the paper's decoy-management requirements and the state
+/// of the look-ahead.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Management {
+    /// (1) Decoy posture: margin in rad.
+    pub posture: MonitorReport,
+    /// (2) Decoy and cable clear of the aircraft: margin in m.
+    pub collision: MonitorReport,
+    /// (3) Cable tension within the allowable and above slack: margin in N.
+    pub tension: MonitorReport,
+    /// (4) Cable out of the exhaust plume: margin in m.
+    pub exhaust: MonitorReport,
+    /// [`Advisories`] bits: requirements the look-ahead predicts violated within
+    /// its horizon if the aircraft holds its current manoeuvre.
+    pub advisories: u8,
+    /// Time of the frame whose state the last completed look-ahead started from,
+    /// s (-1 before the first completes).
+    pub prediction_from_s: f64,
+    /// Horizon of the last completed look-ahead, s (0 before the first).
+    pub prediction_horizon_s: f32,
+}
+
+impl Management {
+    /// Every field zero (the `Default`), as a constant: a controller's report
+    /// before it is configured.
+    pub const ZERO: Self = {
+        let r = MonitorReport {
+            level: MonitorLevel::Normal,
+            margin: 0.0,
+            worst_margin: 0.0,
+            cautions: 0,
+            warnings: 0,
+            violations: 0,
+            predicted_worst_margin: 0.0,
+            time_to_violation_s: 0.0,
+        };
+        Management {
+            posture: r,
+            collision: r,
+            tension: r,
+            exhaust: r,
+            advisories: 0,
+            prediction_from_s: 0.0,
+            prediction_horizon_s: 0.0,
+        }
+    };
+
+    /// The four reports in the order posture, collision, tension, exhaust.
+    pub fn reports(&self) -> [&MonitorReport; 4] {
+        [&self.posture, &self.collision, &self.tension, &self.exhaust]
+    }
+
+    /// The four reports, mutable, in the same order.
+    pub fn reports_mut(&mut self) -> [&mut MonitorReport; 4] {
+        [
+            &mut self.posture,
+            &mut self.collision,
+            &mut self.tension,
+            &mut self.exhaust,
+        ]
+    }
+
+    /// The highest level of the four.
+    pub fn worst_level(&self) -> MonitorLevel {
+        self.reports()
+            .iter()
+            .map(|r| r.level)
+            .max()
+            .unwrap_or(MonitorLevel::Normal)
+    }
+
+    /// Whether the advisory line is asserted for this report: a monitor at
+    /// warning or worse, or a look-ahead advisory (firmware/src/advisory.rs
+    /// drives the line with this; docs/protocol.md §3).
+    pub fn advisory_line(&self) -> bool {
+        self.worst_level() >= MonitorLevel::Warning || self.advisories != 0
+    }
+}
+
+/// The bits of [`Management::advisories`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Advisories(pub u8);
+
+impl Advisories {
+    /// Continuing the manoeuvre violates the posture requirement.
+    pub const POSTURE: u8 = 1;
+    /// ... the collision requirement.
+    pub const COLLISION: u8 = 2;
+    /// ... the tension requirement.
+    pub const TENSION: u8 = 4;
+    /// ... the exhaust requirement.
+    pub const EXHAUST: u8 = 8;
+    /// The bit of the requirement at `index` (0 posture, 1 collision, 2 tension, 3 exhaust).
+    pub const fn bit(index: usize) -> u8 {
+        1 << index
+    }
+}
+
+/// The requirements' names in report order (for logs and files).
+pub const REQUIREMENTS: [&str; 4] = ["posture", "collision", "tension", "exhaust"];
 
 /// A rejected frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -4,8 +4,8 @@
 use decoy_link::framing::{CRC_BYTES, MAX_PAYLOAD_BYTES};
 use decoy_link::{
     AircraftStateFrame, BoardName, Command, Counters, DeviceMessage, FrameDecoder, FrameError,
-    Hello, HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, OutputFrame, Profile, RejectReason,
-    Rejected, StatusFrame, crc32, encode,
+    Hello, HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, Management, MonitorLevel, MonitorReport,
+    OutputFrame, Profile, RejectReason, Rejected, StatusFrame, crc32, encode,
 };
 
 /// A small deterministic generator (SplitMix64), so failures reproduce.
@@ -104,6 +104,36 @@ fn counters(r: &mut Rng) -> Counters {
     }
 }
 
+fn monitor(r: &mut Rng) -> MonitorReport {
+    MonitorReport {
+        level: match r.next() % 4 {
+            0 => MonitorLevel::Normal,
+            1 => MonitorLevel::Caution,
+            2 => MonitorLevel::Warning,
+            _ => MonitorLevel::Violated,
+        },
+        margin: r.f32(),
+        worst_margin: r.f32(),
+        cautions: r.u32(),
+        warnings: r.u32(),
+        violations: r.u32(),
+        predicted_worst_margin: r.f32(),
+        time_to_violation_s: r.f32(),
+    }
+}
+
+fn management(r: &mut Rng) -> Management {
+    Management {
+        posture: monitor(r),
+        collision: monitor(r),
+        tension: monitor(r),
+        exhaust: monitor(r),
+        advisories: r.byte(),
+        prediction_from_s: r.f64(),
+        prediction_horizon_s: r.f32(),
+    }
+}
+
 fn device_message(r: &mut Rng) -> DeviceMessage {
     match r.next() % 5 {
         0 => DeviceMessage::Output(OutputFrame {
@@ -120,6 +150,9 @@ fn device_message(r: &mut Rng) -> DeviceMessage {
             instructions: r.u32(),
             step_instructions: r.u32(),
             steps: r.u16(),
+            management_instructions: r.u32(),
+            prediction_steps: r.u16(),
+            management: management(r),
         }),
         1 => DeviceMessage::Rejected(Rejected {
             seq: if r.next().is_multiple_of(2) {
@@ -388,7 +421,7 @@ fn encode_reports_a_short_buffer() {
 }
 
 /// The example of docs/protocol.md and firmware/README.md, byte for byte: the
-/// ping and its answer (protocol version 2).
+/// ping and its answer (protocol version 3).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
@@ -402,6 +435,6 @@ fn the_documented_ping_frame() {
     };
     assert_eq!(
         wire(&pong),
-        [0x00, 0x08, 0x03, 0x07, 0x02, 0xa0, 0x90, 0x48, 0x5c, 0x00]
+        [0x00, 0x08, 0x03, 0x07, 0x03, 0x36, 0xa0, 0x4f, 0x2b, 0x00]
     );
 }

@@ -160,9 +160,24 @@ pub fn write_plot(plot: &Plot, stem: &Path) -> Result<[PathBuf; 2], PlotError> {
 /// As [`write_plot`]; [`PlotError::Empty`] names the first plot without a finite point
 /// (or has an empty title when `plots` is empty).
 pub fn write_stacked(plots: &[Plot], stem: &Path) -> Result<[PathBuf; 2], PlotError> {
+    write_stacked_shaded(plots, &[], stem)
+}
+
+/// [`write_stacked`] with x intervals shaded (light red, the full height of the
+/// panel, under the lines) in each panel: `shaded[i]` for `plots[i]` (panels
+/// beyond `shaded` have none). For example the times a limit is violated.
+///
+/// # Errors
+///
+/// As [`write_stacked`].
+pub fn write_stacked_shaded(
+    plots: &[Plot],
+    shaded: &[Vec<(f64, f64)>],
+    stem: &Path,
+) -> Result<[PathBuf; 2], PlotError> {
     let rows = u32::try_from(plots.len()).unwrap_or(u32::MAX);
     let height = HEIGHT.max(STACKED_PANEL_HEIGHT.saturating_mul(rows));
-    write_figure(plots, stem, (WIDTH, height))
+    write_figure_shaded(plots, shaded, stem, (WIDTH, height))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -204,6 +219,8 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 const GRID_BOLD: RGBColor = RGBColor(200, 200, 200);
+/// Shaded intervals (light red).
+const SHADE: RGBColor = RGBColor(250, 205, 205);
 const GRID_LIGHT: RGBColor = RGBColor(236, 236, 236);
 /// Minor grid lines between two major ones, at most.
 const MINOR_GRID_LINES: usize = 4;
@@ -237,6 +254,8 @@ type Span = (f64, f64);
 /// A plot's finite data, split into drawable stretches.
 struct Prepared<'a> {
     plot: &'a Plot,
+    /// x intervals to shade.
+    shaded: &'a [(f64, f64)],
     /// Per series, the maximal runs of consecutive finite points, in drawing
     /// coordinates (`y` negated when the plot is inverted).
     runs: Vec<Vec<Vec<(f64, f64)>>>,
@@ -277,7 +296,13 @@ fn prepare(plot: &Plot) -> Result<Prepared<'_>, PlotError> {
         runs.push(series_runs);
     }
     match (x, y) {
-        (Some(x), Some(y)) => Ok(Prepared { plot, runs, x, y }),
+        (Some(x), Some(y)) => Ok(Prepared {
+            plot,
+            shaded: &[],
+            runs,
+            x,
+            y,
+        }),
         _ => Err(PlotError::Empty {
             title: plot.title.clone(),
         }),
@@ -533,13 +558,25 @@ fn split_title<DB: DrawingBackend>(
 // Drawing
 
 fn write_figure(plots: &[Plot], stem: &Path, size: (u32, u32)) -> Result<[PathBuf; 2], PlotError> {
+    write_figure_shaded(plots, &[], stem, size)
+}
+
+fn write_figure_shaded(
+    plots: &[Plot],
+    shaded: &[Vec<(f64, f64)>],
+    stem: &Path,
+    size: (u32, u32),
+) -> Result<[PathBuf; 2], PlotError> {
     ensure_fonts()?;
     if plots.is_empty() {
         return Err(PlotError::Empty {
             title: String::new(),
         });
     }
-    let data = plots.iter().map(prepare).collect::<Result<Vec<_>, _>>()?;
+    let mut data = plots.iter().map(prepare).collect::<Result<Vec<_>, _>>()?;
+    for (d, s) in data.iter_mut().zip(shaded) {
+        d.shaded = s.as_slice();
+    }
 
     let mut pixels = vec![0u8; size.0 as usize * size.1 as usize * 3];
     {
@@ -681,6 +718,19 @@ fn draw_panel<DB: DrawingBackend>(
         mesh.y_desc(plot.y_label.as_str());
     }
     mesh.draw().map_err(draw_err)?;
+
+    // Shaded x intervals, clipped to the axes, under the lines.
+    for &(a, b) in data.shaded {
+        let (lo, hi) = (a.max(lay.x.0), b.min(lay.x.1));
+        if lo.is_finite() && hi.is_finite() && lo <= hi {
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(lo, lay.y.0), (hi, lay.y.1)],
+                    SHADE.filled(),
+                )))
+                .map_err(draw_err)?;
+        }
+    }
 
     let legend = plot.series.len() > 1;
     // Every drawn stretch (after decimation), for placing the legend.

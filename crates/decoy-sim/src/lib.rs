@@ -67,6 +67,7 @@ mod capacity;
 pub mod error;
 pub mod format;
 pub mod geometry;
+pub mod management;
 pub mod options;
 pub mod pendulum;
 mod plots;
@@ -85,8 +86,12 @@ pub mod trim;
 pub use error::SimError;
 pub use format::{describe_layout, format_time, format_value};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
+pub use management::{ManagementSample, ManagementSummary, RequirementSummary};
 pub use options::{InitialState, RunOptions};
-pub use plots::{COMPARISON_PLOT_NAMES, PLOT_NAMES, write_comparison_plots};
+pub use plots::{
+    COMPARISON_PLOT_NAMES, PLOT_NAMES, management_panels, write_comparison_plots,
+    write_management_plot,
+};
 pub use profile::FlightProfile;
 pub use record::{CABLE_HEADER, Sample, Snapshot, TIMESERIES_HEADER};
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};

@@ -2,7 +2,13 @@
 
 use std::path::{Path, PathBuf};
 
-use decoy_plots::{Aspect, Plot, PlotError, Series, write_plot, write_stacked};
+use decoy_config::SystemConfig;
+use decoy_link::{MonitorLevel, REQUIREMENTS};
+use decoy_plots::{
+    Aspect, Plot, PlotError, Series, write_plot, write_stacked, write_stacked_shaded,
+};
+
+use crate::geometry::{Envelope, ExhaustPlume, envelope_from_config, plume_from_config};
 
 use crate::error::SimError;
 use crate::format::format_time;
@@ -10,12 +16,13 @@ use crate::record::{PLOTTED_SNAPSHOTS, Recorded, Sample, Snapshot};
 use crate::scenario::RunPlan;
 
 /// The plots' file stems, in the order they are written.
-pub const PLOT_NAMES: [&str; 5] = [
+pub const PLOT_NAMES: [&str; 6] = [
     "tensions",
     "attitude",
     "cable-side",
     "cable-top",
     "tension-profile",
+    "management",
 ];
 
 /// A quantity of a sample, named.
@@ -71,8 +78,11 @@ fn snapshot_series(snapshots: &[&Snapshot], x: usize, y: usize) -> Vec<Series> {
 pub(crate) fn write_all(
     recorded: &Recorded<'_>,
     plan: &RunPlan,
+    config: &SystemConfig,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, SimError> {
+    let plume = plume_from_config::<f64>(&config.aircraft);
+    let envelope = envelope_from_config::<f64>(&config.aircraft);
     let samples = recorded.samples;
     let name = &plan.name;
     let time = "t [s]";
@@ -127,6 +137,8 @@ pub(crate) fn write_all(
         "below the flight path [m]",
         snapshot_series(&shown, 1, 3),
     );
+    side.series
+        .extend(outlines(&plume, &envelope, View::Side, plan.lateral_sign));
     side.invert_y = true;
     emit("cable-side", write_plot(&side, &dir.join("cable-side")))?;
 
@@ -143,6 +155,9 @@ pub(crate) fn write_all(
         "lateral [m]",
         snapshot_series(&shown, 1, 2),
     );
+    let mut top = top;
+    top.series
+        .extend(outlines(&plume, &envelope, View::Top, plan.lateral_sign));
     emit("cable-top", write_plot(&top, &dir.join("cable-top")))?;
 
     let profile = plot(
@@ -155,7 +170,154 @@ pub(crate) fn write_all(
         "tension-profile",
         write_plot(&profile, &dir.join("tension-profile")),
     )?;
+
+    files.extend(write_management_plot(name, samples, dir)?);
     Ok(files)
+}
+
+/// Draws the management timeline (`management.png/.svg`, [`management_panels`])
+/// of `samples` into `dir`; returns the files written.
+pub fn write_management_plot(
+    name: &str,
+    samples: &[Sample],
+    dir: &Path,
+) -> Result<Vec<PathBuf>, SimError> {
+    let (panels, shaded) = management_panels(name, samples);
+    write_stacked_shaded(&panels, &shaded, &dir.join("management"))
+        .map(Vec::from)
+        .map_err(|e| SimError::Plot {
+            stem: dir.join("management"),
+            message: e.to_string(),
+        })
+}
+
+/// The management timeline: per requirement a panel with its level (0 normal,
+/// 1 caution, 2 warning, 3 violated) over time, the look-ahead's advisories
+/// marked as a line at 3.5 while they stand, and the violations shaded.
+pub fn management_panels(name: &str, samples: &[Sample]) -> (Vec<Plot>, Vec<Vec<(f64, f64)>>) {
+    let mut panels = Vec::new();
+    let mut shaded = Vec::new();
+    for (k, requirement) in REQUIREMENTS.iter().enumerate() {
+        let level = series("level", samples, |s| f64::from(s.management.levels[k]));
+        let advisory = series("advisory (look-ahead: continuing violates)", samples, |s| {
+            if s.management.advisories & (1 << k) != 0 {
+                3.5
+            } else {
+                f64::NAN
+            }
+        });
+        let panel = plot(
+            format!("{name}: {requirement} (0 normal, 1 caution, 2 warning, 3 violated)"),
+            "t [s]",
+            "level",
+            vec![level, advisory],
+        );
+        panels.push(panel);
+        let violated = MonitorLevel::Violated.index();
+        let mut intervals = Vec::new();
+        let mut start: Option<f64> = None;
+        for s in samples {
+            match (s.management.levels[k] == violated, start) {
+                (true, None) => start = Some(s.t),
+                (false, Some(t0)) => {
+                    intervals.push((t0, s.t));
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        if let (Some(t0), Some(last)) = (start, samples.last()) {
+            intervals.push((t0, last.t));
+        }
+        shaded.push(intervals);
+    }
+    (panels, shaded)
+}
+
+/// Which view of the flight-path frame an outline is drawn in.
+#[derive(Clone, Copy, PartialEq)]
+enum View {
+    /// Behind and below.
+    Side,
+    /// Behind and lateral.
+    Top,
+}
+
+/// The exhaust plume's and the collision capsule's outlines in a cable view, as
+/// the body frame lies in the flight-path frame with the body x axis along the
+/// velocity (the built-in profiles' attitude): behind = -x, below = z, lateral =
+/// -y times the run's lateral sign.
+fn outlines(
+    plume: &ExhaustPlume,
+    envelope: &Envelope,
+    view: View,
+    lateral_sign: f64,
+) -> Vec<Series> {
+    let project = |p: nalgebra::Vector3<f64>| -> (f64, f64) {
+        match view {
+            View::Side => (-p.x, p.z),
+            View::Top => (-p.x, lateral_sign * -p.y + 0.0),
+        }
+    };
+    // The view plane's normal in the body frame.
+    let normal = match view {
+        View::Side => nalgebra::Vector3::y(),
+        View::Top => nalgebra::Vector3::z(),
+    };
+    let mut series = Vec::new();
+    let mut add = |label: &str, points: Vec<Option<nalgebra::Vector3<f64>>>| {
+        let (x, y): (Vec<f64>, Vec<f64>) = points
+            .into_iter()
+            .map(|p| p.map_or((f64::NAN, f64::NAN), project))
+            .unzip();
+        series.push(Series {
+            label: label.to_owned(),
+            x,
+            y,
+        });
+    };
+    // The plume: its silhouette in the view plane, a trapezoid.
+    let side = plume.axis.cross(&normal);
+    if side.norm() > 1e-9 {
+        let side = side.normalize();
+        let end = plume.nozzle + plume.axis * plume.length;
+        let r1 = plume.nozzle_radius + plume.length * plume.tan_half_angle;
+        add(
+            "exhaust plume",
+            vec![
+                Some(plume.nozzle + side * plume.nozzle_radius),
+                Some(end + side * r1),
+                Some(end - side * r1),
+                Some(plume.nozzle - side * plume.nozzle_radius),
+                Some(plume.nozzle + side * plume.nozzle_radius),
+            ],
+        );
+    }
+    // The capsule: two sides and two half circles.
+    let axis = envelope.aft - envelope.fore;
+    let side = axis.cross(&normal);
+    if side.norm() > 1e-9 {
+        let side = side.normalize();
+        let along = axis.normalize();
+        let r = envelope.radius;
+        let mut points = Vec::new();
+        let steps = 16;
+        for i in 0..=steps {
+            let a = std::f64::consts::PI * f64::from(i) / f64::from(steps);
+            points.push(Some(
+                envelope.aft + side * (r * a.cos()) + along * (r * a.sin()),
+            ));
+        }
+        for i in 0..=steps {
+            let a = std::f64::consts::PI * f64::from(i) / f64::from(steps);
+            points.push(Some(
+                envelope.fore - side * (r * a.cos()) - along * (r * a.sin()),
+            ));
+        }
+        points.push(points[0]);
+        add("aircraft envelope", points);
+    }
+    series
 }
 
 /// Draws the time-series plots of several runs of one scenario on common axes

@@ -15,6 +15,7 @@ use crate::geometry::{
     Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance, envelope_from_config,
     plume_from_config,
 };
+use crate::management::{ManagementSample, ManagementTrack};
 use crate::profile::FlightProfile;
 use crate::scenario::RunPlan;
 
@@ -33,7 +34,7 @@ pub const SETTLING_HOLD_S: f64 = 1.0;
 pub const PLOTTED_SNAPSHOTS: usize = 6;
 
 /// The header of `timeseries.csv` (units in the names; see `docs/outputs.md`).
-pub const TIMESERIES_HEADER: &str = "t_s,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,cable_exhaust_closest_along_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m";
+pub const TIMESERIES_HEADER: &str = "t_s,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,cable_exhaust_closest_along_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories,posture_violation_in_s,collision_violation_in_s,tension_violation_in_s,exhaust_violation_in_s";
 /// The header of `cable.csv`.
 pub const CABLE_HEADER: &str = "t_s,joint,along_m,behind_m,lateral_m,below_m,tension_N";
 
@@ -66,6 +67,8 @@ pub struct Sample {
     pub speed: f64,
     /// Aircraft reference point altitude, m.
     pub altitude: f64,
+    /// Decoy management: levels, margins, advisories (`docs/outputs.md`).
+    pub management: ManagementSample,
 }
 
 impl Sample {
@@ -83,6 +86,7 @@ impl Sample {
             decoy_clearance: f64::NAN,
             speed: f64::NAN,
             altitude: f64::NAN,
+            management: ManagementSample::default(),
         }
     }
 
@@ -107,6 +111,16 @@ impl Sample {
         for v in values {
             row.push(',');
             row.push_str(&format_value(v));
+        }
+        let m = &self.management;
+        for k in 0..4 {
+            row.push_str(&format!(",{},{}", m.levels[k], format_value(m.margins[k])));
+        }
+        row.push_str(&format!(",{}", m.advisories));
+        for v in m.violation_in {
+            row.push(',');
+            // -1 where no violation is predicted (as on the wire).
+            row.push_str(&format_value(if v.is_finite() { v } else { -1.0 }));
         }
         row.push('\n');
         row
@@ -192,6 +206,7 @@ impl Probe {
             decoy_clearance,
             speed: aircraft.velocity.norm(),
             altitude: aircraft.altitude(),
+            management: ManagementSample::default(),
         }
     }
 
@@ -359,6 +374,8 @@ pub(crate) struct Recorder<'a> {
     pub snapshot_every: u64,
     pub steps: u64,
     pub dt: f64,
+    /// The management monitors and the onboard controller (runs that write files).
+    pub management: Option<ManagementTrack>,
 }
 
 /// Why a run stopped early: the reason in words and the solver's error.
@@ -402,6 +419,7 @@ impl<'a> Recorder<'a> {
             snapshot_every: ((snapshot_interval / plan.dt).round() as u64).max(1),
             steps: plan.steps,
             dt: plan.dt,
+            management: None,
         }
     }
 
@@ -417,7 +435,7 @@ impl<'a> Recorder<'a> {
         let write_row = k == 0 || k.is_multiple_of(self.sample_every) || k == self.steps;
         let take_snapshot = k == 0 || k.is_multiple_of(self.snapshot_every) || k == self.steps;
         let previous_yaw = (k > 0).then_some(self.last.euler_deg[2]);
-        let sample = self.probe.sample(out, &aircraft, previous_yaw);
+        let mut sample = self.probe.sample(out, &aircraft, previous_yaw);
         self.probe
             .snapshot_into(out, &aircraft, &mut self.candidate_cable);
         if !(sample.tension_connection.is_finite() && sample.tension_tow.is_finite()) {
@@ -429,6 +447,9 @@ impl<'a> Recorder<'a> {
                 ),
                 None,
             )));
+        }
+        if write_row && let Some(track) = &mut self.management {
+            sample.management = track.observe(out, &aircraft, self.path);
         }
         self.last = sample;
         std::mem::swap(&mut self.last_cable, &mut self.candidate_cable);

@@ -10,6 +10,7 @@ use solver_core::{AircraftState, Model, SolveError, Solver, State, trim};
 use crate::capacity::with_capacity;
 use crate::error::SimError;
 use crate::format::round_time;
+use crate::management::ManagementTrack;
 use crate::options::{InitialState, RunOptions};
 use crate::plots::PLOT_NAMES;
 use crate::record::{
@@ -153,6 +154,7 @@ fn simulate_with<const N: usize>(
         SAMPLE_INTERVAL_S,
         SNAPSHOT_INTERVAL_S,
     );
+    recorder.management = ManagementTrack::new(config);
     // A run that cannot start (no trim, an initial state that cannot be
     // evaluated) still leaves a summary that says so.
     let started = initial_solver(model, options.initial, &plan)
@@ -219,7 +221,7 @@ fn simulate_with<const N: usize>(
             samples: &samples,
             snapshots: &snapshots,
         };
-        files.extend(crate::plots::write_all(&recorded, &plan, &out_dir)?);
+        files.extend(crate::plots::write_all(&recorded, &plan, config, &out_dir)?);
     }
 
     if let Some((reason, source)) = stopped {

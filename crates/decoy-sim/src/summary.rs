@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::format::round_time;
+use crate::management::ManagementSummary;
 use crate::record::{Sample, Statistics, settling_time};
 
 /// `summary.json`'s `"final"`: the last recorded state.
@@ -66,6 +67,10 @@ pub struct Summary {
     /// Wall-clock time of the run (model, initial state, integration and CSV
     /// output; not the plots), s.
     pub wall_s: f64,
+    /// Decoy management: per requirement its worst margin, first violation, first
+    /// advisory and the advisory's lead (`docs/outputs.md`).
+    #[serde(default)]
+    pub management: ManagementSummary,
     /// Present when the integration stopped early.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<StoppedAt>,
@@ -149,6 +154,7 @@ pub(crate) fn measured(
         min_cable_clearance_to_exhaust_m: statistics.min_exhaust,
         min_decoy_clearance_to_aircraft_m: statistics.min_decoy,
         wall_s,
+        management: ManagementSummary::of_rows(samples.iter().map(|s| (s.t, &s.management))),
         stopped: stopped.map(|reason| StoppedAt {
             t_s: round_time(last.t),
             reason,

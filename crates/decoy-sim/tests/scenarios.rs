@@ -653,6 +653,15 @@ fn outputs_have_their_documented_shape() {
         "min_cable_clearance_to_exhaust_m",
         "min_decoy_clearance_to_aircraft_m",
         "wall_s",
+        "management",
+        "posture",
+        "worst_margin",
+        "first_violation_s",
+        "first_advisory_s",
+        "advisory_lead_s",
+        "collision",
+        "tension",
+        "exhaust",
     ];
     let positions: Vec<usize> = expected
         .iter()
@@ -662,7 +671,12 @@ fn outputs_have_their_documented_shape() {
         })
         .collect();
     assert!(positions.windows(2).all(|w| w[0] < w[1]), "{text}");
-    assert_eq!(summary.as_object().unwrap().len(), 12, "{text}");
+    assert_eq!(summary.as_object().unwrap().len(), 13, "{text}");
+    let management = summary["management"].as_object().unwrap();
+    assert_eq!(management.len(), 4, "{text}");
+    for entry in management.values() {
+        assert_eq!(entry.as_object().unwrap().len(), 4, "{text}");
+    }
     assert_eq!(summary["final"].as_object().unwrap().len(), 6, "{text}");
     assert_eq!(summary["segments"], 16);
     // cable.csv: snapshots at 0, 1, 2 and 2.5 s, joints 0..=16 each.

@@ -116,6 +116,9 @@ const FRAME_BUDGET_M7: u32 = 128_000;
 /// The firmware issue's target per control step, for the solver's share
 /// (`step_instructions`) of a nominal step; measured 74,000 to 74,640.
 const CONTROL_STEP_TARGET: u32 = 100_000;
+/// Most instructions of decoy management (monitors and one look-ahead slice)
+/// per 10 ms frame on the M4 (issue 13: at most 400,000 of prediction per frame).
+const MANAGEMENT_BUDGET: u32 = 400_000;
 /// The benchmark issue's target per RK4 step (16 graded segments, f32, M4), for
 /// the RK4 steps of a nominal control step (`step_instructions / 2`; the first
 /// stage of a frame reuses the previous frame's output evaluation, `Solver::step`);
@@ -368,7 +371,9 @@ fn check_scenario_within(
 
 /// The advisory line's changes the firmware logged (`advisory line asserted:
 /// seq=N ...` or `deasserted`), as (seq, asserted), must be exactly the outputs at
-/// which the hazard flags go from clear to set or back (the line starts low).
+/// which the management report's advisory line (a monitor at warning or worse, or
+/// a look-ahead advisory: `Management::advisory_line`) goes from clear to set or
+/// back (the line starts low).
 fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
     let logged: Vec<(u32, bool)> = log
         .lines()
@@ -382,23 +387,19 @@ fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
     let mut expected = Vec::new();
     let mut asserted = false;
     for out in flight::outputs(answers) {
-        let hazard = out.flags & advisory_hazards() != 0;
-        if hazard != asserted {
-            expected.push((out.seq, hazard));
-            asserted = hazard;
+        let line = out.management.advisory_line();
+        if line != asserted {
+            expected.push((out.seq, line));
+            asserted = line;
         }
     }
     assert_eq!(
         logged, expected,
-        "{label}: the advisory line's logged changes (seq, asserted) differ from the hazard flags' changes"
+        "{label}: the advisory line's logged changes (seq, asserted) differ from the management reports' changes"
     );
-    println!("{label}: advisory line changes {logged:?} (seq, asserted), as the hazard flags");
-}
-
-/// The hazard flags that assert the advisory line (the firmware's
-/// `advisory::HAZARDS`; the firmware is not a host crate, so it is restated).
-fn advisory_hazards() -> u16 {
-    StatusFlags::OVER_TENSION | StatusFlags::CABLE_IN_PLUME | StatusFlags::DECOY_NEAR_AIRCRAFT
+    println!(
+        "{label}: advisory line changes {logged:?} (seq, asserted), as the management reports"
+    );
 }
 
 /// The most instructions a whole nominal frame took.
@@ -415,6 +416,32 @@ fn nominal_frame_max(answers: &[DeviceMessage]) -> u32 {
 fn check_budget(label: &str, answers: &[DeviceMessage], frame_budget: u32) {
     let stats = flight::instruction_stats(answers);
     assert!(stats.nominal_steps > 0, "{label}: no nominal control step");
+    // Decoy management (the monitors and the look-ahead's slice, after the
+    // solution) within its budget on every frame, whatever the manoeuvre; and it
+    // does run (a slice of look-ahead steps on every frame after the trim).
+    let outputs = flight::outputs(answers);
+    let worst = outputs
+        .iter()
+        .max_by_key(|o| o.management_instructions)
+        .map(|o| (o.management_instructions, o.seq, o.prediction_steps))
+        .unwrap_or_default();
+    println!(
+        "{label}: decoy management at most {} instructions per frame (seq {}, {} look-ahead steps), budget {MANAGEMENT_BUDGET}",
+        worst.0, worst.1, worst.2
+    );
+    assert!(
+        worst.0 <= MANAGEMENT_BUDGET,
+        "{label}: decoy management took {} instructions at seq {}, over {MANAGEMENT_BUDGET}",
+        worst.0,
+        worst.1
+    );
+    assert!(
+        outputs
+            .iter()
+            .skip(1)
+            .all(|o| o.prediction_steps > 0 || o.management_instructions == 0),
+        "{label}: a frame ran no look-ahead step"
+    );
     assert!(
         stats.nominal_solver_max <= CONTROL_STEP_TARGET,
         "{label}: the solver took {} instructions in a nominal control step, over {CONTROL_STEP_TARGET}",
@@ -733,6 +760,7 @@ impl Probe {
                 let mut masked = out;
                 masked.instructions = 0;
                 masked.step_instructions = 0;
+                masked.management_instructions = 0;
                 masked.flags &= !StatusFlags::RECOVERED;
                 assert_eq!(
                     masked, reference,
@@ -823,6 +851,7 @@ fn without_instructions(mut m: DeviceMessage) -> DeviceMessage {
     if let DeviceMessage::Output(o) = &mut m {
         o.instructions = 0;
         o.step_instructions = 0;
+        o.management_instructions = 0;
     }
     m
 }

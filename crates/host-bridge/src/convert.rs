@@ -4,10 +4,13 @@
 //! types, same bits), so validation is exactly the controller's.
 
 use bridge_types::{
-    AircraftState, Answer, Header, Output, PROTOCOL_VERSION, Rejection, command, kind, profile,
-    reason,
+    AircraftState, Answer, Header, MonitorReport, Output, PROTOCOL_VERSION, Rejection, command,
+    kind, profile, reason,
 };
-use decoy_link::{AircraftStateFrame, Command, OutputFrame, Profile, RejectReason, StatusFlags};
+use decoy_link::{
+    AircraftStateFrame, Command, Management, MonitorLevel, MonitorReport as LinkMonitorReport,
+    OutputFrame, Profile, RejectReason, StatusFlags,
+};
 
 /// The link's State frame carrying `state` (its `header.seq` as the frame's seq).
 pub fn to_link_frame(state: &AircraftState) -> AircraftStateFrame {
@@ -57,7 +60,50 @@ pub fn output_from_link(out: &OutputFrame) -> Output {
         steps: out.steps,
         instructions: out.instructions,
         step_instructions: out.step_instructions,
+        management_instructions: out.management_instructions,
+        prediction_from_s: out.management.prediction_from_s,
+        prediction_horizon_s: out.management.prediction_horizon_s,
+        prediction_steps: out.prediction_steps,
+        advisories: out.management.advisories,
         reserved: 0,
+        posture: report_from_link(&out.management.posture),
+        collision: report_from_link(&out.management.collision),
+        tension: report_from_link(&out.management.tension),
+        exhaust: report_from_link(&out.management.exhaust),
+    }
+}
+
+/// The wire form of one monitor's report (the level as its index).
+fn report_from_link(r: &LinkMonitorReport) -> MonitorReport {
+    MonitorReport {
+        margin: r.margin,
+        worst_margin: r.worst_margin,
+        predicted_worst_margin: r.predicted_worst_margin,
+        time_to_violation_s: r.time_to_violation_s,
+        cautions: r.cautions,
+        warnings: r.warnings,
+        violations: r.violations,
+        level: r.level.index(),
+        reserved: [0; 3],
+    }
+}
+
+/// The link form of a wire monitor report (an unknown level reads as violated).
+fn report_to_link(r: &MonitorReport) -> LinkMonitorReport {
+    LinkMonitorReport {
+        level: match r.level {
+            0 => MonitorLevel::Normal,
+            1 => MonitorLevel::Caution,
+            2 => MonitorLevel::Warning,
+            _ => MonitorLevel::Violated,
+        },
+        margin: r.margin,
+        worst_margin: r.worst_margin,
+        cautions: r.cautions,
+        warnings: r.warnings,
+        violations: r.violations,
+        predicted_worst_margin: r.predicted_worst_margin,
+        time_to_violation_s: r.time_to_violation_s,
     }
 }
 
@@ -77,6 +123,17 @@ pub fn output_to_link(out: &Output) -> OutputFrame {
         instructions: out.instructions,
         step_instructions: out.step_instructions,
         steps: out.steps,
+        management_instructions: out.management_instructions,
+        prediction_steps: out.prediction_steps,
+        management: Management {
+            posture: report_to_link(&out.posture),
+            collision: report_to_link(&out.collision),
+            tension: report_to_link(&out.tension),
+            exhaust: report_to_link(&out.exhaust),
+            advisories: out.advisories,
+            prediction_from_s: out.prediction_from_s,
+            prediction_horizon_s: out.prediction_horizon_s,
+        },
     }
 }
 
@@ -226,8 +283,30 @@ mod tests {
             instructions: 5,
             step_instructions: 4,
             steps: 2,
+            management_instructions: 7,
+            prediction_steps: 3,
+            management: Management {
+                exhaust: LinkMonitorReport {
+                    level: MonitorLevel::Warning,
+                    margin: 0.4,
+                    worst_margin: 0.3,
+                    cautions: 2,
+                    warnings: 1,
+                    violations: 0,
+                    predicted_worst_margin: -0.2,
+                    time_to_violation_s: 1.5,
+                },
+                advisories: 8,
+                prediction_from_s: 0.25,
+                prediction_horizon_s: 3.0,
+                ..Management::default()
+            },
         };
         let out = output_from_link(&frame);
+        assert_eq!(
+            (out.exhaust.level, out.advisories, out.tension.level),
+            (2, 8, 0)
+        );
         assert_eq!(out.flags, StatusFlags::TRIMMED | StatusFlags::OVER_TENSION);
         let mut back = frame;
         back.flags = out.flags;

@@ -1,0 +1,296 @@
+//! Decoy management end to end in the controller: the monitors' levels and the
+//! look-ahead's advisories over the paper's manoeuvres and the steady envelope,
+//! in f32 (the Cortex-M4's precision, 16 graded segments) as the firmware runs it.
+//!
+//! **Installation.** The reference configuration as shipped (`config/`: the
+//! decoy launcher 2 m aft and 1.7 m below the engine axis, a 35 m hot plume),
+//! whose cable clears the plume by at least 1.2 m in steady flight over the
+//! envelope and enters it in the paper's 0.20 rad/s pull-up.
+
+mod common;
+
+use decoy_config::SystemConfig;
+use decoy_controller::path::state_frame;
+use decoy_controller::{Controller, NoCounter, SystemParams};
+use decoy_link::{Command, DeviceMessage, HostMessage, MonitorLevel, OutputFrame, Profile};
+use solver_core::profiles::LevelAcceleration;
+use solver_core::{AircraftState, FlightPath, Real};
+
+use common::CAPACITY;
+
+/// The reference system as shipped.
+fn shipped() -> SystemParams {
+    SystemConfig::builtin().unwrap().params().unwrap()
+}
+
+fn controller<T: Real>(system: &SystemParams) -> Controller<T, CAPACITY> {
+    Controller::new(system.controller_config(system.embedded_layout()).unwrap()).unwrap()
+}
+
+/// The Outputs of a built-in profile flown for `seconds` in 10 ms frames.
+fn fly_profile<T: Real>(system: &SystemParams, profile: Profile, seconds: f64) -> Vec<OutputFrame> {
+    let mut c = controller::<T>(system);
+    c.handle(
+        HostMessage::Command(Command::SelectProfile(profile)),
+        &mut NoCounter,
+    );
+    let frames = (seconds / 0.01).round() as u32;
+    (0..=frames)
+        .map(|k| {
+            let t = 0.01 * f64::from(k);
+            let f = AircraftState::<f64>::level(9000.0, 200.0);
+            common::output(c.handle(HostMessage::State(state_frame(k, t, &f)), &mut NoCounter))
+        })
+        .collect()
+}
+
+/// The Outputs of streamed frames along `path` for `seconds`.
+fn fly_path<T: Real, P: FlightPath<f64>>(
+    system: &SystemParams,
+    path: &P,
+    seconds: f64,
+) -> Vec<OutputFrame> {
+    let mut c = controller::<T>(system);
+    let frames = (seconds / 0.01).round() as u32;
+    (0..=frames)
+        .map(|k| {
+            let t = 0.01 * f64::from(k);
+            match c.handle(
+                HostMessage::State(state_frame(k, t, &path.state_at(t))),
+                &mut NoCounter,
+            ) {
+                DeviceMessage::Output(o) => o,
+                other => panic!("t = {t}: {other:?}"),
+            }
+        })
+        .collect()
+}
+
+/// Per requirement: the first violation (level violated) and the first advisory.
+fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); 4] {
+    let mut e = [(None, None); 4];
+    for o in outputs {
+        for (k, r) in o.management.reports().iter().enumerate() {
+            if e[k].0.is_none() && r.level == MonitorLevel::Violated {
+                e[k].0 = Some(o.time_s);
+            }
+            if e[k].1.is_none() && o.management.advisories & (1 << k) != 0 {
+                e[k].1 = Some(o.time_s);
+            }
+        }
+    }
+    e
+}
+
+const NAMES: [&str; 4] = decoy_link::REQUIREMENTS;
+
+/// The least advisory lead asserted, s: the 1 s. The look-ahead flies
+/// a 12-segment model (`[management] prediction_segments`) whose 1.35 m
+/// shortest segment lets it take 12 ms steps (the 16-segment model's 0.46 m
+/// allowed 6 ms and cut them to 2.6 ms in a snatch), 5 per frame.
+const LEAST_LEAD_S: f64 = 1.0;
+
+/// In the paper's pull-up and turn at 0.20 rad/s the look-ahead advises before
+/// every violation (at least [`LEAST_LEAD_S`] ahead), and something is violated
+/// (the test cannot pass by predicting nothing).
+#[test]
+fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
+    for (label, system) in [("shipped", shipped())] {
+        for profile in [
+            Profile::PullUp {
+                rate_milli_radps: 200,
+            },
+            Profile::Turn {
+                rate_milli_radps: 200,
+            },
+        ] {
+            let outputs = fly_profile::<f32>(&system, profile, 12.0);
+            let events = events(&outputs);
+            let mut violated = 0;
+            for (k, (violation, advisory)) in events.iter().enumerate() {
+                println!(
+                    "{label} {profile:?} {}: violated {violation:?}, advised {advisory:?}",
+                    NAMES[k]
+                );
+                if let Some(v) = violation {
+                    violated += 1;
+                    let a = advisory.unwrap_or_else(|| {
+                        panic!(
+                            "{label} {profile:?}: {} violated at {v} s, never advised",
+                            NAMES[k]
+                        )
+                    });
+                    assert!(
+                        v - a >= LEAST_LEAD_S - 1e-9,
+                        "{label} {profile:?}: {} advised at {a} s, violated at {v} s",
+                        NAMES[k]
+                    );
+                }
+            }
+            if matches!(profile, Profile::PullUp { .. }) {
+                assert!(
+                    violated > 0,
+                    "{label}: the 0.20 rad/s pull-up violates nothing"
+                );
+            }
+        }
+    }
+}
+
+/// No advisory, no warning and no violation in steady level flight across Mach
+/// 0.5-0.9 at 9 km and 3-12 km at Mach 0.7.
+#[test]
+fn steady_flight_gives_no_advisory_anywhere_in_the_envelope() {
+    let system = shipped();
+    let config = SystemConfig::builtin().unwrap();
+    let mut cases: Vec<(f64, f64)> = [0.5, 0.6, 0.7, 0.8, 0.9].map(|m| (9000.0, m)).to_vec();
+    cases.extend([3000.0, 6000.0, 12000.0].map(|h| (h, 0.7)));
+    for (altitude, mach) in cases {
+        let speed = config.mach_to_speed(altitude, mach).unwrap();
+        let path = LevelAcceleration::steady(altitude, speed);
+        let outputs = fly_path::<f32, _>(&system, &path, 5.0);
+        let last = outputs.last().unwrap();
+        let m = &last.management;
+        println!(
+            "steady {altitude} m Mach {mach}: margins {:?}, predicted {:?}",
+            m.reports().map(|r| r.margin),
+            m.reports().map(|r| r.predicted_worst_margin)
+        );
+        assert!(m.prediction_from_s >= 0.0, "no prediction completed");
+        for o in &outputs {
+            assert_eq!(
+                o.management.advisories, 0,
+                "{altitude} m Mach {mach} at {} s",
+                o.time_s
+            );
+            assert!(
+                o.management.worst_level() < MonitorLevel::Warning,
+                "{altitude} m Mach {mach} at {} s: {:?}",
+                o.time_s,
+                o.management
+            );
+        }
+    }
+}
+
+/// The paper's acceleration (Mach 0.6 to 0.8 at 10 m/s^2) is flown without an
+/// advisory or a violation.
+#[test]
+fn the_acceleration_case_gives_no_advisory() {
+    let outputs = fly_profile::<f32>(&shipped(), Profile::Acceleration, 15.0);
+    for o in &outputs {
+        assert_eq!(
+            o.management.advisories, 0,
+            "at {} s: {:?}",
+            o.time_s, o.management
+        );
+        assert!(
+            o.management.worst_level() < MonitorLevel::Violated,
+            "at {} s",
+            o.time_s
+        );
+    }
+}
+
+/// The look-ahead flies at least 3 s ahead and completes a prediction at least
+/// every 0.5 s of flight in steady flight (5 steps of 12 ms per frame: 3 s in
+/// 50 frames; see `config/reference-system.toml`).
+#[test]
+fn the_look_ahead_covers_3_s_and_refreshes_every_half_second() {
+    let system = shipped();
+    let outputs = fly_profile::<f32>(&system, Profile::Steady, 6.0);
+    let mut starts: Vec<f64> = outputs
+        .iter()
+        .map(|o| o.management.prediction_from_s)
+        .filter(|t| *t >= 0.0)
+        .collect();
+    starts.dedup();
+    assert!(starts.len() >= 4, "{starts:?}");
+    for w in starts.windows(2) {
+        assert!(w[1] - w[0] <= 0.5 + 1e-9, "{starts:?}");
+    }
+    for o in &outputs {
+        if o.management.prediction_from_s >= 0.0 {
+            assert!(
+                o.management.prediction_horizon_s >= 3.0 - 1e-6,
+                "{:?}",
+                o.management
+            );
+        }
+        assert!(u32::from(o.prediction_steps) <= system.management.prediction_steps_per_frame);
+    }
+}
+
+/// The predicted worst margins against the margins actually reached over the
+/// same horizon, in the 0.20 rad/s pull-up (the prediction holds the manoeuvre,
+/// so it is compared where the manoeuvre is held over the whole horizon: the
+/// rotation from 2 s to 7 s, the climb after it, snatch included).
+#[test]
+fn predicted_margins_against_the_margins_reached() {
+    // More steps per frame than the M4's budget allows, for more predictions
+    // to compare (the accuracy does not depend on how the work is sliced).
+    let mut system = shipped();
+    system.management.prediction_steps_per_frame = 10;
+    let outputs = fly_profile::<f32>(
+        &system,
+        Profile::PullUp {
+            rate_milli_radps: 200,
+        },
+        12.0,
+    );
+    let mut compared = 0;
+    // Largest |predicted - reached| per requirement, in the rotation and in
+    // the climb after it (the snatch).
+    let mut worst_error = [[0.0f64; 4]; 2];
+    let mut seen = -1.0;
+    for o in &outputs {
+        let m = &o.management;
+        let from = m.prediction_from_s;
+        let until = from + f64::from(m.prediction_horizon_s);
+        let phase = if from > 2.05 && until <= 7.0 {
+            0
+        } else if from > 7.05 && until <= 12.0 {
+            1
+        } else {
+            continue;
+        };
+        if from == seen {
+            continue;
+        }
+        seen = from;
+        for k in 1..4 {
+            let reached = outputs
+                .iter()
+                .filter(|p| p.time_s >= from - 1e-9 && p.time_s <= until + 1e-9)
+                .map(|p| f64::from(p.management.reports()[k].margin))
+                .fold(f64::INFINITY, f64::min);
+            let predicted = f64::from(m.reports()[k].predicted_worst_margin);
+            worst_error[phase][k] = worst_error[phase][k].max((predicted - reached).abs());
+            println!(
+                "from {from:.2} s: {} predicted {predicted:.3}, reached {reached:.3}",
+                NAMES[k]
+            );
+        }
+        compared += 1;
+    }
+    println!(
+        "largest |predicted - reached| (collision m, tension N, exhaust m): rotation {:?}, climb and snatch {:?}",
+        &worst_error[0][1..],
+        &worst_error[1][1..]
+    );
+    assert!(compared >= 2, "{compared} predictions compared");
+    // The prediction holds a constant-rate pull-up and a straight climb exactly,
+    // so what separates predicted from reached is the look-ahead's coarser model
+    // (12 segments against 16) and its longer step (13 ms against 5 ms). Measured
+    // in the rotation: collision 0.120 m, tension 0.71 N, exhaust 0.012 m.
+    let [rotation, climb] = worst_error;
+    assert!(rotation[1] < 0.15 && rotation[3] < 0.02, "{rotation:?}");
+    assert!(rotation[2] < 1.5, "{rotation:?}");
+    // In the snatch after the rotation the cable's path to the plume is
+    // predicted within 0.05 m (measured 0.043 m) and the decoy's to the
+    // aircraft within 0.4 m (0.336 m); its peak tension, a jerk of a slack
+    // cable, depends on the model and the step: the predicted peak differs by
+    // 240 N (a tension advisory comes at 7.44 s that no violation follows).
+    assert!(climb[1] < 0.4 && climb[3] < 0.05, "{climb:?}");
+    assert!(climb[2] < 300.0, "{climb:?}");
+}
