@@ -5,7 +5,7 @@
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 use solver_core::{
     AircraftState, Atmosphere, ConfigError, FlightPath, Model, ModelParams, Real, SolveError,
-    Solver, State, Vec3, trim,
+    Solver, State, Vec3,
 };
 
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
@@ -500,11 +500,62 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.status()
     }
 
+    /// A State frame's answer: the real-time solution ([`Controller::solve`]),
+    /// then, for an accepted frame, the decoy management ([`Controller::manage`]).
+    /// Two calls, not nested, so that the solution's frame (with the solver
+    /// state saved for a rejection) is off the stack while the look-ahead flies
+    /// (the Cortex-M7's 64 KiB).
     fn on_state(
         &mut self,
         frame: &AircraftStateFrame,
         counter: &mut impl InstructionCounter,
     ) -> DeviceMessage {
+        match self.solve(frame, counter) {
+            Ok((mut output, measures, aircraft, start)) => {
+                self.manage(&mut output, &measures, &aircraft, frame.time_s);
+                output.management_instructions = counter.elapsed(start);
+                DeviceMessage::Output(output)
+            }
+            Err(answer) => answer,
+        }
+    }
+
+    /// Decoy management after an accepted frame's solution: the monitors take
+    /// its `measures`, then one slice of the look-ahead; the report goes into
+    /// `output`.
+    #[inline(never)]
+    fn manage(
+        &mut self,
+        output: &mut OutputFrame,
+        measures: &Measures<T>,
+        aircraft: &AircraftState<T>,
+        now: f64,
+    ) {
+        self.monitors.update(measures, &self.management);
+        self.lookahead.work(
+            self.solver.state(),
+            self.solver.model().lengths(),
+            aircraft,
+            self.wave_rate,
+            measures,
+            &self.geometry,
+            &self.management,
+        );
+        output.prediction_steps = self.lookahead.last_steps as u16;
+        output.management = self.management_report(now);
+        self.last_management = output.management;
+    }
+
+    /// A State frame's real-time solution: the accepted Output (its management
+    /// still to fill), its measures, the aircraft at its time and the counter's
+    /// reading where the management starts; or the rejection.
+    #[inline(never)]
+    #[allow(clippy::type_complexity)]
+    fn solve(
+        &mut self,
+        frame: &AircraftStateFrame,
+        counter: &mut impl InstructionCounter,
+    ) -> Result<(OutputFrame, Measures<T>, AircraftState<T>, u32), DeviceMessage> {
         let start = counter.now();
         let seq = Some(frame.seq);
         let environment = &self.solver.model().params().environment;
@@ -516,15 +567,15 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             _ => Err(RejectReason::NonFinite),
         };
         if let Err(reason) = checked {
-            return self.reject(seq, reason);
+            return Err(self.reject(seq, reason));
         }
         if let Some(run) = &self.run {
             let dt = frame.time_s - run.last.time_s;
             if !(dt > 0.0) {
-                return self.reject(seq, RejectReason::TimeNotIncreasing);
+                return Err(self.reject(seq, RejectReason::TimeNotIncreasing));
             }
             if dt > MAX_TIME_JUMP_S + TIME_TOLERANCE_S {
-                return self.reject(seq, RejectReason::TimeJump);
+                return Err(self.reject(seq, RejectReason::TimeJump));
             }
         }
         let saved = *self.solver.state();
@@ -550,7 +601,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                     );
                     if !measures.is_finite(&self.management) {
                         self.restore(saved);
-                        return self.reject(seq, RejectReason::SolverFailure);
+                        return Err(self.reject(seq, RejectReason::SolverFailure));
                     }
                     self.run = Some(run);
                     self.wave_rate = self.last_wave_rate();
@@ -565,30 +616,16 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                     }
                     output.instructions = solution_instructions;
                     output.step_instructions = step_instructions;
-                    self.monitors.update(&measures, &self.management);
-                    self.lookahead.work(
-                        self.solver.state(),
-                        self.solver.model().lengths(),
-                        &aircraft,
-                        self.wave_rate,
-                        &measures,
-                        &self.geometry,
-                        &self.management,
-                    );
-                    output.management_instructions = counter.elapsed(management);
-                    output.prediction_steps = self.lookahead.last_steps as u16;
-                    output.management = self.management_report(frame.time_s);
-                    self.last_management = output.management;
-                    DeviceMessage::Output(output)
+                    Ok((output, measures, aircraft, management))
                 }
                 Err(_) => {
                     self.restore(saved);
-                    self.reject(seq, RejectReason::SolverFailure)
+                    Err(self.reject(seq, RejectReason::SolverFailure))
                 }
             },
             Err(reason) => {
                 self.restore(saved);
-                self.reject(seq, reason)
+                Err(self.reject(seq, reason))
             }
         }
     }
@@ -676,10 +713,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             angular_acceleration: Vec3::zeros(),
             ..aircraft
         };
-        let mut state = trim(self.solver.model(), &steady).map_err(|_| RejectReason::NotTrimmed)?;
-        state.time = time;
+        // In place (the caller restores its saved state on error).
         self.solver
-            .set_state(state)
+            .trim(&steady, time)
             .map_err(|_| RejectReason::NotTrimmed)?;
         Ok((run, 0, streamed))
     }

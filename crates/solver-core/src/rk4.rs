@@ -120,6 +120,12 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         &self.states[self.current]
     }
 
+    /// The current state, to write in place (the caller keeps it finite, its
+    /// directions unit and perpendicular to its rates).
+    pub fn state_mut(&mut self) -> &mut State<T, N> {
+        &mut self.states[self.current]
+    }
+
     /// Replaces the state (the caller checks it is finite).
     pub fn set_state(&mut self, state: State<T, N>) {
         self.states = [state; 2];

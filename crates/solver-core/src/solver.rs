@@ -222,6 +222,22 @@ impl<T: Real, const N: usize> Solver<T, N> {
         Ok(())
     }
 
+    /// Makes the state the trim for steady straight flight with the aircraft in
+    /// `aircraft` ([`crate::trim::trim`]), at `time`, computed in place: no
+    /// state-sized value on the stack (the Cortex-M7 controller's state is
+    /// 3 KB). On error the state is what the search had reached, possibly not a
+    /// valid state: restore a saved copy with [`Solver::set_state`].
+    pub fn trim(&mut self, aircraft: &AircraftState<T>, time: f64) -> Result<(), crate::TrimError> {
+        self.evaluated = None;
+        let state = self.rk4.state_mut();
+        crate::trim::trim_into(&self.model, aircraft, state)?;
+        state.time = time;
+        if !state.is_finite(self.model.segment_count()) {
+            return Err(crate::TrimError::ColumnDidNotConverge);
+        }
+        Ok(())
+    }
+
     /// Sets the state's time (s) without touching the rest of the state; for a
     /// caller that integrates to an exact end time, where n steps of (t1 - t0)/n
     /// can land an ulp away from t1. A non-finite `time` is ignored.

@@ -42,6 +42,19 @@ pub fn trim<T: Real, const N: usize>(
     model: &Model<T, N>,
     aircraft: &AircraftState<T>,
 ) -> Result<State<T, N>, TrimError> {
+    let mut state = State::<T, N>::default();
+    trim_into(model, aircraft, &mut state)?;
+    Ok(state)
+}
+
+/// [`trim`] written into `state` (for a caller that must not hold a state on
+/// its stack: [`crate::Solver::trim`]). On error `state` holds what the search
+/// had reached: the caller restores its own copy.
+pub fn trim_into<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    aircraft: &AircraftState<T>,
+    state: &mut State<T, N>,
+) -> Result<(), TrimError> {
     let (connection, air) = connection_and_air(model, aircraft)?;
     let steady_tolerance = T::lit(1e-9);
     if aircraft.acceleration.norm() > steady_tolerance
@@ -58,7 +71,7 @@ pub fn trim<T: Real, const N: usize>(
     let lengths = model.lengths();
     let masses = model.masses();
 
-    let mut state = State::<T, N>::default();
+    *state = State::<T, N>::default();
     let mut centre_altitude = [-connection.position.z; N];
     let mut decoy_altitude = -connection.position.z;
     let tolerance = T::lit(16.0) * T::eps() * (connection.position.z.abs() + T::one());
@@ -109,7 +122,7 @@ pub fn trim<T: Real, const N: usize>(
             decoy_altitude = -cg.z;
         }
         if change <= tolerance {
-            return Ok(state);
+            return Ok(());
         }
     }
     Err(TrimError::ColumnDidNotConverge)
