@@ -28,7 +28,7 @@ pub struct BridgeArgs {
     /// host: the controller in this process; qemu: the firmware under QEMU over its UART.
     #[arg(long, value_enum, default_value_t = BackendArg::Host)]
     backend: BackendArg,
-    /// The qemu backend's board: m4 (Cortex-M4F, f32) or m7 (Cortex-M7, f64).
+    /// The qemu backend's board: m4 (Cortex-M4F, f32), m7 (Cortex-M7, f64) or stm32f405 (STM32F405, f32).
     #[arg(long, value_enum, default_value_t = BridgeBoard::M4)]
     board: BridgeBoard,
     /// The host backend's precision (f32 with libm: the firmware's bits).
@@ -87,6 +87,8 @@ enum BridgeBoard {
     M4,
     /// Cortex-M7 (mps2-an500), f64.
     M7,
+    /// STM32F405 (netduinoplus2), f32.
+    Stm32f405,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -139,6 +141,7 @@ pub fn bridge_command(
         board: match args.board {
             BridgeBoard::M4 => Board::M4,
             BridgeBoard::M7 => Board::M7,
+            BridgeBoard::Stm32f405 => Board::Stm32f405,
         },
         precision: args.precision.map(|p| match p {
             PrecisionArg::F32 => Precision::F32,

@@ -336,9 +336,19 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
             "tensions.svg",
             "attitude.png",
             "attitude.svg",
+            "management.png",
+            "management.svg",
         ] {
             assert!(dir.join(plot).exists(), "{plot}");
         }
+        // The decoy management crosses the bridge: one entry per requirement
+        // (the turn at Mach 0.8 violates nothing), and its columns in the file.
+        for r in ["posture", "collision", "tension", "exhaust"] {
+            let m = &v["management"][r];
+            assert!(m["worst_margin"].as_f64().unwrap() > 0.0, "{mode} {r}: {m}");
+            assert!(m["first_violation_s"].is_null(), "{mode} {r}: {m}");
+        }
+        assert!(csv.lines().next().unwrap().contains("exhaust_margin_m"));
     }
     signal(&child, "INT");
     assert!(child.wait_with_output().unwrap().status.success());
@@ -354,17 +364,17 @@ fn the_layout_json_describes_every_type() {
         .unwrap();
     assert!(out.status.success());
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["protocol_version"], 1);
+    assert_eq!(v["protocol_version"], 2);
     let types = v["types"].as_array().unwrap();
     let answer = types.iter().find(|t| t["name"] == "Answer").unwrap();
-    assert_eq!(answer["type_name"], "decoy.bridge.v1.Answer");
-    assert_eq!(answer["size"], 96);
+    assert_eq!(answer["type_name"], "decoy.bridge.v2.Answer");
+    assert_eq!(answer["size"], 240);
     assert_eq!(answer["fields"][2]["name"], "output");
     assert_eq!(answer["fields"][2]["offset"], 24);
     assert_eq!(v["services"].as_array().unwrap().len(), 7);
     let text = Command::new(DECOY).arg("bridge-layout").output().unwrap();
     assert!(
         String::from_utf8_lossy(&text.stdout)
-            .contains("AircraftState (decoy.bridge.v1.AircraftState): size 104, align 8")
+            .contains("AircraftState (decoy.bridge.v2.AircraftState): size 104, align 8")
     );
 }

@@ -535,11 +535,35 @@ fn simulate_json_is_the_summary_and_the_files_are_written() {
         "final",
         "min_cable_clearance_to_exhaust_m",
         "min_decoy_clearance_to_aircraft_m",
+        "management",
         "wall_s",
     ]
     .into_iter()
     .collect();
     assert_eq!(keys(&v), expected);
+    // One entry per requirement of the paper, each with the four keys of
+    // docs/outputs.md; steady flight violates and advises nothing.
+    for r in ["posture", "collision", "tension", "exhaust"] {
+        let m = &v["management"][r];
+        let entry: BTreeSet<&str> = m.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+        assert_eq!(
+            entry,
+            [
+                "worst_margin",
+                "first_violation_s",
+                "first_advisory_s",
+                "advisory_lead_s"
+            ]
+            .into_iter()
+            .collect(),
+            "{r}"
+        );
+        assert!(m["worst_margin"].as_f64().unwrap() > 0.0, "{r}: {m}");
+        assert!(
+            m["first_violation_s"].is_null() && m["first_advisory_s"].is_null(),
+            "{r}: {m}"
+        );
+    }
     assert_eq!(v["scenario"], "steady");
     assert_eq!(v["segments"], 16);
     assert_eq!(num(&v, "t_end"), 2.0);

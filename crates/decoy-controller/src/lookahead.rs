@@ -549,6 +549,78 @@ mod tests {
     use super::*;
     use solver_core::profiles::{LevelTurn, PullUp};
 
+    /// A bent, turning cable of 16 graded segments (ratio 1.3, 100 m).
+    fn fine_cable() -> ([f64; 16], State<f64, 16>) {
+        let r: f64 = 1.3;
+        let l0 = 100.0 * (r - 1.0) / (r.powi(16) - 1.0);
+        let lengths = core::array::from_fn(|i| l0 * r.powi(15 - i as i32));
+        let mut state = State::<f64, 16>::default();
+        state.time = 2.5;
+        for i in 0..16 {
+            let a = 0.1 + 0.02 * i as f64;
+            let e = Vec3::new(
+                -libm::cos(a),
+                0.05 * libm::sin(0.3 * i as f64),
+                libm::sin(a),
+            )
+            .normalize();
+            let w = Vec3::new(0.01 * i as f64, -0.2, 0.03);
+            state.directions[i] = e;
+            state.rates[i] = w - e * w.dot(&e);
+        }
+        state.decoy_attitude = [0.9, 0.1, -0.2, 0.1];
+        state.decoy_rate = Vec3::new(0.1, 0.2, 0.3);
+        (lengths, state)
+    }
+
+    /// On a model of the same segments the mapping is the identity; on a
+    /// coarser one the joints lie on the cable at their arc lengths (the end
+    /// at the controller's towing point to the bend), and a cable turning
+    /// rigidly keeps its rate.
+    #[test]
+    fn the_coarse_state_lies_on_the_cable() {
+        let (lengths, state) = fine_cable();
+        let same: State<f64, 16> = coarse_state(&state, &lengths, &lengths);
+        for i in 0..16 {
+            assert!(
+                (same.directions[i] - state.directions[i]).norm() < 1e-12,
+                "{i}"
+            );
+            assert!((same.rates[i] - state.rates[i]).norm() < 1e-12, "{i}");
+        }
+        assert_eq!(same.decoy_attitude, state.decoy_attitude);
+        assert_eq!(same.time, state.time);
+        // 12 segments graded 1.3 over the same 100 m.
+        let r: f64 = 1.3;
+        let l0 = 100.0 * (r - 1.0) / (r.powi(12) - 1.0);
+        let coarse: [f64; 12] = core::array::from_fn(|i| l0 * r.powi(11 - i as i32));
+        let copy: State<f64, 12> = coarse_state(&state, &lengths, &coarse);
+        let fine_end: Vec3<f64> = (0..16).map(|i| state.directions[i] * lengths[i]).sum();
+        let coarse_end: Vec3<f64> = (0..12).map(|k| copy.directions[k] * coarse[k]).sum();
+        // The chords are shorter than the segments by the bend: well under 1 %.
+        assert!(
+            (coarse_end - fine_end).norm() < 0.3,
+            "{coarse_end} {fine_end}"
+        );
+        for k in 0..12 {
+            assert!((copy.directions[k].norm() - 1.0).abs() < 1e-12);
+            assert!(copy.rates[k].dot(&copy.directions[k]).abs() < 1e-12);
+        }
+        // A straight cable turning as one body at w: every segment turns at w.
+        let mut rigid = state;
+        let e = Vec3::new(-0.9, 0.1, 0.4).normalize();
+        let w = Vec3::new(0.0, -0.3, 0.1);
+        for i in 0..16 {
+            rigid.directions[i] = e;
+            rigid.rates[i] = w - e * w.dot(&e);
+        }
+        let copy: State<f64, 12> = coarse_state(&rigid, &lengths, &coarse);
+        for k in 0..12 {
+            assert!((copy.directions[k] - e).norm() < 1e-12, "{k}");
+            assert!((copy.rates[k] - rigid.rates[0]).norm() < 1e-12, "{k}");
+        }
+    }
+
     /// Holding a constant-rate manoeuvre reproduces it: a pull-up and a
     /// coordinated turn extrapolated from one instant follow the profile.
     #[test]

@@ -96,12 +96,23 @@ const LEAST_LEAD_S: f64 = 1.0;
 #[test]
 fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
     for (label, system) in [("shipped", shipped())] {
+        // The paper's 0.20 rad/s pull-up and turn, and every other built-in
+        // manoeuvre the product ships (pull-ups 0.05 and 0.10, turn 0.10).
         for profile in [
             Profile::PullUp {
                 rate_milli_radps: 200,
             },
             Profile::Turn {
                 rate_milli_radps: 200,
+            },
+            Profile::PullUp {
+                rate_milli_radps: 50,
+            },
+            Profile::PullUp {
+                rate_milli_radps: 100,
+            },
+            Profile::Turn {
+                rate_milli_radps: 100,
             },
         ] {
             let outputs = fly_profile::<f32>(&system, profile, 12.0);
@@ -127,7 +138,11 @@ fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
                     );
                 }
             }
-            if matches!(profile, Profile::PullUp { .. }) {
+            if profile
+                == (Profile::PullUp {
+                    rate_milli_radps: 200,
+                })
+            {
                 assert!(
                     violated > 0,
                     "{label}: the 0.20 rad/s pull-up violates nothing"

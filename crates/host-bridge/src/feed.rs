@@ -15,7 +15,7 @@ use decoy_hil::hil_run::{paired_rows, sample, write_timeseries};
 use decoy_link::{AircraftStateFrame, Command, DeviceMessage, HostMessage, RejectReason, Rejected};
 use decoy_sim::{
     RunOptions, Sample, Scenario, ScenarioKind, Summary, format_time, summarize,
-    write_comparison_plots,
+    write_comparison_plots, write_management_plot,
 };
 use serde::Serialize;
 
@@ -532,6 +532,14 @@ pub fn run_feed(
         )
         .map_err(|e| BridgeError::Output(e.to_string()))?;
         files.extend(plotted);
+        files.extend(
+            write_management_plot(
+                &format!("{} (bridge {})", plan.name, options.instance),
+                &bridge_samples,
+                &out_dir,
+            )
+            .map_err(|e| BridgeError::Output(e.to_string()))?,
+        );
     }
     if let Some((t_s, reason)) = flown.stop {
         return Err(FeedError::Stopped {

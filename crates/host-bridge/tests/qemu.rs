@@ -1,10 +1,11 @@
-//! The qemu backend: the firmware under QEMU (M4, f32) behind the bridge. A
+//! The qemu backend: the firmware under QEMU (M4 and STM32F405, f32) behind the bridge. A
 //! scenario flown in lockstep through shared memory gets the firmware's answers,
 //! which equal the host replay of the same frames bit for bit (as `decoy hil`
 //! checks over the UART), with the firmware's exact instruction counts.
 
 use decoy_config::SystemConfig;
 use decoy_hil::flight::{self, host_controller, replay, scenario_frames, scenario_messages};
+use decoy_hil::qemu::Board;
 use decoy_link::DeviceMessage;
 use host_bridge::backend::{BackendKind, BackendOptions};
 use host_bridge::client::BridgeClient;
@@ -13,6 +14,15 @@ use host_bridge::local::{Isolated, LocalBridge};
 
 #[test]
 fn lockstep_through_the_firmware_equals_the_host_replay() {
+    lockstep_through(Board::M4, "mps2-an386");
+}
+
+#[test]
+fn lockstep_through_the_stm32f405_firmware_equals_the_host_replay() {
+    lockstep_through(Board::Stm32f405, "stm32f405");
+}
+
+fn lockstep_through(board: Board, board_name: &str) {
     let iso = Isolated::new().unwrap();
     let config = SystemConfig::builtin().unwrap();
     let bridge = LocalBridge::start(
@@ -20,6 +30,7 @@ fn lockstep_through_the_firmware_equals_the_host_replay() {
         &config,
         &BackendOptions {
             kind: BackendKind::Qemu,
+            board,
             ..BackendOptions::default()
         },
         &iso.config,
@@ -27,7 +38,7 @@ fn lockstep_through_the_firmware_equals_the_host_replay() {
     .unwrap();
     let mut c = BridgeClient::connect("qemu", "qemu-client", &iso.config).unwrap();
     let status = c.get_status().unwrap();
-    assert_eq!(bridge_types::field_text(&status.board), "mps2-an386");
+    assert_eq!(bridge_types::field_text(&status.board), board_name);
     assert_eq!((status.precision_bits, status.segments), (32, 16));
     c.simple_command(bridge_types::command::RESET_TO_TRIM)
         .unwrap();
