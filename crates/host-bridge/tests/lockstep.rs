@@ -197,7 +197,7 @@ fn bad_states_are_typed_rejections_and_change_nothing() {
             s.time_s += 0.5;
             bad.push((s, reason::TIME_JUMP));
             let mut s = good;
-            s.header.protocol_version = 2;
+            s.header.protocol_version = bridge_types::PROTOCOL_VERSION + 1;
             bad.push((s, reason::WRONG_VERSION));
             let mut s = good;
             s.header.kind = kind::STATUS;

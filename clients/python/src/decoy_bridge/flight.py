@@ -67,11 +67,28 @@ OUTPUT_COLUMNS = (
     "rk4_steps",
     "instructions",
     "latency_us",
+    "posture_level",
+    "posture_margin_deg",
+    "collision_level",
+    "collision_margin_m",
+    "tension_level",
+    "tension_margin_N",
+    "exhaust_level",
+    "exhaust_margin_m",
+    "advisories",
 )
 """Columns of ``timeseries.csv``: ``decoy feed``'s (docs/outputs.md: position in the
 flight-path frame from the aircraft reference point, ``lateral`` positive to the
 left, angles relative to the flight-path frame), then the F-16's load factor and
-the round trip of each frame from Python, µs."""
+the round trip of each frame from Python, µs, then the decoy management
+(docs/management.md): each requirement's level (0 normal, 1 caution, 2 warning,
+3 violated) and margin, and the advisory bits (posture 1, collision 2, tension 4,
+exhaust 8)."""
+
+REQUIREMENTS = ("posture", "collision", "tension", "exhaust")
+"""The paper's four decoy-management requirements, in the wire order."""
+MARGIN_UNITS = ("deg", "m", "N", "m")
+"""Units of their margins in the files (the wire's posture margin is in rad)."""
 
 
 @dataclass
@@ -181,7 +198,40 @@ def output_row(rec: Record) -> dict[str, Any]:
         "rk4_steps": o.steps,
         "instructions": o.instructions,
         "latency_us": rec.latency_us,
+        **management_columns(o),
     }
+
+
+def management_columns(o: Any) -> dict[str, Any]:
+    """The management columns of an Output (:data:`OUTPUT_COLUMNS`)."""
+    cols: dict[str, Any] = {}
+    for name, unit in zip(REQUIREMENTS, MARGIN_UNITS):
+        r = getattr(o, name)
+        margin = float(r.margin)
+        cols[f"{name}_level"] = int(r.level)
+        cols[f"{name}_margin_{unit}"] = math.degrees(margin) if name == "posture" else margin
+    cols["advisories"] = int(o.advisories)
+    return cols
+
+
+def management_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """``summary.json``'s ``"management"``, as ``decoy feed`` computes it: per
+    requirement the worst margin, the first violation and the first advisory (s)
+    and the advisory's lead (null where none)."""
+    out: dict[str, Any] = {}
+    for k, (name, unit) in enumerate(zip(REQUIREMENTS, MARGIN_UNITS)):
+        margins = [r[f"{name}_margin_{unit}"] for r in rows if math.isfinite(r[f"{name}_margin_{unit}"])]
+        violation = next((round(r["t_s"], 9) for r in rows if r[f"{name}_level"] == 3), None)
+        advisory = next((round(r["t_s"], 9) for r in rows if r["advisories"] & (1 << k)), None)
+        out[name] = {
+            "worst_margin": min(margins) if margins else None,
+            "first_violation_s": violation,
+            "first_advisory_s": advisory,
+            "advisory_lead_s": round(violation - advisory, 9)
+            if violation is not None and advisory is not None
+            else None,
+        }
+    return out
 
 
 def _fmt(v: Any) -> str:
@@ -270,6 +320,7 @@ def summarize(
                 },
                 "min_cable_clearance_to_exhaust_m": float(min(r["cable_exhaust_clearance_m"] for r in rows)),
                 "min_decoy_clearance_to_aircraft_m": float(min(r["decoy_aircraft_clearance_m"] for r in rows)),
+                "management": management_summary(rows),
             }
         )
     else:
@@ -282,6 +333,7 @@ def summarize(
                 "final": None,
                 "min_cable_clearance_to_exhaust_m": None,
                 "min_decoy_clearance_to_aircraft_m": None,
+                "management": management_summary([]),
             }
         )
     out["wall_s"] = run.wall_s
