@@ -55,13 +55,9 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) tow_rhs: Vec3<T>,
     /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j.
     pub(crate) elimination: [Mat3<T>; N],
-    /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (symmetric, six entries).
-    pub(crate) pivot_inverse: [Sym3<T>; N],
-    /// Elimination: u_j = S_j⁻¹ e_{j+1} for joint j = i, so that
-    /// X_j = S_j⁻¹ B_j = (2 S_j⁻¹ - 3 u_j e_{j+1}ᵀ)/m_{j+1}.
-    pub(crate) pivot_direction: [Vec3<T>; N],
-    /// Elimination: z_j = S_j⁻¹ y_j for joint j = i.
-    pub(crate) reduced_rhs: [Vec3<T>; N],
+    /// Elimination: what the back sweep needs of joint j = i ([`Pivot`]); the
+    /// shooting reference keeps its affine offsets u_j in `reduced_rhs`.
+    pub(crate) pivots: [Pivot<T>; N],
     /// T_{i+1}: force of segment i+1 on the next body at joint i+1.
     pub(crate) joint_force: [Vec3<T>; N],
     /// T_0: force of the aircraft on segment 1 at the connection point.
@@ -114,9 +110,7 @@ impl<T: Real, const N: usize> Workspace<T, N> {
             joint_rhs: [z; N],
             tow_rhs: z,
             elimination: [zero33(); N],
-            pivot_inverse: [Sym3::ZERO; N],
-            pivot_direction: [z; N],
-            reduced_rhs: [z; N],
+            pivots: [Pivot::ZERO; N],
             joint_force: [z; N],
             connection_force: z,
             decoy: DecoyScratch {
@@ -157,9 +151,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
             joint_rhs: [z; N],
             tow_rhs: z,
             elimination: [Mat3::zeros(); N],
-            pivot_inverse: [Sym3::zero(); N],
-            pivot_direction: [z; N],
-            reduced_rhs: [z; N],
+            pivots: [Pivot::ZERO; N],
             joint_force: [z; N],
             connection_force: z,
             decoy: DecoyScratch {
@@ -431,6 +423,27 @@ fn joint_row<T: Real, const N: usize>(
     }
 }
 
+/// What the back sweep needs of joint j's pivot S_j (segment j+1 with direction e and
+/// mass m): T_j = z_j - Q_j T_{j+1} + U_j (e·T_{j+1}).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pivot<T: Real> {
+    /// Q_j = (2/m) S_j⁻¹ (symmetric).
+    scaled_inverse: Sym3<T>,
+    /// U_j = (3/m) S_j⁻¹ e.
+    scaled_direction: Vec3<T>,
+    /// z_j = S_j⁻¹ y_j (the shooting reference keeps its affine offsets here).
+    pub(crate) reduced_rhs: Vec3<T>,
+}
+
+impl<T: Real> Pivot<T> {
+    /// Every entry zero.
+    const ZERO: Self = Pivot {
+        scaled_inverse: Sym3::ZERO,
+        scaled_direction: zero3(),
+        reduced_rhs: zero3(),
+    };
+}
+
 /// A symmetric 3x3 matrix, six entries (the pivot blocks S_j and their inverses).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Sym3<T: Real> {
@@ -453,40 +466,15 @@ impl<T: Real> Sym3<T> {
         yz: T::ZERO,
     };
 
-    fn zero() -> Self {
-        let z = T::zero();
-        Sym3 {
-            xx: z,
-            yy: z,
-            zz: z,
-            xy: z,
-            xz: z,
-            yz: z,
-        }
-    }
-
-    /// The lower triangle of `m` (which must be symmetric).
+    /// The segment contribution -3 e eᵀ/m to a joint's diagonal block, plus `diagonal`
+    /// times the identity (4/m for (I + 3P)/m = (4I - 3 e eᵀ)/m alone).
     #[inline(always)]
-    fn from_lower(m: &Mat3<T>) -> Self {
-        Sym3 {
-            xx: m[(0, 0)],
-            yy: m[(1, 1)],
-            zz: m[(2, 2)],
-            xy: m[(1, 0)],
-            xz: m[(2, 0)],
-            yz: m[(2, 1)],
-        }
-    }
-
-    /// The segment contribution (I + 3P)/m = (4I - 3 e eᵀ)/m to a joint's diagonal block.
-    #[inline(always)]
-    fn segment(e: &Vec3<T>, inverse_mass: T) -> Self {
-        let d = T::lit(4.0) * inverse_mass;
+    fn segment(e: &Vec3<T>, inverse_mass: T, diagonal: T) -> Self {
         let f = e * (-T::lit(3.0) * inverse_mass);
         Sym3 {
-            xx: d + f.x * e.x,
-            yy: d + f.y * e.y,
-            zz: d + f.z * e.z,
+            xx: diagonal + f.x * e.x,
+            yy: diagonal + f.y * e.y,
+            zz: diagonal + f.z * e.z,
             xy: f.x * e.y,
             xz: f.x * e.z,
             yz: f.y * e.z,
@@ -502,18 +490,6 @@ impl<T: Real> Sym3<T> {
             xy: self.xy * k,
             xz: self.xz * k,
             yz: self.yz * k,
-        }
-    }
-
-    #[inline(always)]
-    fn add(&self, o: &Self) -> Self {
-        Sym3 {
-            xx: self.xx + o.xx,
-            yy: self.yy + o.yy,
-            zz: self.zz + o.zz,
-            xy: self.xy + o.xy,
-            xz: self.xz + o.xz,
-            yz: self.yz + o.yz,
         }
     }
 
@@ -609,13 +585,12 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let (model, state, ws) = opaque((model, state, ws));
     let last = last_joint(model);
     let directions = &state.directions;
-    let inverse_masses = model.inverse_masses();
     let t = forward_sweep(model, state, ws)?;
     set_joint_force(ws, last, t);
     let mut t = t;
     let mut probe = t.x + t.y + t.z;
     for j in (0..last).rev() {
-        t = back_substitute(ws, j, &directions[j], inverse_masses[j], &t);
+        t = back_substitute(&ws.pivots[j], &directions[j], &t);
         probe += t.x + t.y + t.z;
         set_joint_force(ws, j, t);
     }
@@ -638,7 +613,6 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     let n = model.segment_count();
     let directions = &state.directions;
     let rates = &state.rates;
-    let inverse_masses = model.inverse_masses();
     let gains = model.rate_gains();
     let mut t = forward_sweep(model, state, ws)?;
     let mut probe = t.x + t.y + t.z;
@@ -659,17 +633,17 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
         t
     };
     // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
-    for j in (0..last).rev() {
-        let e = directions[j];
-        t = back_substitute(ws, j, &e, inverse_masses[j], &t);
+    let pivots = &ws.pivots[..last];
+    let forces = &mut ws.joint_force[..last];
+    for j in (1..last).rev() {
+        t = back_step(j, pivots, state, gains, &t, &downstream, out);
         probe += t.x + t.y + t.z;
-        // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
-        out.directions[j] = rates[j].cross(&e);
-        out.rates[j] = -e.cross(&(t + downstream)) * gains[j];
         downstream = t;
-        if j > 0 {
-            ws.joint_force[j - 1] = t;
-        }
+        forces[j - 1] = t;
+    }
+    if last > 0 {
+        t = back_step(0, pivots, state, gains, &t, &downstream, out);
+        probe += t.x + t.y + t.z;
     }
     ws.connection_force = t;
     let result = finish_tensions(model, ws, probe);
@@ -677,24 +651,56 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     result
 }
 
-/// One step of the back sweep: T_j = z_j - X_j T_{j+1}, with
-/// X_j T = (2 S_j⁻¹ T - 3 u_j (e·T))/m (`e`, `inverse_mass`: segment j+1's).
+/// Joint j of the back sweep with segment j+1's accelerations: T_j from T_{j+1}
+/// (`t`), then de/dt = w x e and dw/dt = -(6/(m l)) e x (T_j + T_{j+1}).
 #[inline(always)]
-fn back_substitute<T: Real, const N: usize>(
-    ws: &Workspace<T, N>,
+fn back_step<T: Real, const N: usize>(
     j: usize,
-    e: &Vec3<T>,
-    inverse_mass: T,
-    next: &Vec3<T>,
+    pivots: &[Pivot<T>],
+    state: &State<T, N>,
+    gains: &[T],
+    t: &Vec3<T>,
+    downstream: &Vec3<T>,
+    out: &mut Derivative<T, N>,
 ) -> Vec3<T> {
-    let (two, three) = (T::lit(2.0), T::lit(3.0));
-    let x_t = (ws.pivot_inverse[j].mul(next) * two - ws.pivot_direction[j] * (three * e.dot(next)))
-        * inverse_mass;
-    ws.reduced_rhs[j] - x_t
+    let e = state.directions[j];
+    let t = back_substitute(&pivots[j], &e, t);
+    // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
+    out.directions[j] = state.rates[j].cross(&e);
+    out.rates[j] = -e.cross(&(t + downstream)) * gains[j];
+    t
 }
 
-/// The forward sweep of [`solve_tensions`]: fills the pivots, directions and
-/// reduced right-hand sides, and returns T_last = S_last⁻¹ y_last.
+/// One step of the back sweep: T_j = z_j - X_j T_{j+1}, with
+/// X_j T = (2 S_j⁻¹ T - 3 u_j (e·T))/m = Q_j T - U_j (e·T) from the stored
+/// [`Pivot`] (`e`: segment j+1's direction).
+#[inline(always)]
+fn back_substitute<T: Real>(pivot: &Pivot<T>, e: &Vec3<T>, next: &Vec3<T>) -> Vec3<T> {
+    let q = &pivot.scaled_inverse;
+    let (u, z) = (&pivot.scaled_direction, &pivot.reduced_rhs);
+    let along = e.x * next.x + e.y * next.y + e.z * next.z;
+    Vec3::new(
+        z.x - q.xx * next.x - q.xy * next.y - q.xz * next.z + u.x * along,
+        z.y - q.xy * next.x - q.yy * next.y - q.yz * next.z + u.y * along,
+        z.z - q.xz * next.x - q.yz * next.y - q.zz * next.z + u.z * along,
+    )
+}
+
+/// The forward sweep of [`solve_tensions`]: fills the pivots, and returns
+/// T_last = S_last⁻¹ y_last.
+///
+/// Per joint j (segment j+1 with e = e_{j+1}, k = 1/m_{j+1}), with the cofactor
+/// matrix C and det of S_j (S_j⁻¹ = C/det, one division):
+///
+/// ```text
+///   Q_j = 2k S_j⁻¹,  U_j = 3k S_j⁻¹ e,  z_j = S_j⁻¹ y_j           (stored)
+///   w   = 2k U_j - 1.5k (e·U_j + 1) e
+///   S_{j+1} = 4k I - 2k Q_j + w eᵀ + e wᵀ + (segment j+2 or decoy block)
+///   y_{j+1} = b_{j+1} - 2k z_j + 3k (e·z_j) e
+/// ```
+///
+/// (B_j S_j⁻¹ B_j = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m² with u = S_j⁻¹ e, and
+/// segment j+1's own diagonal contribution (4I - 3 e eᵀ)/m folded into the rank-2 term.)
 #[inline(always)]
 fn forward_sweep<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -703,59 +709,78 @@ fn forward_sweep<T: Real, const N: usize>(
 ) -> Result<Vec3<T>, SolveError> {
     let last = last_joint(model);
     let n = model.segment_count();
-    let inverse_masses = model.inverse_masses();
-    let directions = &state.directions;
-    let (two, three, four, six) = (T::lit(2.0), T::lit(3.0), T::lit(4.0), T::lit(6.0));
-    let (one_and_half, four_and_half) = (T::lit(1.5), T::lit(4.5));
+    let inverse_masses = &model.inverse_masses()[..n];
+    let directions = &state.directions[..n];
+    let rhs = &ws.joint_rhs[..n];
+    let pivots = &mut ws.pivots[..last];
+    let (one, three) = (T::one(), T::lit(3.0));
+    let (one_and_half, four) = (T::lit(1.5), T::lit(4.0));
     // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
-    let mut s = Sym3::segment(&directions[0], inverse_masses[0]);
-    let mut y = ws.joint_rhs[0];
-    for j in 0..last {
+    let mut e = directions[0];
+    let mut k = inverse_masses[0];
+    let mut s = Sym3::segment(&e, k, four * k);
+    let mut y = rhs[0];
+    for (j, pivot) in pivots.iter_mut().enumerate() {
         // Segment j+1 (index j) couples joints j and j+1.
-        let e = directions[j];
-        let im = inverse_masses[j];
-        // S_j⁻¹ = C/det: the products with C run while the division does (a shorter
-        // serial chain per joint; the sweep is latency-bound on hosts).
         let (cofactors, det) = s.cofactors();
         let cofactor_e = cofactors.mul(&e);
         let cofactor_y = cofactors.mul(&y);
-        let e_cofactor_e = e.dot(&cofactor_e);
-        let inv_det = T::one() / det;
+        let inv_det = one / det;
         if !s.positive_definite(det, inv_det) {
             return Err(SolveError::NonPositivePivot { joint: j });
         }
-        let inv = cofactors.scaled(inv_det);
-        let u = cofactor_e * inv_det;
+        let two_k = k + k;
+        let q = cofactors.scaled(inv_det * two_k);
+        let u = cofactor_e * (inv_det * (three * k));
         let z = cofactor_y * inv_det;
-        ws.pivot_inverse[j] = inv;
-        ws.pivot_direction[j] = u;
-        ws.reduced_rhs[j] = z;
-        let im2 = im * im;
-        let eu = e_cofactor_e * inv_det;
-        let w = u * (six * im2) - e * (four_and_half * im2 * eu + one_and_half * im);
-        let d = four * im;
-        let k = -four * im2;
-        let mut s_next = Sym3 {
-            xx: d + k * inv.xx + two * w.x * e.x,
-            yy: d + k * inv.yy + two * w.y * e.y,
-            zz: d + k * inv.zz + two * w.z * e.z,
-            xy: k * inv.xy + w.x * e.y + e.x * w.y,
-            xz: k * inv.xz + w.x * e.z + e.x * w.z,
-            yz: k * inv.yz + w.y * e.z + e.y * w.z,
-        };
-        // b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
-        let b_next;
-        if j + 1 < n {
-            s_next = s_next.add(&Sym3::segment(&directions[j + 1], inverse_masses[j + 1]));
-            b_next = ws.joint_rhs[j + 1];
+        pivot.scaled_inverse = q;
+        pivot.scaled_direction = u;
+        pivot.reduced_rhs = z;
+        let c = one_and_half * k;
+        let eu = e.x * u.x + e.y * u.y + e.z * u.z;
+        let g = c + c * eu;
+        let w = Vec3::new(
+            two_k * u.x - g * e.x,
+            two_k * u.y - g * e.y,
+            two_k * u.z - g * e.z,
+        );
+        let ez = e.x * z.x + e.y * z.y + e.z * z.z;
+        let h = three * k * ez;
+        // The next joint's own block (4I - 3 e eᵀ)/m of segment j+2 from its upstream
+        // end, or the decoy's, with segment j+1's 4k I; its right-hand side b_{j+1}.
+        let four_k = four * k;
+        let (block, b, e_next, k_next) = if j + 1 < n {
+            let e_next = directions[j + 1];
+            let k_next = inverse_masses[j + 1];
+            let block = Sym3::segment(&e_next, k_next, four_k + four * k_next);
+            (block, rhs[j + 1], e_next, k_next)
         } else {
-            s_next = s_next.add(&Sym3::from_lower(&ws.decoy.joint_block));
-            b_next = ws.tow_rhs;
-        }
-        // y_{j+1} = b_{j+1} - B_j z_j.
-        let b_next = b_next - (z * two - e * (three * e.dot(&z))) * im;
-        s = s_next;
-        y = b_next;
+            let d = &ws.decoy.joint_block;
+            let block = Sym3 {
+                xx: d[(0, 0)] + four_k,
+                yy: d[(1, 1)] + four_k,
+                zz: d[(2, 2)] + four_k,
+                xy: d[(1, 0)],
+                xz: d[(2, 0)],
+                yz: d[(2, 1)],
+            };
+            (block, ws.tow_rhs, e, k)
+        };
+        s = Sym3 {
+            xx: block.xx - two_k * q.xx + (w.x + w.x) * e.x,
+            yy: block.yy - two_k * q.yy + (w.y + w.y) * e.y,
+            zz: block.zz - two_k * q.zz + (w.z + w.z) * e.z,
+            xy: block.xy - two_k * q.xy + w.x * e.y + e.x * w.y,
+            xz: block.xz - two_k * q.xz + w.x * e.z + e.x * w.z,
+            yz: block.yz - two_k * q.yz + w.y * e.z + e.y * w.z,
+        };
+        y = Vec3::new(
+            b.x - two_k * z.x + h * e.x,
+            b.y - two_k * z.y + h * e.y,
+            b.z - two_k * z.z + h * e.z,
+        );
+        e = e_next;
+        k = k_next;
     }
     let inv = s
         .spd_inverse()
@@ -819,7 +844,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
     let (mut u_cur, mut v_cur) = (Mat3::identity(), Vec3::zeros());
     // Store the carriers to recover every T_j once T_0 is known.
     ws.elimination[0] = u_cur;
-    ws.reduced_rhs[0] = v_cur;
+    ws.pivots[0].reduced_rhs = v_cur;
     for j in 0..last {
         let (d, b) = joint_row(model, state, ws, j);
         // Row j: B_{j-1} T_{j-1} + D_j T_j + B_j T_{j+1} = b_j.
@@ -842,7 +867,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
         v_cur = v_next;
         if j + 1 < N {
             ws.elimination[j + 1] = u_cur;
-            ws.reduced_rhs[j + 1] = v_cur;
+            ws.pivots[j + 1].reduced_rhs = v_cur;
         }
     }
     // Residual of the last row: B_{last-1} T_{last-1} + D_last T_last - b_last = α T_0 + β.
@@ -861,7 +886,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
     ws.connection_force = t0;
     for j in 1..=last {
         let (u, v) = if j < N {
-            (ws.elimination[j], ws.reduced_rhs[j])
+            (ws.elimination[j], ws.pivots[j].reduced_rhs)
         } else {
             (u_cur, v_cur)
         };
