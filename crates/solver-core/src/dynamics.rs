@@ -42,15 +42,10 @@ use crate::state::{Derivative, State};
 pub struct Workspace<T: Real, const N: usize> {
     /// Joint 0 kinematics (connection point).
     pub(crate) connection: PointKinematics<T>,
-    /// Position of joint i+1, NED.
-    pub(crate) joint_position: [Vec3<T>; N],
-    /// Velocity of joint i+1, NED.
-    pub(crate) joint_velocity: [Vec3<T>; N],
-    /// External force per unit mass on segment i+1 (gravity + drag), F/m.
-    pub(crate) specific_force: [Vec3<T>; N],
-    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
-    /// connection-point acceleration), assembled with the loads in pass 1.
-    pub(crate) joint_rhs: [Vec3<T>; N],
+    /// Per joint i+1 and its upstream segment i+1: position, air velocity, loads and
+    /// right-hand side ([`JointScratch`]), side by side (one base address in the
+    /// segment loop).
+    pub(crate) joints: [JointScratch<T>; N],
     /// Right-hand side b_N of the towing-point joint (with the decoy's part).
     pub(crate) tow_rhs: Vec3<T>,
     /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j.
@@ -64,6 +59,30 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) connection_force: Vec3<T>,
     /// Decoy quantities of this evaluation (zero for a free end).
     pub(crate) decoy: DecoyScratch<T>,
+}
+
+/// What one evaluation keeps of joint i+1 (entry i) and segment i+1.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointScratch<T: Real> {
+    /// Position of joint i+1, NED.
+    pub(crate) position: Vec3<T>,
+    /// Air velocity relative to joint i+1 (wind - v), NED.
+    pub(crate) air: Vec3<T>,
+    /// External force per unit mass on segment i+1 (gravity + drag), F/m.
+    pub(crate) specific_force: Vec3<T>,
+    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
+    /// connection-point acceleration), assembled with the loads in pass 1.
+    pub(crate) rhs: Vec3<T>,
+}
+
+impl<T: Real> JointScratch<T> {
+    /// Every entry zero.
+    const ZERO: Self = JointScratch {
+        position: zero3(),
+        air: zero3(),
+        specific_force: zero3(),
+        rhs: zero3(),
+    };
 }
 
 /// Decoy quantities of one evaluation.
@@ -104,10 +123,7 @@ impl<T: Real, const N: usize> Workspace<T, N> {
                 velocity: z,
                 acceleration: z,
             },
-            joint_position: [z; N],
-            joint_velocity: [z; N],
-            specific_force: [z; N],
-            joint_rhs: [z; N],
+            joints: [JointScratch::ZERO; N],
             tow_rhs: z,
             elimination: [zero33(); N],
             pivots: [Pivot::ZERO; N],
@@ -145,10 +161,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
                 velocity: z,
                 acceleration: z,
             },
-            joint_position: [z; N],
-            joint_velocity: [z; N],
-            specific_force: [z; N],
-            joint_rhs: [z; N],
+            joints: [JointScratch::ZERO; N],
             tow_rhs: z,
             elimination: [Mat3::zeros(); N],
             pivots: [Pivot::ZERO; N],
@@ -259,6 +272,11 @@ pub fn decoy_aero<T: Real>(
 /// centripetal term c_i = -(l_i/2) w_i x (w_i x e_i), and the joint right-hand sides
 /// b_{i-1} += -(F_i/m_i + c_i), b_i += F_i/m_i - c_i (b_0 starts from a_0). Returns the
 /// last segment's share F_N/m_N - c_N of b_N.
+///
+/// Carried down the chain: the joint position, the air velocity relative to the
+/// joint (wind - v) and the joint altitude. With u the air velocity relative to the
+/// segment centre, u·e its axial part and u_n = u - (u·e) e:
+/// `F/m = g + rho (k_n |u_n|) u_n + rho (k_t |u·e| (u·e)) e`.
 #[inline(always)]
 fn cable_loads<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -270,40 +288,59 @@ fn cable_loads<T: Real, const N: usize>(
 ) -> Vec3<T> {
     let n = model.segment_count();
     let env = &model.params().environment;
-    let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
+    let gravity = env.gravity;
     let half = T::lit(0.5);
     let mut p = connection.position;
-    let mut v = connection.velocity;
-    let lengths = model.lengths();
+    let mut air = env.wind - connection.velocity;
+    let mut altitude = -p.z;
+    let lengths = &model.lengths()[..n];
     let (normal_drag, tangential_drag) = model.drag_factors();
+    let (normal_drag, tangential_drag) = (&normal_drag[..n], &tangential_drag[..n]);
+    let directions = &state.directions[..n];
+    let rates = &state.rates[..n];
     let mut carry = connection.acceleration;
+    let joints = &mut ws.joints[..n];
     for i in 0..n {
-        let e = state.directions[i];
-        let w = state.rates[i];
+        let e = directions[i];
+        let w = rates[i];
         let l = lengths[i];
-        let we = w.cross(&e);
-        let mut specific = gravity;
+        let half_l = half * l;
+        let we = Vec3::new(w.y * e.z - w.z * e.y, w.z * e.x - w.x * e.z, w.x * e.y - w.y * e.x);
+        let mut specific = Vec3::new(T::zero(), T::zero(), gravity);
         if has_air {
             // cable_drag(..)/m_i with the per-unit-mass factors of the model.
-            let centre_altitude = -(p.z + e.z * (half * l));
-            let centre_velocity = v + we * (half * l);
-            let density = density_at(centre_altitude);
-            let u = env.wind - centre_velocity;
-            let along = u.dot(&e);
-            let ut = e * along;
-            let un = u - ut;
-            specific += (un * (normal_drag[i] * norm(&un))
-                + ut * (tangential_drag[i] * along.abs()))
-                * density;
+            let density = density_at(altitude - e.z * half_l);
+            let u = Vec3::new(
+                air.x - we.x * half_l,
+                air.y - we.y * half_l,
+                air.z - we.z * half_l,
+            );
+            let along = u.x * e.x + u.y * e.y + u.z * e.z;
+            let un = Vec3::new(u.x - e.x * along, u.y - e.y * along, u.z - e.z * along);
+            let normal = density * normal_drag[i] * (un.x * un.x + un.y * un.y + un.z * un.z).square_root();
+            let axial = density * tangential_drag[i] * along.abs() * along;
+            specific = Vec3::new(
+                un.x * normal + e.x * axial,
+                un.y * normal + e.y * axial,
+                gravity + un.z * normal + e.z * axial,
+            );
         }
-        ws.specific_force[i] = specific;
-        let centripetal = -w.cross(&we) * (half * l);
-        ws.joint_rhs[i] = carry - (specific + centripetal);
-        carry = specific - centripetal;
-        p += e * l;
-        v += we * l;
-        ws.joint_position[i] = p;
-        ws.joint_velocity[i] = v;
+        let joint = &mut joints[i];
+        joint.specific_force = specific;
+        // -c_i = (l/2) w x (w x e).
+        let wwe = Vec3::new(
+            w.y * we.z - w.z * we.y,
+            w.z * we.x - w.x * we.z,
+            w.x * we.y - w.y * we.x,
+        );
+        let minus_c = wwe * half_l;
+        joint.rhs = carry - specific + minus_c;
+        carry = specific + minus_c;
+        p = Vec3::new(p.x + e.x * l, p.y + e.y * l, p.z + e.z * l);
+        altitude -= e.z * l;
+        air = Vec3::new(air.x - we.x * l, air.y - we.y * l, air.z - we.z * l);
+        joint.position = p;
+        joint.air = air;
     }
     carry
 }
@@ -337,8 +374,8 @@ pub fn prepare<T: Real, const N: usize>(
         // One normalisation and one rotation matrix per evaluation (also used by pass 3).
         let r = crate::scalar::rotation_matrix(state.decoy_attitude);
         let wb = state.decoy_rate;
-        let tow = ws.joint_position[n - 1];
-        let tow_velocity = ws.joint_velocity[n - 1];
+        let tow = ws.joints[n - 1].position;
+        let tow_velocity = env.wind - ws.joints[n - 1].air;
         let r_world = r * derived.tow_from_cg;
         let cg_position = tow - r_world;
         let cg_velocity = tow_velocity - r * wb.cross(&derived.tow_from_cg);
@@ -416,7 +453,7 @@ fn joint_row<T: Real, const N: usize>(
     if j < n {
         // Downstream segment j+1 (index j) seen from its upstream end.
         block += segment_block(&state.directions[j], inverse_masses[j]);
-        (block, ws.joint_rhs[j])
+        (block, ws.joints[j].rhs)
     } else {
         block += ws.decoy.joint_block;
         (block, ws.tow_rhs)
@@ -633,42 +670,40 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
         t
     };
     // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
-    let pivots = &ws.pivots[..last];
-    let forces = &mut ws.joint_force[..last];
-    for j in (1..last).rev() {
-        t = back_step(j, pivots, state, gains, &t, &downstream, out);
-        probe += t.x + t.y + t.z;
-        downstream = t;
-        forces[j - 1] = t;
-    }
     if last > 0 {
-        t = back_step(0, pivots, state, gains, &t, &downstream, out);
+        let range = 1..last;
+        // Through `opaque`: the pivots' own base address in a register, so that their
+        // fields are reached by small offsets (see `opaque`).
+        let rows = opaque(&ws.pivots[range.clone()])
+            .iter()
+            .zip(&directions[range.clone()])
+            .zip(&rates[range.clone()])
+            .zip(&gains[range.clone()])
+            .zip(out.directions[range.clone()].iter_mut())
+            .zip(out.rates[range].iter_mut())
+            .zip(ws.joint_force[..last - 1].iter_mut())
+            .rev();
+        for ((((((pivot, e), w), gain), de), dw), force) in rows {
+            // Copies first: the stores below may alias for all the optimiser knows.
+            let (pivot, e, w, gain) = (*pivot, *e, *w, *gain);
+            t = back_substitute(&pivot, &e, &t);
+            probe += t.x + t.y + t.z;
+            // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
+            *de = w.cross(&e);
+            *dw = -e.cross(&(t + downstream)) * gain;
+            downstream = t;
+            *force = t;
+        }
+        let e = &directions[0];
+        t = back_substitute(&ws.pivots[0], e, &t);
         probe += t.x + t.y + t.z;
+        out.directions[0] = rates[0].cross(e);
+        out.rates[0] = -e.cross(&(t + downstream)) * gains[0];
     }
     ws.connection_force = t;
     let result = finish_tensions(model, ws, probe);
     decoy_accelerations(model, state, ws, out);
     result
-}
-
-/// Joint j of the back sweep with segment j+1's accelerations: T_j from T_{j+1}
-/// (`t`), then de/dt = w x e and dw/dt = -(6/(m l)) e x (T_j + T_{j+1}).
-#[inline(always)]
-fn back_step<T: Real, const N: usize>(
-    j: usize,
-    pivots: &[Pivot<T>],
-    state: &State<T, N>,
-    gains: &[T],
-    t: &Vec3<T>,
-    downstream: &Vec3<T>,
-    out: &mut Derivative<T, N>,
-) -> Vec3<T> {
-    let e = state.directions[j];
-    let t = back_substitute(&pivots[j], &e, t);
-    // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
-    out.directions[j] = state.rates[j].cross(&e);
-    out.rates[j] = -e.cross(&(t + downstream)) * gains[j];
-    t
 }
 
 /// One step of the back sweep: T_j = z_j - X_j T_{j+1}, with
@@ -711,7 +746,7 @@ fn forward_sweep<T: Real, const N: usize>(
     let n = model.segment_count();
     let inverse_masses = &model.inverse_masses()[..n];
     let directions = &state.directions[..n];
-    let rhs = &ws.joint_rhs[..n];
+    let joints = &ws.joints[..n];
     let pivots = &mut ws.pivots[..last];
     let (one, three) = (T::one(), T::lit(3.0));
     let (one_and_half, four) = (T::lit(1.5), T::lit(4.0));
@@ -719,7 +754,7 @@ fn forward_sweep<T: Real, const N: usize>(
     let mut e = directions[0];
     let mut k = inverse_masses[0];
     let mut s = Sym3::segment(&e, k, four * k);
-    let mut y = rhs[0];
+    let mut y = joints[0].rhs;
     for (j, pivot) in pivots.iter_mut().enumerate() {
         // Segment j+1 (index j) couples joints j and j+1.
         let (cofactors, det) = s.cofactors();
@@ -753,7 +788,7 @@ fn forward_sweep<T: Real, const N: usize>(
             let e_next = directions[j + 1];
             let k_next = inverse_masses[j + 1];
             let block = Sym3::segment(&e_next, k_next, four_k + four * k_next);
-            (block, rhs[j + 1], e_next, k_next)
+            (block, joints[j + 1].rhs, e_next, k_next)
         } else {
             let d = &ws.decoy.joint_block;
             let block = Sym3 {

@@ -456,7 +456,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection.position
         } else {
-            self.ws.joint_position[j - 1]
+            self.ws.joints[j - 1].position
         }
     }
     /// Velocity of joint `j`, NED, m/s.
@@ -464,7 +464,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection.velocity
         } else {
-            self.ws.joint_velocity[j - 1]
+            self.model.params().environment.wind - self.ws.joints[j - 1].air
         }
     }
     /// Angular acceleration of segment `i` (1-based), NED, rad/s^2.
