@@ -746,62 +746,70 @@ fn forward_sweep<T: Real, const N: usize>(
     let n = model.segment_count();
     let inverse_masses = &model.inverse_masses()[..n];
     let directions = &state.directions[..n];
-    let joints = &ws.joints[..n];
-    let pivots = &mut ws.pivots[..last];
-    let (one, three) = (T::one(), T::lit(3.0));
-    let (one_and_half, four) = (T::lit(1.5), T::lit(4.0));
+    let four = T::lit(4.0);
     // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
     let mut e = directions[0];
     let mut k = inverse_masses[0];
     let mut s = Sym3::segment(&e, k, four * k);
-    let mut y = joints[0].rhs;
-    for (j, pivot) in pivots.iter_mut().enumerate() {
-        // Segment j+1 (index j) couples joints j and j+1.
-        let (cofactors, det) = s.cofactors();
-        let cofactor_e = cofactors.mul(&e);
-        let cofactor_y = cofactors.mul(&y);
-        let inv_det = one / det;
-        if !s.positive_definite(det, inv_det) {
-            return Err(SolveError::NonPositivePivot { joint: j });
-        }
-        let two_k = k + k;
-        let q = cofactors.scaled(inv_det * two_k);
-        let u = cofactor_e * (inv_det * (three * k));
-        let z = cofactor_y * inv_det;
-        pivot.scaled_inverse = q;
-        pivot.scaled_direction = u;
-        pivot.reduced_rhs = z;
-        let c = one_and_half * k;
-        let eu = e.x * u.x + e.y * u.y + e.z * u.z;
-        let g = c + c * eu;
-        let w = Vec3::new(
-            two_k * u.x - g * e.x,
-            two_k * u.y - g * e.y,
-            two_k * u.z - g * e.z,
-        );
-        let ez = e.x * z.x + e.y * z.y + e.z * z.z;
-        let h = three * k * ez;
-        // The next joint's own block (4I - 3 e eᵀ)/m of segment j+2 from its upstream
-        // end, or the decoy's, with segment j+1's 4k I; its right-hand side b_{j+1}.
-        let four_k = four * k;
-        let (block, b, e_next, k_next) = if j + 1 < n {
-            let e_next = directions[j + 1];
-            let k_next = inverse_masses[j + 1];
-            let block = Sym3::segment(&e_next, k_next, four_k + four * k_next);
-            (block, joints[j + 1].rhs, e_next, k_next)
-        } else {
-            let d = &ws.decoy.joint_block;
-            let block = Sym3 {
-                xx: d[(0, 0)] + four_k,
-                yy: d[(1, 1)] + four_k,
-                zz: d[(2, 2)] + four_k,
-                xy: d[(1, 0)],
-                xz: d[(2, 0)],
-                yz: d[(2, 1)],
-            };
-            (block, ws.tow_rhs, e, k)
+    let mut y = ws.joints[0].rhs;
+    // Joints 0..n-2: the next joint's own block is segment j+2's (4I - 3 e eᵀ)/m from its
+    // upstream end. Through `opaque`: each array's own base address in a register.
+    let rows = opaque(&mut ws.pivots[..n - 1])
+        .iter_mut()
+        .zip(&directions[1..])
+        .zip(&inverse_masses[1..])
+        .zip(opaque(&ws.joints[1..n]));
+    for (j, (((pivot, e_next), k_next), joint)) in rows.enumerate() {
+        // The next segment's values are loaded after the pivot is stored (fewer
+        // values live across the elimination).
+        let (update, diagonal) = eliminate(&s, &y, &e, k, j, pivot)?;
+        let (e_next, k_next) = (*e_next, *k_next);
+        let block = Sym3::segment(&e_next, k_next, diagonal + four * k_next);
+        (s, y) = update.apply(&block, &joint.rhs, &e);
+        e = e_next;
+        k = k_next;
+    }
+    if last == n {
+        // Joint n-1: the decoy's block at the towing point.
+        let (update, diagonal) = eliminate(&s, &y, &e, k, n - 1, &mut ws.pivots[n - 1])?;
+        let d = &ws.decoy.joint_block;
+        let block = Sym3 {
+            xx: d[(0, 0)] + diagonal,
+            yy: d[(1, 1)] + diagonal,
+            zz: d[(2, 2)] + diagonal,
+            xy: d[(1, 0)],
+            xz: d[(2, 0)],
+            yz: d[(2, 1)],
         };
-        s = Sym3 {
+        (s, y) = update.apply(&block, &ws.tow_rhs, &e);
+    }
+    let inv = s
+        .spd_inverse()
+        .ok_or(SolveError::NonPositivePivot { joint: last })?;
+    Ok(inv.mul(&y))
+}
+
+/// What [`eliminate`] leaves for the next joint: S_{j+1} and y_{j+1} but for the next
+/// joint's own block and right-hand side.
+struct SchurUpdate<T: Real> {
+    /// Q_j.
+    q: Sym3<T>,
+    /// z_j.
+    z: Vec3<T>,
+    /// w of the rank-2 term.
+    w: Vec3<T>,
+    /// 2k.
+    two_k: T,
+    /// 3k (e·z_j).
+    h: T,
+}
+
+impl<T: Real> SchurUpdate<T> {
+    /// S_{j+1} = block - 2k Q_j + w eᵀ + e wᵀ and y_{j+1} = b - 2k z_j + h e.
+    #[inline(always)]
+    fn apply(&self, block: &Sym3<T>, b: &Vec3<T>, e: &Vec3<T>) -> (Sym3<T>, Vec3<T>) {
+        let (q, z, w, two_k, h) = (&self.q, &self.z, &self.w, self.two_k, self.h);
+        let s = Sym3 {
             xx: block.xx - two_k * q.xx + (w.x + w.x) * e.x,
             yy: block.yy - two_k * q.yy + (w.y + w.y) * e.y,
             zz: block.zz - two_k * q.zz + (w.z + w.z) * e.z,
@@ -809,18 +817,59 @@ fn forward_sweep<T: Real, const N: usize>(
             xz: block.xz - two_k * q.xz + w.x * e.z + e.x * w.z,
             yz: block.yz - two_k * q.yz + w.y * e.z + e.y * w.z,
         };
-        y = Vec3::new(
+        let y = Vec3::new(
             b.x - two_k * z.x + h * e.x,
             b.y - two_k * z.y + h * e.y,
             b.z - two_k * z.z + h * e.z,
         );
-        e = e_next;
-        k = k_next;
+        (s, y)
     }
-    let inv = s
-        .spd_inverse()
-        .ok_or(SolveError::NonPositivePivot { joint: last })?;
-    Ok(inv.mul(&y))
+}
+
+/// Eliminates joint `j` (pivot S_j = `s`, reduced right-hand side `y`; segment j+1
+/// with direction `e` and inverse mass `k`): stores its [`Pivot`] and returns the
+/// Schur update for joint j+1 with the diagonal 4k that segment j+1 adds there.
+#[inline(always)]
+fn eliminate<T: Real>(
+    s: &Sym3<T>,
+    y: &Vec3<T>,
+    e: &Vec3<T>,
+    k: T,
+    j: usize,
+    pivot: &mut Pivot<T>,
+) -> Result<(SchurUpdate<T>, T), SolveError> {
+    let (cofactors, det) = s.cofactors();
+    let cofactor_e = cofactors.mul(e);
+    let cofactor_y = cofactors.mul(y);
+    let inv_det = T::one() / det;
+    if !s.positive_definite(det, inv_det) {
+        return Err(SolveError::NonPositivePivot { joint: j });
+    }
+    let two_k = k + k;
+    let three_k = T::lit(3.0) * k;
+    let q = cofactors.scaled(inv_det * two_k);
+    let u = cofactor_e * (inv_det * three_k);
+    let z = cofactor_y * inv_det;
+    pivot.scaled_inverse = q;
+    pivot.scaled_direction = u;
+    pivot.reduced_rhs = z;
+    let c = T::lit(1.5) * k;
+    let eu = e.x * u.x + e.y * u.y + e.z * u.z;
+    let g = c + c * eu;
+    let w = Vec3::new(
+        two_k * u.x - g * e.x,
+        two_k * u.y - g * e.y,
+        two_k * u.z - g * e.z,
+    );
+    let ez = e.x * z.x + e.y * z.y + e.z * z.z;
+    let update = SchurUpdate {
+        q,
+        z,
+        w,
+        two_k,
+        h: three_k * ez,
+    };
+    Ok((update, T::lit(4.0) * k))
 }
 
 #[inline(always)]
