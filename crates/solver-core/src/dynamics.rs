@@ -24,8 +24,6 @@
 //! (`D_0 = (I + 3P_1)/m_1`, `b_0 = a_0 - F_1/m_1 - c_1`) and at joint N by the decoy's
 //! Newton-Euler equations (`D_N += I/m_d + [r]xᵀ I_d⁻¹ [r]x`), or by T_N = 0 for a free end.
 
-use nalgebra::Quaternion;
-
 use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
@@ -64,10 +62,10 @@ pub struct Workspace<T: Real, const N: usize> {
 /// What one evaluation keeps of joint i+1 (entry i) and segment i+1.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct JointScratch<T: Real> {
-    /// Position of joint i+1, NED.
+    /// Position of joint i+1, NED (set by [`joint_kinematics`]).
     pub(crate) position: Vec3<T>,
-    /// Air velocity relative to joint i+1 (wind - v), NED.
-    pub(crate) air: Vec3<T>,
+    /// Velocity of joint i+1, NED (set by [`joint_kinematics`], with the position).
+    pub(crate) velocity: Vec3<T>,
     /// External force per unit mass on segment i+1 (gravity + drag), F/m.
     pub(crate) specific_force: Vec3<T>,
     /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
@@ -79,7 +77,7 @@ impl<T: Real> JointScratch<T> {
     /// Every entry zero.
     const ZERO: Self = JointScratch {
         position: zero3(),
-        air: zero3(),
+        velocity: zero3(),
         specific_force: zero3(),
         rhs: zero3(),
     };
@@ -105,7 +103,11 @@ pub struct DecoyScratch<T: Real> {
     /// Decoy attitude as a rotation matrix (body FRD to NED), from the normalised quaternion.
     pub(crate) rotation: Mat3<T>,
     /// Decoy block of joint N: I/m_d + [r]xᵀ I⁻¹ [r]x (NED).
-    pub(crate) joint_block: Mat3<T>,
+    pub(crate) joint_block: Sym3<T>,
+    /// The towing point from the CG, NED: R r_tow.
+    pub(crate) tow_from_cg: Vec3<T>,
+    /// w x I w, body frame.
+    pub(crate) gyroscopic: Vec3<T>,
     /// Decoy part of b_N.
     pub(crate) joint_rhs: Vec3<T>,
 }
@@ -138,7 +140,9 @@ impl<T: Real, const N: usize> Workspace<T, N> {
                 airspeed: T::ZERO,
                 dynamic_pressure: T::ZERO,
                 rotation: zero33(),
-                joint_block: zero33(),
+                joint_block: Sym3::ZERO,
+                tow_from_cg: z,
+                gyroscopic: z,
                 joint_rhs: z,
             },
         }
@@ -176,7 +180,9 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
                 airspeed: T::zero(),
                 dynamic_pressure: T::zero(),
                 rotation: Mat3::identity(),
-                joint_block: Mat3::zeros(),
+                joint_block: Sym3::ZERO,
+                tow_from_cg: z,
+                gyroscopic: z,
                 joint_rhs: z,
             },
         }
@@ -278,36 +284,35 @@ pub fn decoy_aero<T: Real>(
 /// segment centre, u·e its axial part and u_n = u - (u·e) e:
 /// `F/m = g + rho (k_n |u_n|) u_n + rho (k_t |u·e| (u·e)) e`.
 #[inline(always)]
-fn cable_loads<T: Real, const N: usize>(
+fn cable_loads<T: Real, const N: usize, const AIR: bool>(
     model: &Model<T, N>,
     state: &State<T, N>,
     connection: &PointKinematics<T>,
-    has_air: bool,
     ws: &mut Workspace<T, N>,
     density_at: impl Fn(T) -> T,
-) -> Vec3<T> {
+) -> (Vec3<T>, T, Vec3<T>) {
     let n = model.segment_count();
     let env = &model.params().environment;
     let gravity = env.gravity;
     let half = T::lit(0.5);
-    let mut p = connection.position;
     let mut air = env.wind - connection.velocity;
-    let mut altitude = -p.z;
-    let lengths = &model.lengths()[..n];
+    let mut altitude = -connection.position.z;
     let (normal_drag, tangential_drag) = model.drag_factors();
-    let (normal_drag, tangential_drag) = (&normal_drag[..n], &tangential_drag[..n]);
-    let directions = &state.directions[..n];
-    let rates = &state.rates[..n];
+    // Through `opaque`: the joints' own base address in a register.
+    let rows = state.directions[..n]
+        .iter()
+        .zip(&state.rates[..n])
+        .zip(model.lengths())
+        .zip(normal_drag)
+        .zip(tangential_drag)
+        .zip(opaque(&mut ws.joints[..n]).iter_mut());
     let mut carry = connection.acceleration;
-    let joints = &mut ws.joints[..n];
-    for i in 0..n {
-        let e = directions[i];
-        let w = rates[i];
-        let l = lengths[i];
+    for (((((e, w), l), normal_drag), tangential_drag), joint) in rows {
+        // Copies first: the stores below may alias for all the optimiser knows.
+        let (e, w, l) = (*e, *w, *l);
         let half_l = half * l;
         let we = Vec3::new(w.y * e.z - w.z * e.y, w.z * e.x - w.x * e.z, w.x * e.y - w.y * e.x);
-        let mut specific = Vec3::new(T::zero(), T::zero(), gravity);
-        if has_air {
+        let specific = if AIR {
             // cable_drag(..)/m_i with the per-unit-mass factors of the model.
             let density = density_at(altitude - e.z * half_l);
             let u = Vec3::new(
@@ -317,16 +322,17 @@ fn cable_loads<T: Real, const N: usize>(
             );
             let along = u.x * e.x + u.y * e.y + u.z * e.z;
             let un = Vec3::new(u.x - e.x * along, u.y - e.y * along, u.z - e.z * along);
-            let normal = density * normal_drag[i] * (un.x * un.x + un.y * un.y + un.z * un.z).square_root();
-            let axial = density * tangential_drag[i] * along.abs() * along;
-            specific = Vec3::new(
+            let speed = (un.x * un.x + un.y * un.y + un.z * un.z).square_root();
+            let normal = density * *normal_drag * speed;
+            let axial = density * *tangential_drag * along.abs() * along;
+            Vec3::new(
                 un.x * normal + e.x * axial,
                 un.y * normal + e.y * axial,
                 gravity + un.z * normal + e.z * axial,
-            );
-        }
-        let joint = &mut joints[i];
-        joint.specific_force = specific;
+            )
+        } else {
+            Vec3::new(T::zero(), T::zero(), gravity)
+        };
         // -c_i = (l/2) w x (w x e).
         let wwe = Vec3::new(
             w.y * we.z - w.z * we.y,
@@ -334,15 +340,43 @@ fn cable_loads<T: Real, const N: usize>(
             w.x * we.y - w.y * we.x,
         );
         let minus_c = wwe * half_l;
+        joint.specific_force = specific;
         joint.rhs = carry - specific + minus_c;
         carry = specific + minus_c;
-        p = Vec3::new(p.x + e.x * l, p.y + e.y * l, p.z + e.z * l);
         altitude -= e.z * l;
         air = Vec3::new(air.x - we.x * l, air.y - we.y * l, air.z - we.z * l);
-        joint.position = p;
-        joint.air = air;
     }
-    carry
+    (carry, altitude, air)
+}
+
+/// Joint positions and velocities (`p_i = p_{i-1} + l_i e_i`, `v_i = v_{i-1} + l_i w_i x e_i`
+/// from the connection point) and the decoy's CG position, for the outputs of the
+/// evaluation in `ws` at `state`. The evaluation itself needs only altitudes and air
+/// velocities, which [`prepare`] carries down the chain; this pass runs only for
+/// evaluations whose outputs are read ([`crate::Solver::outputs`], the observed first
+/// stage of [`crate::Solver::step_observed`]).
+pub(crate) fn joint_kinematics<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+) {
+    let n = model.segment_count();
+    let mut p = ws.connection.position;
+    let mut v = ws.connection.velocity;
+    let rows = state.directions[..n]
+        .iter()
+        .zip(&state.rates[..n])
+        .zip(model.lengths())
+        .zip(ws.joints[..n].iter_mut());
+    for (((e, w), l), joint) in rows {
+        p += e * *l;
+        v += w.cross(e) * *l;
+        joint.position = p;
+        joint.velocity = v;
+    }
+    if model.decoy().is_some() {
+        ws.decoy.cg_position = p - ws.decoy.tow_from_cg;
+    }
 }
 
 /// Pass 1: kinematics, loads and the velocity terms.
@@ -358,51 +392,80 @@ pub fn prepare<T: Real, const N: usize>(
     ws: &mut Workspace<T, N>,
 ) {
     let (model, state, ws) = opaque((model, state, ws));
-    let n = model.segment_count();
     let params = model.params();
     let env = &params.environment;
     let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
     let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
     ws.connection = *connection;
     // The layer choice of the air column, once per evaluation rather than per segment.
-    ws.tow_rhs = match air.single_layer() {
-        Some(layer) => cable_loads(model, state, connection, has_air, ws, |h| layer.density(h)),
-        None => cable_loads(model, state, connection, has_air, ws, |h| air.density(h)),
+    let (tow_rhs, tow_altitude, tow_air) = match air.single_layer() {
+        _ if !has_air => cable_loads::<T, N, false>(model, state, connection, ws, |_| T::zero()),
+        Some(layer) => cable_loads::<T, N, true>(model, state, connection, ws, |h| layer.density(h)),
+        None => cable_loads::<T, N, true>(model, state, connection, ws, |h| air.density(h)),
     };
+    ws.tow_rhs = tow_rhs;
 
     if let Some((decoy, derived)) = model.decoy() {
         // One normalisation and one rotation matrix per evaluation (also used by pass 3).
         let r = crate::scalar::rotation_matrix(state.decoy_attitude);
         let wb = state.decoy_rate;
-        let tow = ws.joints[n - 1].position;
-        let tow_velocity = env.wind - ws.joints[n - 1].air;
-        let r_world = r * derived.tow_from_cg;
-        let cg_position = tow - r_world;
-        let cg_velocity = tow_velocity - r * wb.cross(&derived.tow_from_cg);
-        let density = air.density(-cg_position.z);
+        // The towing point lies on the body x axis from the CG (r_tow = (a, 0, 0), the
+        // model's `tow_from_cg`), so R r_tow = a R x_b and w x r_tow = a (0, w_z, -w_y).
+        let a = derived.tow_from_cg.x;
+        let (c0, c1, c2) = (r.column(0), r.column(1), r.column(2));
+        let tow_from_cg = Vec3::new(a * c0[0], a * c0[1], a * c0[2]);
+        let cg_velocity = env.wind
+            - tow_air
+            - Vec3::new(
+                a * (wb.z * c1[0] - wb.y * c2[0]),
+                a * (wb.z * c1[1] - wb.y * c2[1]),
+                a * (wb.z * c1[2] - wb.y * c2[2]),
+            );
+        let density = air.density(tow_altitude + tow_from_cg.z);
         let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) =
             decoy_aero(decoy, derived, &r, &wb, &cg_velocity, &env.wind, density);
         let inertia = decoy.inertia_cg;
-        let gyroscopic = wb.cross(&inertia.component_mul(&wb));
+        let iw = Vec3::new(inertia.x * wb.x, inertia.y * wb.y, inertia.z * wb.z);
+        let gyroscopic = wb.cross(&iw);
         // Towing-point acceleration from the decoy side (a_tow = a_cg + dw x r + w x (w x r)):
         //   a_tow = (T_N + F_d)/m_d + [r]xᵀ I⁻¹ [r]x T_N - r x I⁻¹ (M - w x I w) + w x (w x r).
-        // `rhs_body` is its force-free angular part in the body frame.
-        let free_angular = (aero_moment_body - gyroscopic).component_mul(&derived.inertia_inv);
-        let rhs_body =
-            wb.cross(&wb.cross(&derived.tow_from_cg)) - derived.tow_from_cg.cross(&free_angular);
+        // `rhs_body` is its force-free angular part in the body frame; with r = (a, 0, 0):
+        // w x (w x r) = a (-(w_y² + w_z²), w_x w_y, w_x w_z), r x f = a (0, -f_z, f_y).
+        let inv = &derived.inertia_inv;
+        let free_angular = aero_moment_body - gyroscopic;
+        let (fy, fz) = (free_angular.y * inv.y, free_angular.z * inv.z);
+        let rhs_body = Vec3::new(
+            -a * (wb.y * wb.y + wb.z * wb.z),
+            a * (wb.x * wb.y + fz),
+            a * (wb.x * wb.z - fy),
+        );
         let inverse_mass = T::one() / decoy.mass;
         let force = aero_force + gravity * decoy.mass;
+        // [r]xᵀ I⁻¹ [r]x = diag(0, a²/I_z, a²/I_y) (the model's hinge compliance), so
+        // R (...) Rᵀ = (a²/I_z) c1 c1ᵀ + (a²/I_y) c2 c2ᵀ with c1, c2 columns of R.
+        let compliance = &derived.hinge_compliance;
+        let f1 = c1 * compliance[(1, 1)];
+        let f2 = c2 * compliance[(2, 2)];
+        let joint_block = Sym3 {
+            xx: inverse_mass + f1[0] * c1[0] + f2[0] * c2[0],
+            yy: inverse_mass + f1[1] * c1[1] + f2[1] * c2[1],
+            zz: inverse_mass + f1[2] * c1[2] + f2[2] * c2[2],
+            xy: f1[0] * c1[1] + f2[0] * c2[1],
+            xz: f1[0] * c1[2] + f2[0] * c2[2],
+            yz: f1[1] * c1[2] + f2[1] * c2[2],
+        };
         ws.decoy = DecoyScratch {
             rotation: r,
-            cg_position,
+            tow_from_cg,
+            cg_position: ws.decoy.cg_position,
             cg_velocity,
             aero_force,
             aero_moment_body,
+            gyroscopic,
             angle_of_attack: alpha,
             airspeed,
             dynamic_pressure,
-            joint_block: Mat3::identity() * inverse_mass
-                + r * derived.hinge_compliance * r.transpose(),
+            joint_block,
             // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
             joint_rhs: -(force * inverse_mass) - r * rhs_body,
         };
@@ -455,7 +518,7 @@ fn joint_row<T: Real, const N: usize>(
         block += segment_block(&state.directions[j], inverse_masses[j]);
         (block, ws.joints[j].rhs)
     } else {
-        block += ws.decoy.joint_block;
+        block += ws.decoy.joint_block.matrix();
         (block, ws.tow_rhs)
     }
 }
@@ -516,6 +579,13 @@ impl<T: Real> Sym3<T> {
             xz: f.x * e.z,
             yz: f.y * e.z,
         }
+    }
+
+    /// The full matrix.
+    fn matrix(&self) -> Mat3<T> {
+        Mat3::new(
+            self.xx, self.xy, self.xz, self.xy, self.yy, self.yz, self.xz, self.yz, self.zz,
+        )
     }
 
     #[inline(always)]
@@ -774,12 +844,10 @@ fn forward_sweep<T: Real, const N: usize>(
         let (update, diagonal) = eliminate(&s, &y, &e, k, n - 1, &mut ws.pivots[n - 1])?;
         let d = &ws.decoy.joint_block;
         let block = Sym3 {
-            xx: d[(0, 0)] + diagonal,
-            yy: d[(1, 1)] + diagonal,
-            zz: d[(2, 2)] + diagonal,
-            xy: d[(1, 0)],
-            xz: d[(2, 0)],
-            yz: d[(2, 1)],
+            xx: d.xx + diagonal,
+            yy: d.yy + diagonal,
+            zz: d.zz + diagonal,
+            ..*d
         };
         (s, y) = update.apply(&block, &ws.tow_rhs, &e);
     }
@@ -1018,17 +1086,29 @@ fn decoy_accelerations<T: Real, const N: usize>(
     out: &mut Derivative<T, N>,
 ) {
     let n = model.segment_count();
-    if let Some((decoy, derived)) = model.decoy() {
+    if let Some((_, derived)) = model.decoy() {
         let wb = state.decoy_rate;
         let tension_body = ws.decoy.rotation.tr_mul(&ws.joint_force[n - 1]);
-        let inertia = decoy.inertia_cg;
-        let torque = ws.decoy.aero_moment_body + derived.tow_from_cg.cross(&tension_body)
-            - wb.cross(&inertia.component_mul(&wb));
-        out.decoy_rate = torque.component_mul(&derived.inertia_inv);
-        let [w, x, y, z] = state.decoy_attitude;
-        let dq = Quaternion::new(w, x, y, z) * Quaternion::new(T::zero(), wb.x, wb.y, wb.z);
+        // r x T with r = (a, 0, 0) on the body x axis: a (0, -T_z, T_y).
+        let a = derived.tow_from_cg.x;
+        let m = &ws.decoy.aero_moment_body;
+        let g = &ws.decoy.gyroscopic;
+        let inv = &derived.inertia_inv;
+        out.decoy_rate = Vec3::new(
+            (m.x - g.x) * inv.x,
+            (m.y - a * tension_body.z - g.y) * inv.y,
+            (m.z + a * tension_body.y - g.z) * inv.z,
+        );
+        // dq/dt = q ⊗ (0, w)/2.
+        let [qw, qx, qy, qz] = state.decoy_attitude;
         let half = T::lit(0.5);
-        out.decoy_attitude = [dq.w * half, dq.i * half, dq.j * half, dq.k * half];
+        let (hx, hy, hz) = (wb.x * half, wb.y * half, wb.z * half);
+        out.decoy_attitude = [
+            -qx * hx - qy * hy - qz * hz,
+            qw * hx + qy * hz - qz * hy,
+            qw * hy - qx * hz + qz * hx,
+            qw * hz + qx * hy - qy * hx,
+        ];
     } else {
         out.decoy_attitude = [T::zero(); 4];
         out.decoy_rate = Vec3::zeros();

@@ -163,7 +163,7 @@ impl<T: Real, const N: usize> Rk4<T, N> {
     pub fn step<S, F>(&mut self, source: &mut S, dt: f64, observe: F) -> Result<(), SolveError>
     where
         S: DerivativeSource<T, N> + ?Sized,
-        F: FnOnce(&S, &State<T, N>, &Derivative<T, N>),
+        F: FnOnce(&mut S, &State<T, N>, &Derivative<T, N>),
     {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(InputError::BadTimeStep.into());

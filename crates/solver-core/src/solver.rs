@@ -268,6 +268,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             evaluated: &mut self.evaluated,
         };
         self.rk4.step(&mut towed, dt, |towed, state, k1| {
+            dynamics::joint_kinematics(towed.model, state, towed.ws);
             observe(&Outputs {
                 model: towed.model,
                 state,
@@ -302,7 +303,9 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// The outputs of the most recent evaluation (the last RK4 stage of a step, or
     /// the last [`Solver::outputs`] call), without evaluating again. After
     /// [`Solver::outputs`] they belong to the current state; after a step, to its
-    /// last stage. Before any evaluation the forces are zero.
+    /// last stage, except the joint and CG positions and the joint velocities, which
+    /// are those of the last [`Solver::outputs`] (or observed first stage): a step's
+    /// stages do not form them. Before any evaluation the forces are zero.
     pub fn last_outputs(&self) -> Outputs<'_, T, N> {
         Outputs {
             model: &self.model,
@@ -336,6 +339,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.ws,
             slope,
         )?;
+        dynamics::joint_kinematics(&self.model, state, &mut self.ws);
         self.evaluated = Some(EvaluationKey::new(&connection, &air, self.method));
         Ok(())
     }
@@ -464,7 +468,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection.velocity
         } else {
-            self.model.params().environment.wind - self.ws.joints[j - 1].air
+            self.ws.joints[j - 1].velocity
         }
     }
     /// Angular acceleration of segment `i` (1-based), NED, rad/s^2.
