@@ -240,7 +240,16 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// `dt` is f64 in every precision so that time advances identically for f32 and
     /// f64 solvers; the arithmetic of the step uses `dt` rounded to `T`.
     pub fn step<P: FlightPath<T> + ?Sized>(&mut self, path: &P, dt: f64) -> Result<(), SolveError> {
-        self.step_observed(path, dt, |_| {})
+        // As `step_observed` with nothing to observe (no joint kinematics for outputs).
+        let mut towed = Towed {
+            model: &self.model,
+            path,
+            method: self.method,
+            ws: &mut self.ws,
+            air: &mut self.air,
+            evaluated: &mut self.evaluated,
+        };
+        self.rk4.step(&mut towed, dt, |_, _, _| {})
     }
 
     /// [`Solver::step`], calling `observe` with the outputs at the state *before* the
