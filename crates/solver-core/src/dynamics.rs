@@ -71,6 +71,9 @@ pub(crate) struct JointScratch<T: Real> {
     /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
     /// connection-point acceleration), assembled with the loads in pass 1.
     pub(crate) rhs: Vec3<T>,
+    /// de/dt = w x e of segment i+1 (pass 1 forms it for the velocities; pass 3's
+    /// derivative copies it).
+    pub(crate) direction_rate: Vec3<T>,
 }
 
 impl<T: Real> JointScratch<T> {
@@ -80,6 +83,7 @@ impl<T: Real> JointScratch<T> {
         velocity: zero3(),
         specific_force: zero3(),
         rhs: zero3(),
+        direction_rate: zero3(),
     };
 }
 
@@ -342,6 +346,7 @@ fn cable_loads<T: Real, const N: usize, const AIR: bool>(
         let minus_c = wwe * half_l;
         joint.specific_force = specific;
         joint.rhs = carry - specific + minus_c;
+        joint.direction_rate = we;
         carry = specific + minus_c;
         altitude -= e.z * l;
         air = Vec3::new(air.x - we.x * l, air.y - we.y * l, air.z - we.z * l);
@@ -719,7 +724,6 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     let last = last_joint(model);
     let n = model.segment_count();
     let directions = &state.directions;
-    let rates = &state.rates;
     let gains = model.rate_gains();
     let mut t = forward_sweep(model, state, ws)?;
     let mut probe = t.x + t.y + t.z;
@@ -735,7 +739,7 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
             ws.joint_force[last - 1] = t;
         }
         let e = directions[n - 1];
-        out.directions[n - 1] = rates[n - 1].cross(&e);
+        out.directions[n - 1] = ws.joints[n - 1].direction_rate;
         out.rates[n - 1] = -e.cross(&(t + zero)) * gains[n - 1];
         t
     };
@@ -747,19 +751,19 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
         let rows = opaque(&ws.pivots[range.clone()])
             .iter()
             .zip(&directions[range.clone()])
-            .zip(&rates[range.clone()])
+            .zip(opaque(&ws.joints[range.clone()]))
             .zip(&gains[range.clone()])
             .zip(out.directions[range.clone()].iter_mut())
             .zip(out.rates[range].iter_mut())
             .zip(ws.joint_force[..last - 1].iter_mut())
             .rev();
-        for ((((((pivot, e), w), gain), de), dw), force) in rows {
+        for ((((((pivot, e), joint), gain), de), dw), force) in rows {
             // Copies first: the stores below may alias for all the optimiser knows.
-            let (pivot, e, w, gain) = (*pivot, *e, *w, *gain);
+            let (pivot, e, we, gain) = (*pivot, *e, joint.direction_rate, *gain);
             t = back_substitute(&pivot, &e, &t);
             probe += t.x + t.y + t.z;
             // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
-            *de = w.cross(&e);
+            *de = we;
             *dw = -e.cross(&(t + downstream)) * gain;
             downstream = t;
             *force = t;
@@ -767,7 +771,7 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
         let e = &directions[0];
         t = back_substitute(&ws.pivots[0], e, &t);
         probe += t.x + t.y + t.z;
-        out.directions[0] = rates[0].cross(e);
+        out.directions[0] = ws.joints[0].direction_rate;
         out.rates[0] = -e.cross(&(t + downstream)) * gains[0];
     }
     ws.connection_force = t;
