@@ -29,6 +29,7 @@ use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
 use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite, zero3, zero33};
+use crate::rk4::StageUpdate;
 use crate::state::{Derivative, State};
 
 /// Per-evaluation scratch and results. Read after an evaluation through
@@ -1089,6 +1090,16 @@ fn decoy_accelerations<T: Real, const N: usize>(
     ws: &Workspace<T, N>,
     out: &mut Derivative<T, N>,
 ) {
+    (out.decoy_attitude, out.decoy_rate) = decoy_derivative(model, state, ws);
+}
+
+/// The decoy's dq/dt and dw/dt (zero for a free end).
+#[inline(always)]
+fn decoy_derivative<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &Workspace<T, N>,
+) -> ([T; 4], Vec3<T>) {
     let n = model.segment_count();
     if let Some((_, derived)) = model.decoy() {
         let wb = state.decoy_rate;
@@ -1098,7 +1109,7 @@ fn decoy_accelerations<T: Real, const N: usize>(
         let m = &ws.decoy.aero_moment_body;
         let g = &ws.decoy.gyroscopic;
         let inv = &derived.inertia_inv;
-        out.decoy_rate = Vec3::new(
+        let rate = Vec3::new(
             (m.x - g.x) * inv.x,
             (m.y - a * tension_body.z - g.y) * inv.y,
             (m.z + a * tension_body.y - g.z) * inv.z,
@@ -1107,15 +1118,145 @@ fn decoy_accelerations<T: Real, const N: usize>(
         let [qw, qx, qy, qz] = state.decoy_attitude;
         let half = T::lit(0.5);
         let (hx, hy, hz) = (wb.x * half, wb.y * half, wb.z * half);
-        out.decoy_attitude = [
+        let attitude = [
             -qx * hx - qy * hy - qz * hz,
             qw * hx + qy * hz - qz * hy,
             qw * hy - qx * hz + qz * hx,
             qw * hz + qx * hy - qy * hx,
         ];
+        (attitude, rate)
     } else {
-        out.decoy_attitude = [T::zero(); 4];
-        out.decoy_rate = Vec3::zeros();
+        ([T::zero(); 4], Vec3::zeros())
+    }
+}
+
+/// Passes 2 and 3 as [`solve_tensions_and_accelerations`], with the derivative of each
+/// segment (and of the decoy), as it is found in the back sweep, turned into the next
+/// RK4 stage in `stage` itself (the state evaluated, whose entries are no longer
+/// needed once their segment is done) and into the weighted sum: no derivative is
+/// stored and read back. Same arithmetic as the separate passes, so the same bits.
+#[inline(never)]
+pub fn solve_tensions_to_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    stage: &mut State<T, N>,
+    ws: &mut Workspace<T, N>,
+    next: StageUpdate<'_, T, N>,
+) -> Result<(), SolveError> {
+    let (model, stage, ws) = opaque((model, stage, ws));
+    let StageUpdate { base, h, sum, weight } = next;
+    let (base, sum, weight) = opaque((base, sum, weight));
+    let last = last_joint(model);
+    let n = model.segment_count();
+    let gains = model.rate_gains();
+    let mut t = forward_sweep(model, stage, ws)?;
+    let mut probe = t.x + t.y + t.z;
+    // Segment index j's derivative (de, dw) into the stage and the sum.
+    let update = |stage: &mut State<T, N>, sum: &mut Derivative<T, N>, j: usize, de: Vec3<T>, dw: Vec3<T>| {
+        stage.directions[j] = base.directions[j] + de * h;
+        stage.rates[j] = base.rates[j] + dw * h;
+        sum.directions[j] = sum.directions[j] + de * weight;
+        sum.rates[j] = sum.rates[j] + dw * weight;
+    };
+    let mut downstream = if last == n {
+        ws.joint_force[n - 1] = t;
+        t
+    } else {
+        let zero = Vec3::zeros();
+        ws.joint_force[n - 1] = zero;
+        if last > 0 {
+            ws.joint_force[last - 1] = t;
+        }
+        let e = stage.directions[n - 1];
+        let dw = -e.cross(&(t + zero)) * gains[n - 1];
+        update(stage, sum, n - 1, ws.joints[n - 1].direction_rate, dw);
+        t
+    };
+    if last > 0 {
+        let range = 1..last;
+        let rows = opaque(&ws.pivots[range.clone()])
+            .iter()
+            .zip(opaque(&ws.joints[range.clone()]))
+            .zip(&gains[range.clone()])
+            .zip(
+                stage.directions[range.clone()]
+                    .iter_mut()
+                    .zip(stage.rates[range.clone()].iter_mut()),
+            )
+            .zip(
+                base.directions[range.clone()]
+                    .iter()
+                    .zip(&base.rates[range.clone()]),
+            )
+            .zip(
+                sum.directions[range.clone()]
+                    .iter_mut()
+                    .zip(sum.rates[range].iter_mut()),
+            )
+            .zip(ws.joint_force[..last - 1].iter_mut())
+            .rev();
+        for ((((((pivot, joint), gain), (e_out, w_out)), (e0, w0)), (se, sw)), force) in rows {
+            // Copies first: the stores below may alias for all the optimiser knows.
+            let (pivot, we, gain, e) = (*pivot, joint.direction_rate, *gain, *e_out);
+            let (e0, w0, s_e, s_w) = (*e0, *w0, *se, *sw);
+            t = back_substitute(&pivot, &e, &t);
+            probe += t.x + t.y + t.z;
+            let dw = -e.cross(&(t + downstream)) * gain;
+            *e_out = e0 + we * h;
+            *w_out = w0 + dw * h;
+            *se = s_e + we * weight;
+            *sw = s_w + dw * weight;
+            downstream = t;
+            *force = t;
+        }
+        let e = stage.directions[0];
+        t = back_substitute(&ws.pivots[0], &e, &t);
+        probe += t.x + t.y + t.z;
+        let dw = -e.cross(&(t + downstream)) * gains[0];
+        update(stage, sum, 0, ws.joints[0].direction_rate, dw);
+    }
+    ws.connection_force = t;
+    let result = finish_tensions(model, ws, probe);
+    let (dq, dw) = decoy_derivative(model, stage, ws);
+    for ((o, b), (s, d)) in stage
+        .decoy_attitude
+        .iter_mut()
+        .zip(&base.decoy_attitude)
+        .zip(sum.decoy_attitude.iter_mut().zip(&dq))
+    {
+        *o = *b + *d * h;
+        *s = *s + *d * weight;
+    }
+    stage.decoy_rate = base.decoy_rate + dw * h;
+    sum.decoy_rate = sum.decoy_rate + dw * weight;
+    result
+}
+
+/// [`evaluate`] followed by the next RK4 stage ([`StageUpdate`]) in `stage` itself,
+/// with the same bits, the derivative never stored (see
+/// [`solve_tensions_to_stage`]); the shooting reference evaluates into `out` and
+/// forms the stage from it.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_to_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    stage: &mut State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    method: TensionMethod,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+    next: StageUpdate<'_, T, N>,
+) -> Result<(), SolveError> {
+    match method {
+        TensionMethod::TwoSweep => {
+            prepare(model, stage, connection, air, ws);
+            solve_tensions_to_stage(model, stage, ws, next)
+        }
+        TensionMethod::Shooting => {
+            evaluate(model, stage, connection, air, method, ws, out)?;
+            let n = model.segment_count();
+            stage.set_stage_accumulating(next.base, out, next.h, next.sum, next.weight, n);
+            Ok(())
+        }
     }
 }
 

@@ -7,7 +7,7 @@ use crate::dynamics::{self, TensionMethod, Workspace};
 use crate::error::{ConfigError, InputError, SolveError};
 use crate::model::{Model, ModelParams};
 use crate::motion::{AircraftState, FlightPath, PointKinematics};
-use crate::rk4::{DerivativeSource, Rk4};
+use crate::rk4::{DerivativeSource, Rk4, StageUpdate};
 use crate::scalar::{Real, Vec3, zero3};
 use crate::state::{Derivative, State};
 
@@ -109,6 +109,26 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
             self.method,
             self.ws,
             out,
+        )
+    }
+
+    #[inline(always)]
+    fn evaluate_to_stage(
+        &mut self,
+        stage: &mut State<T, N>,
+        (connection, air): &Self::Inputs,
+        out: &mut Derivative<T, N>,
+        next: StageUpdate<'_, T, N>,
+    ) -> Result<(), SolveError> {
+        dynamics::evaluate_to_stage(
+            self.model,
+            stage,
+            connection,
+            air,
+            self.method,
+            self.ws,
+            out,
+            next,
         )
     }
 
