@@ -19,12 +19,12 @@ use decoy_hil::step_cost::{StepCost, measure};
 /// The benchmark issue's target for one RK4 step, M4 f32, 16 graded segments.
 const RK4_STEP_TARGET: u32 = 40_000;
 /// Issue 14's target for one RK4-equivalent step (16 graded, f32, M4): not met
-/// (measured 31,680, from 38,640), printed against it.
+/// (measured 31,200, from 38,640), printed against it.
 const ISSUE_14_STEP_TARGET: u32 = 25_000;
 /// A guard just above the measurement of a step evaluating all four stages, so that
-/// a regression fails: measured 31,680 on the M4 and 31,697 on the STM32F405 (its
+/// a regression fails: measured 31,200 on the M4 and 31,233 on the STM32F405 (its
 /// finer clock); lower it as the solver gets faster.
-const RK4_STEP_GUARD: u32 = 31_720;
+const RK4_STEP_GUARD: u32 = 31_240;
 
 #[test]
 fn an_rk4_step_on_the_m4_is_within_the_target() {
@@ -67,8 +67,8 @@ fn check_f32_step_cost(board: Board) {
         "the first step does not reuse the output evaluation: {cost:?}"
     );
     // The turn's steps take data-dependent branches (table intervals, the
-    // renormalisation's window): measured 31,280 to 31,680 on the M4, ten
-    // 40-instruction ticks, and 31,280 to 31,697 on the STM32F405 (its finer clock);
+    // renormalisation's window): measured 30,800 to 31,200 on the M4, ten
+    // 40-instruction ticks, and 30,822 to 31,233 on the STM32F405 (its finer clock);
     // one tick of margin.
     assert!(
         cost.four_stages - cost.four_stages_min <= 440,
