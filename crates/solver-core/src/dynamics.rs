@@ -1154,8 +1154,8 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
     let update = |stage: &mut State<T, N>, sum: &mut Derivative<T, N>, j: usize, de: Vec3<T>, dw: Vec3<T>| {
         stage.directions[j] = base.directions[j] + de * h;
         stage.rates[j] = base.rates[j] + dw * h;
-        sum.directions[j] = sum.directions[j] + de * weight;
-        sum.rates[j] = sum.rates[j] + dw * weight;
+        sum.directions[j] += de * weight;
+        sum.rates[j] += dw * weight;
     };
     let mut downstream = if last == n {
         ws.joint_force[n - 1] = t;
@@ -1224,10 +1224,10 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
         .zip(sum.decoy_attitude.iter_mut().zip(&dq))
     {
         *o = *b + *d * h;
-        *s = *s + *d * weight;
+        *s += *d * weight;
     }
     stage.decoy_rate = base.decoy_rate + dw * h;
-    sum.decoy_rate = sum.decoy_rate + dw * weight;
+    sum.decoy_rate += dw * weight;
     result
 }
 
