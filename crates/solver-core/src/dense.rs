@@ -228,8 +228,8 @@ pub fn evaluate_dense<T: Real, const N: usize>(
     }
     for k in (0..n).rev() {
         // m_k a_ck = T_{k-1} - T_k + F_k.
-        joint_forces[k] =
-            centre_accel[k] * masses[k] - ws.joints[k].specific_force * masses[k] + joint_forces[k + 1];
+        joint_forces[k] = centre_accel[k] * masses[k] - ws.joints[k].specific_force * masses[k]
+            + joint_forces[k + 1];
     }
     let _ = centre_accel0;
     Ok(DenseSolution {

@@ -28,8 +28,8 @@ use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
-use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite, zero3, zero33};
 use crate::rk4::StageUpdate;
+use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite, zero3, zero33};
 use crate::state::{Derivative, State};
 
 /// Per-evaluation scratch and results. Read after an evaluation through
@@ -316,7 +316,11 @@ fn cable_loads<T: Real, const N: usize, const AIR: bool>(
         // Copies first: the stores below may alias for all the optimiser knows.
         let (e, w, l) = (*e, *w, *l);
         let half_l = half * l;
-        let we = Vec3::new(w.y * e.z - w.z * e.y, w.z * e.x - w.x * e.z, w.x * e.y - w.y * e.x);
+        let we = Vec3::new(
+            w.y * e.z - w.z * e.y,
+            w.z * e.x - w.x * e.z,
+            w.x * e.y - w.y * e.x,
+        );
         let specific = if AIR {
             // cable_drag(..)/m_i with the per-unit-mass factors of the model.
             let density = density_at(altitude - e.z * half_l);
@@ -406,7 +410,9 @@ pub fn prepare<T: Real, const N: usize>(
     // The layer choice of the air column, once per evaluation rather than per segment.
     let (tow_rhs, tow_altitude, tow_air) = match air.single_layer() {
         _ if !has_air => cable_loads::<T, N, false>(model, state, connection, ws, |_| T::zero()),
-        Some(layer) => cable_loads::<T, N, true>(model, state, connection, ws, |h| layer.density(h)),
+        Some(layer) => {
+            cable_loads::<T, N, true>(model, state, connection, ws, |h| layer.density(h))
+        }
         None => cable_loads::<T, N, true>(model, state, connection, ws, |h| air.density(h)),
     };
     ws.tow_rhs = tow_rhs;
@@ -1143,7 +1149,12 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
     next: StageUpdate<'_, T, N>,
 ) -> Result<(), SolveError> {
     let (model, stage, ws) = opaque((model, stage, ws));
-    let StageUpdate { base, h, sum, weight } = next;
+    let StageUpdate {
+        base,
+        h,
+        sum,
+        weight,
+    } = next;
     let (base, sum, weight) = opaque((base, sum, weight));
     let last = last_joint(model);
     let n = model.segment_count();
@@ -1151,7 +1162,11 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
     let mut t = forward_sweep(model, stage, ws)?;
     let mut probe = t.x + t.y + t.z;
     // Segment index j's derivative (de, dw) into the stage and the sum.
-    let update = |stage: &mut State<T, N>, sum: &mut Derivative<T, N>, j: usize, de: Vec3<T>, dw: Vec3<T>| {
+    let update = |stage: &mut State<T, N>,
+                  sum: &mut Derivative<T, N>,
+                  j: usize,
+                  de: Vec3<T>,
+                  dw: Vec3<T>| {
         stage.directions[j] = base.directions[j] + de * h;
         stage.rates[j] = base.rates[j] + dw * h;
         sum.directions[j] += de * weight;

@@ -249,7 +249,11 @@ fn stage_pass<T: Real, const N: usize>(
         .zip(out.rates[..count].iter_mut())
         .zip(base.directions[..count].iter().zip(&base.rates[..count]))
         .zip(k.directions[..count].iter().zip(&k.rates[..count]))
-        .zip(sum.directions[..count].iter_mut().zip(sum.rates[..count].iter_mut()));
+        .zip(
+            sum.directions[..count]
+                .iter_mut()
+                .zip(sum.rates[..count].iter_mut()),
+        );
     for ((((o_e, o_w), (b_e, b_w)), (k_e, k_w)), (s_e, s_w)) in rows {
         // Copies first: the stores may alias for all the optimiser knows.
         let (b_e, b_w, k_e, k_w, se, sw) = (*b_e, *b_w, *k_e, *k_w, *s_e, *s_w);
