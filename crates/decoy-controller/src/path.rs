@@ -173,10 +173,13 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
         // the integers (on the M4F a soft-float compare costs about 30 instructions).
         let elapsed = t - self.t0;
         let bits = elapsed.to_bits() as i64;
+        // A NaN takes one of the two branches: with its sign bit set it is negative as
+        // an integer, without it it lies above every span (a positive double, at most
+        // +inf, whose bits are below every NaN's).
         if bits >= self.span_bits {
             return self.to.state();
         }
-        if bits <= 0 || elapsed.is_nan() {
+        if bits <= 0 {
             return self.from.state();
         }
         let s = T::lit(elapsed) * self.inverse_span;

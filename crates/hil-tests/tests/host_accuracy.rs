@@ -11,8 +11,8 @@
 //! acceleration and the turns ([`WITHIN_TARGET`]). It does not hold where the
 //! cable is jerked taut (the pull-ups' snatch load at about 8.7 s, and the recorded
 //! flight's pull-up): there the controller's RK4 steps, at the wave-speed stability
-//! limit (0.8 l/c on the 0.46 m segment at the decoy), overshoot the peak by 3.4 to
-//! 14 %, while the same 16-segment model integrated at 0.25 ms is within 0.7 %
+//! limit (0.8 l/c on the 0.46 m segment at the decoy), overshoot the peak by 4.4 to
+//! 16.4 %, while the same 16-segment model integrated at 0.25 ms is within 0.7 %
 //! (a time-step error, not a discretisation error: firmware/README.md, "The worst
 //! frame and the accuracy"). Those scenarios are held to the error measured
 //! today ([`KNOWN_GAPS`]) so that a change making them worse fails, and the gap is
@@ -37,15 +37,18 @@ const WITHIN_TARGET: [(&str, Option<f64>, f64); 4] = [
     ("turn", Some(0.20), 10.0),
 ];
 
-/// The scenarios that miss [`TARGET`], with the relative error measured when this
-/// installation of `config/` was chosen (the controller over the 300-segment
-/// solution's peak: +4.51 %, +16.09 %, +4.89 %, +6.46 %; a guard 0.5 point above
-/// it). Deterministic runs: these are exact numbers, not a noise band.
+/// The scenarios that miss [`TARGET`], with the relative error measured (the
+/// controller over the 300-segment solution's peak: +4.72 %, +16.39 %, +4.45 %,
+/// +6.09 %; a guard 0.5 point above it). Deterministic runs: these are exact
+/// numbers, not a noise band. They were +4.51 %, +16.09 %, +4.89 %, +6.46 % before
+/// the solver's arithmetic was reordered for the M4 (the same equations, other
+/// roundings): through a snatch load, integrated at the wave-speed stability limit,
+/// last-bit differences move the peaks by tenths of a point.
 const KNOWN_GAPS: [(&str, Option<f64>, f64, f64); 4] = [
-    ("pull-up", Some(0.05), 10.0, 0.050),
-    ("pull-up", Some(0.10), 10.0, 0.166),
-    ("pull-up", Some(0.20), 10.0, 0.054),
-    ("recorded", None, 10.0, 0.070),
+    ("pull-up", Some(0.05), 10.0, 0.052),
+    ("pull-up", Some(0.10), 10.0, 0.169),
+    ("pull-up", Some(0.20), 10.0, 0.050),
+    ("recorded", None, 10.0, 0.066),
 ];
 
 /// (controller's peak, 300-segment peak) connection tension, N, over the frames

@@ -6,7 +6,9 @@
 //! Asserted on both f32 boards, the Cortex-M4F of `mps2-an386` and the STM32F405
 //! (`netduinoplus2`, whose 168 MHz SysTick reads 125 instructions per 21 ticks): an
 //! RK4 step that evaluates all four stages
-//! takes at most [`RK4_STEP_TARGET`] instructions (the benchmark issue's target); a
+//! takes at most [`RK4_STEP_TARGET`] instructions (the benchmark issue's target) and
+//! at most [`RK4_STEP_GUARD`] (just above the measurement; issue 14's 25,000 is
+//! printed, not met); a
 //! frame's first step, whose first stage is the previous frame's output evaluation
 //! reused, is cheaper by most of an evaluation; and in the steady turn every frame
 //! costs the same to within a few ticks. The M7 (f64) counts are printed.
@@ -16,6 +18,13 @@ use decoy_hil::step_cost::{StepCost, measure};
 
 /// The benchmark issue's target for one RK4 step, M4 f32, 16 graded segments.
 const RK4_STEP_TARGET: u32 = 40_000;
+/// Issue 14's target for one RK4-equivalent step (16 graded, f32, M4): not met
+/// (measured 31,200, from 38,640), printed against it.
+const ISSUE_14_STEP_TARGET: u32 = 25_000;
+/// A guard just above the measurement of a step evaluating all four stages, so that
+/// a regression fails: measured 31,200 on the M4 and 31,233 on the STM32F405 (its
+/// finer clock); lower it as the solver gets faster.
+const RK4_STEP_GUARD: u32 = 31_240;
 
 #[test]
 fn an_rk4_step_on_the_m4_is_within_the_target() {
@@ -37,22 +46,33 @@ fn check_f32_step_cost(board: Board) {
          max {} instructions",
         cost.four_stages, cost.four_stages_min, cost.first_stage_reused, cost.outputs, cost.path
     );
+    let verdict = if cost.four_stages <= ISSUE_14_STEP_TARGET {
+        "met"
+    } else {
+        "NOT met"
+    };
+    println!("{board}: issue 14's target of {ISSUE_14_STEP_TARGET} per RK4 step: {verdict}");
     assert!(
         cost.four_stages <= RK4_STEP_TARGET,
         "an RK4 step took {} instructions, over {RK4_STEP_TARGET}: {frames:#?}",
         cost.four_stages
     );
     assert!(
+        cost.four_stages <= RK4_STEP_GUARD,
+        "an RK4 step took {} instructions, over the guard of {RK4_STEP_GUARD}: {frames:#?}",
+        cost.four_stages
+    );
+    assert!(
         cost.first_stage_reused + cost.outputs / 2 < cost.four_stages,
         "the first step does not reuse the output evaluation: {cost:?}"
     );
-    // The turn's steps take data-dependent branches (table intervals, the plume
-    // test's early exits): measured 38,240 to 38,640 on the M4, ten 40-instruction
-    // ticks (the minimum was one tick lower in one build of the same code); the
-    // STM32F405's finer clock reads the same spread.
+    // The turn's steps take data-dependent branches (table intervals, the
+    // renormalisation's window): measured 30,800 to 31,200 on the M4, ten
+    // 40-instruction ticks, and 30,822 to 31,233 on the STM32F405 (its finer clock);
+    // one tick of margin.
     assert!(
-        cost.four_stages - cost.four_stages_min <= 480,
-        "the steady turn's steps differ by more than 480 instructions: {frames:#?}"
+        cost.four_stages - cost.four_stages_min <= 440,
+        "the steady turn's steps differ by more than 440 instructions: {frames:#?}"
     );
 }
 

@@ -86,7 +86,7 @@ pub fn evaluate_dense<T: Real, const N: usize>(
         let centre = joint_accel0 + wwe * (half * lengths[i]);
         joint_accel0 += wwe * lengths[i];
         centre_accel0.push(centre);
-        residual.push(ws.specific_force[i] * masses[i] - centre * masses[i]);
+        residual.push(ws.joints[i].specific_force * masses[i] - centre * masses[i]);
     }
     // Decoy: rho = CG from towing point (NED), residual force, moment and inertia in NED.
     let mut decoy_terms = None;
@@ -228,8 +228,8 @@ pub fn evaluate_dense<T: Real, const N: usize>(
     }
     for k in (0..n).rev() {
         // m_k a_ck = T_{k-1} - T_k + F_k.
-        joint_forces[k] =
-            centre_accel[k] * masses[k] - ws.specific_force[k] * masses[k] + joint_forces[k + 1];
+        joint_forces[k] = centre_accel[k] * masses[k] - ws.joints[k].specific_force * masses[k]
+            + joint_forces[k + 1];
     }
     let _ = centre_accel0;
     Ok(DenseSolution {

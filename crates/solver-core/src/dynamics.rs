@@ -24,12 +24,11 @@
 //! (`D_0 = (I + 3P_1)/m_1`, `b_0 = a_0 - F_1/m_1 - c_1`) and at joint N by the decoy's
 //! Newton-Euler equations (`D_N += I/m_d + [r]xᵀ I_d⁻¹ [r]x`), or by T_N = 0 for a free end.
 
-use nalgebra::Quaternion;
-
 use crate::atmosphere::AirColumn;
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::PointKinematics;
+use crate::rk4::StageUpdate;
 use crate::scalar::{Mat3, Real, Vec3, norm, opaque, vec_finite, zero3, zero33};
 use crate::state::{Derivative, State};
 
@@ -42,32 +41,51 @@ use crate::state::{Derivative, State};
 pub struct Workspace<T: Real, const N: usize> {
     /// Joint 0 kinematics (connection point).
     pub(crate) connection: PointKinematics<T>,
-    /// Position of joint i+1, NED.
-    pub(crate) joint_position: [Vec3<T>; N],
-    /// Velocity of joint i+1, NED.
-    pub(crate) joint_velocity: [Vec3<T>; N],
-    /// External force per unit mass on segment i+1 (gravity + drag), F/m.
-    pub(crate) specific_force: [Vec3<T>; N],
-    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
-    /// connection-point acceleration), assembled with the loads in pass 1.
-    pub(crate) joint_rhs: [Vec3<T>; N],
+    /// Per joint i+1 and its upstream segment i+1: position, air velocity, loads and
+    /// right-hand side ([`JointScratch`]), side by side (one base address in the
+    /// segment loop).
+    pub(crate) joints: [JointScratch<T>; N],
     /// Right-hand side b_N of the towing-point joint (with the decoy's part).
     pub(crate) tow_rhs: Vec3<T>,
     /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j.
     pub(crate) elimination: [Mat3<T>; N],
-    /// Elimination: the pivot inverse S_j⁻¹ for joint j = i (symmetric, six entries).
-    pub(crate) pivot_inverse: [Sym3<T>; N],
-    /// Elimination: u_j = S_j⁻¹ e_{j+1} for joint j = i, so that
-    /// X_j = S_j⁻¹ B_j = (2 S_j⁻¹ - 3 u_j e_{j+1}ᵀ)/m_{j+1}.
-    pub(crate) pivot_direction: [Vec3<T>; N],
-    /// Elimination: z_j = S_j⁻¹ y_j for joint j = i.
-    pub(crate) reduced_rhs: [Vec3<T>; N],
+    /// Elimination: what the back sweep needs of joint j = i ([`Pivot`]); the
+    /// shooting reference keeps its affine offsets u_j in `reduced_rhs`.
+    pub(crate) pivots: [Pivot<T>; N],
     /// T_{i+1}: force of segment i+1 on the next body at joint i+1.
     pub(crate) joint_force: [Vec3<T>; N],
     /// T_0: force of the aircraft on segment 1 at the connection point.
     pub(crate) connection_force: Vec3<T>,
     /// Decoy quantities of this evaluation (zero for a free end).
     pub(crate) decoy: DecoyScratch<T>,
+}
+
+/// What one evaluation keeps of joint i+1 (entry i) and segment i+1.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointScratch<T: Real> {
+    /// Position of joint i+1, NED (set by [`joint_kinematics`]).
+    pub(crate) position: Vec3<T>,
+    /// Velocity of joint i+1, NED (set by [`joint_kinematics`], with the position).
+    pub(crate) velocity: Vec3<T>,
+    /// External force per unit mass on segment i+1 (gravity + drag), F/m.
+    pub(crate) specific_force: Vec3<T>,
+    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
+    /// connection-point acceleration), assembled with the loads in pass 1.
+    pub(crate) rhs: Vec3<T>,
+    /// de/dt = w x e of segment i+1 (pass 1 forms it for the velocities; pass 3's
+    /// derivative copies it).
+    pub(crate) direction_rate: Vec3<T>,
+}
+
+impl<T: Real> JointScratch<T> {
+    /// Every entry zero.
+    const ZERO: Self = JointScratch {
+        position: zero3(),
+        velocity: zero3(),
+        specific_force: zero3(),
+        rhs: zero3(),
+        direction_rate: zero3(),
+    };
 }
 
 /// Decoy quantities of one evaluation.
@@ -90,7 +108,11 @@ pub struct DecoyScratch<T: Real> {
     /// Decoy attitude as a rotation matrix (body FRD to NED), from the normalised quaternion.
     pub(crate) rotation: Mat3<T>,
     /// Decoy block of joint N: I/m_d + [r]xᵀ I⁻¹ [r]x (NED).
-    pub(crate) joint_block: Mat3<T>,
+    pub(crate) joint_block: Sym3<T>,
+    /// The towing point from the CG, NED: R r_tow.
+    pub(crate) tow_from_cg: Vec3<T>,
+    /// w x I w, body frame.
+    pub(crate) gyroscopic: Vec3<T>,
     /// Decoy part of b_N.
     pub(crate) joint_rhs: Vec3<T>,
 }
@@ -108,15 +130,10 @@ impl<T: Real, const N: usize> Workspace<T, N> {
                 velocity: z,
                 acceleration: z,
             },
-            joint_position: [z; N],
-            joint_velocity: [z; N],
-            specific_force: [z; N],
-            joint_rhs: [z; N],
+            joints: [JointScratch::ZERO; N],
             tow_rhs: z,
             elimination: [zero33(); N],
-            pivot_inverse: [Sym3::ZERO; N],
-            pivot_direction: [z; N],
-            reduced_rhs: [z; N],
+            pivots: [Pivot::ZERO; N],
             joint_force: [z; N],
             connection_force: z,
             decoy: DecoyScratch {
@@ -128,7 +145,9 @@ impl<T: Real, const N: usize> Workspace<T, N> {
                 airspeed: T::ZERO,
                 dynamic_pressure: T::ZERO,
                 rotation: zero33(),
-                joint_block: zero33(),
+                joint_block: Sym3::ZERO,
+                tow_from_cg: z,
+                gyroscopic: z,
                 joint_rhs: z,
             },
         }
@@ -151,15 +170,10 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
                 velocity: z,
                 acceleration: z,
             },
-            joint_position: [z; N],
-            joint_velocity: [z; N],
-            specific_force: [z; N],
-            joint_rhs: [z; N],
+            joints: [JointScratch::ZERO; N],
             tow_rhs: z,
             elimination: [Mat3::zeros(); N],
-            pivot_inverse: [Sym3::zero(); N],
-            pivot_direction: [z; N],
-            reduced_rhs: [z; N],
+            pivots: [Pivot::ZERO; N],
             joint_force: [z; N],
             connection_force: z,
             decoy: DecoyScratch {
@@ -171,7 +185,9 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
                 airspeed: T::zero(),
                 dynamic_pressure: T::zero(),
                 rotation: Mat3::identity(),
-                joint_block: Mat3::zeros(),
+                joint_block: Sym3::ZERO,
+                tow_from_cg: z,
+                gyroscopic: z,
                 joint_rhs: z,
             },
         }
@@ -267,53 +283,110 @@ pub fn decoy_aero<T: Real>(
 /// centripetal term c_i = -(l_i/2) w_i x (w_i x e_i), and the joint right-hand sides
 /// b_{i-1} += -(F_i/m_i + c_i), b_i += F_i/m_i - c_i (b_0 starts from a_0). Returns the
 /// last segment's share F_N/m_N - c_N of b_N.
+///
+/// Carried down the chain: the joint position, the air velocity relative to the
+/// joint (wind - v) and the joint altitude. With u the air velocity relative to the
+/// segment centre, u·e its axial part and u_n = u - (u·e) e:
+/// `F/m = g + rho (k_n |u_n|) u_n + rho (k_t |u·e| (u·e)) e`.
 #[inline(always)]
-fn cable_loads<T: Real, const N: usize>(
+fn cable_loads<T: Real, const N: usize, const AIR: bool>(
     model: &Model<T, N>,
     state: &State<T, N>,
     connection: &PointKinematics<T>,
-    has_air: bool,
     ws: &mut Workspace<T, N>,
     density_at: impl Fn(T) -> T,
-) -> Vec3<T> {
+) -> (Vec3<T>, T, Vec3<T>) {
     let n = model.segment_count();
     let env = &model.params().environment;
-    let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
+    let gravity = env.gravity;
     let half = T::lit(0.5);
-    let mut p = connection.position;
-    let mut v = connection.velocity;
-    let lengths = model.lengths();
+    let mut air = env.wind - connection.velocity;
+    let mut altitude = -connection.position.z;
     let (normal_drag, tangential_drag) = model.drag_factors();
+    // Through `opaque`: the joints' own base address in a register.
+    let rows = state.directions[..n]
+        .iter()
+        .zip(&state.rates[..n])
+        .zip(model.lengths())
+        .zip(normal_drag)
+        .zip(tangential_drag)
+        .zip(opaque(&mut ws.joints[..n]).iter_mut());
     let mut carry = connection.acceleration;
-    for i in 0..n {
-        let e = state.directions[i];
-        let w = state.rates[i];
-        let l = lengths[i];
-        let we = w.cross(&e);
-        let mut specific = gravity;
-        if has_air {
+    for (((((e, w), l), normal_drag), tangential_drag), joint) in rows {
+        // Copies first: the stores below may alias for all the optimiser knows.
+        let (e, w, l) = (*e, *w, *l);
+        let half_l = half * l;
+        let we = Vec3::new(
+            w.y * e.z - w.z * e.y,
+            w.z * e.x - w.x * e.z,
+            w.x * e.y - w.y * e.x,
+        );
+        let specific = if AIR {
             // cable_drag(..)/m_i with the per-unit-mass factors of the model.
-            let centre_altitude = -(p.z + e.z * (half * l));
-            let centre_velocity = v + we * (half * l);
-            let density = density_at(centre_altitude);
-            let u = env.wind - centre_velocity;
-            let along = u.dot(&e);
-            let ut = e * along;
-            let un = u - ut;
-            specific += (un * (normal_drag[i] * norm(&un))
-                + ut * (tangential_drag[i] * along.abs()))
-                * density;
-        }
-        ws.specific_force[i] = specific;
-        let centripetal = -w.cross(&we) * (half * l);
-        ws.joint_rhs[i] = carry - (specific + centripetal);
-        carry = specific - centripetal;
-        p += e * l;
-        v += we * l;
-        ws.joint_position[i] = p;
-        ws.joint_velocity[i] = v;
+            let density = density_at(altitude - e.z * half_l);
+            let u = Vec3::new(
+                air.x - we.x * half_l,
+                air.y - we.y * half_l,
+                air.z - we.z * half_l,
+            );
+            let along = u.x * e.x + u.y * e.y + u.z * e.z;
+            let un = Vec3::new(u.x - e.x * along, u.y - e.y * along, u.z - e.z * along);
+            let speed = (un.x * un.x + un.y * un.y + un.z * un.z).square_root();
+            let normal = density * *normal_drag * speed;
+            let axial = density * *tangential_drag * along.abs() * along;
+            Vec3::new(
+                un.x * normal + e.x * axial,
+                un.y * normal + e.y * axial,
+                gravity + un.z * normal + e.z * axial,
+            )
+        } else {
+            Vec3::new(T::zero(), T::zero(), gravity)
+        };
+        // -c_i = (l/2) w x (w x e).
+        let wwe = Vec3::new(
+            w.y * we.z - w.z * we.y,
+            w.z * we.x - w.x * we.z,
+            w.x * we.y - w.y * we.x,
+        );
+        let minus_c = wwe * half_l;
+        joint.specific_force = specific;
+        joint.rhs = carry - specific + minus_c;
+        joint.direction_rate = we;
+        carry = specific + minus_c;
+        altitude -= e.z * l;
+        air = Vec3::new(air.x - we.x * l, air.y - we.y * l, air.z - we.z * l);
     }
-    carry
+    (carry, altitude, air)
+}
+
+/// Joint positions and velocities (`p_i = p_{i-1} + l_i e_i`, `v_i = v_{i-1} + l_i w_i x e_i`
+/// from the connection point) and the decoy's CG position, for the outputs of the
+/// evaluation in `ws` at `state`. The evaluation itself needs only altitudes and air
+/// velocities, which [`prepare`] carries down the chain; this pass runs only for
+/// evaluations whose outputs are read ([`crate::Solver::outputs`], the observed first
+/// stage of [`crate::Solver::step_observed`]).
+pub(crate) fn joint_kinematics<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+) {
+    let n = model.segment_count();
+    let mut p = ws.connection.position;
+    let mut v = ws.connection.velocity;
+    let rows = state.directions[..n]
+        .iter()
+        .zip(&state.rates[..n])
+        .zip(model.lengths())
+        .zip(ws.joints[..n].iter_mut());
+    for (((e, w), l), joint) in rows {
+        p += e * *l;
+        v += w.cross(e) * *l;
+        joint.position = p;
+        joint.velocity = v;
+    }
+    if model.decoy().is_some() {
+        ws.decoy.cg_position = p - ws.decoy.tow_from_cg;
+    }
 }
 
 /// Pass 1: kinematics, loads and the velocity terms.
@@ -329,51 +402,82 @@ pub fn prepare<T: Real, const N: usize>(
     ws: &mut Workspace<T, N>,
 ) {
     let (model, state, ws) = opaque((model, state, ws));
-    let n = model.segment_count();
     let params = model.params();
     let env = &params.environment;
     let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
     let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
     ws.connection = *connection;
     // The layer choice of the air column, once per evaluation rather than per segment.
-    ws.tow_rhs = match air.single_layer() {
-        Some(layer) => cable_loads(model, state, connection, has_air, ws, |h| layer.density(h)),
-        None => cable_loads(model, state, connection, has_air, ws, |h| air.density(h)),
+    let (tow_rhs, tow_altitude, tow_air) = match air.single_layer() {
+        _ if !has_air => cable_loads::<T, N, false>(model, state, connection, ws, |_| T::zero()),
+        Some(layer) => {
+            cable_loads::<T, N, true>(model, state, connection, ws, |h| layer.density(h))
+        }
+        None => cable_loads::<T, N, true>(model, state, connection, ws, |h| air.density(h)),
     };
+    ws.tow_rhs = tow_rhs;
 
     if let Some((decoy, derived)) = model.decoy() {
         // One normalisation and one rotation matrix per evaluation (also used by pass 3).
         let r = crate::scalar::rotation_matrix(state.decoy_attitude);
         let wb = state.decoy_rate;
-        let tow = ws.joint_position[n - 1];
-        let tow_velocity = ws.joint_velocity[n - 1];
-        let r_world = r * derived.tow_from_cg;
-        let cg_position = tow - r_world;
-        let cg_velocity = tow_velocity - r * wb.cross(&derived.tow_from_cg);
-        let density = air.density(-cg_position.z);
+        // The towing point lies on the body x axis from the CG (r_tow = (a, 0, 0), the
+        // model's `tow_from_cg`), so R r_tow = a R x_b and w x r_tow = a (0, w_z, -w_y).
+        let a = derived.tow_from_cg.x;
+        let (c0, c1, c2) = (r.column(0), r.column(1), r.column(2));
+        let tow_from_cg = Vec3::new(a * c0[0], a * c0[1], a * c0[2]);
+        let cg_velocity = env.wind
+            - tow_air
+            - Vec3::new(
+                a * (wb.z * c1[0] - wb.y * c2[0]),
+                a * (wb.z * c1[1] - wb.y * c2[1]),
+                a * (wb.z * c1[2] - wb.y * c2[2]),
+            );
+        let density = air.density(tow_altitude + tow_from_cg.z);
         let (aero_force, aero_moment_body, alpha, airspeed, dynamic_pressure) =
             decoy_aero(decoy, derived, &r, &wb, &cg_velocity, &env.wind, density);
         let inertia = decoy.inertia_cg;
-        let gyroscopic = wb.cross(&inertia.component_mul(&wb));
+        let iw = Vec3::new(inertia.x * wb.x, inertia.y * wb.y, inertia.z * wb.z);
+        let gyroscopic = wb.cross(&iw);
         // Towing-point acceleration from the decoy side (a_tow = a_cg + dw x r + w x (w x r)):
         //   a_tow = (T_N + F_d)/m_d + [r]xᵀ I⁻¹ [r]x T_N - r x I⁻¹ (M - w x I w) + w x (w x r).
-        // `rhs_body` is its force-free angular part in the body frame.
-        let free_angular = (aero_moment_body - gyroscopic).component_mul(&derived.inertia_inv);
-        let rhs_body =
-            wb.cross(&wb.cross(&derived.tow_from_cg)) - derived.tow_from_cg.cross(&free_angular);
+        // `rhs_body` is its force-free angular part in the body frame; with r = (a, 0, 0):
+        // w x (w x r) = a (-(w_y² + w_z²), w_x w_y, w_x w_z), r x f = a (0, -f_z, f_y).
+        let inv = &derived.inertia_inv;
+        let free_angular = aero_moment_body - gyroscopic;
+        let (fy, fz) = (free_angular.y * inv.y, free_angular.z * inv.z);
+        let rhs_body = Vec3::new(
+            -a * (wb.y * wb.y + wb.z * wb.z),
+            a * (wb.x * wb.y + fz),
+            a * (wb.x * wb.z - fy),
+        );
         let inverse_mass = T::one() / decoy.mass;
         let force = aero_force + gravity * decoy.mass;
+        // [r]xᵀ I⁻¹ [r]x = diag(0, a²/I_z, a²/I_y) (the model's hinge compliance), so
+        // R (...) Rᵀ = (a²/I_z) c1 c1ᵀ + (a²/I_y) c2 c2ᵀ with c1, c2 columns of R.
+        let compliance = &derived.hinge_compliance;
+        let f1 = c1 * compliance[(1, 1)];
+        let f2 = c2 * compliance[(2, 2)];
+        let joint_block = Sym3 {
+            xx: inverse_mass + f1[0] * c1[0] + f2[0] * c2[0],
+            yy: inverse_mass + f1[1] * c1[1] + f2[1] * c2[1],
+            zz: inverse_mass + f1[2] * c1[2] + f2[2] * c2[2],
+            xy: f1[0] * c1[1] + f2[0] * c2[1],
+            xz: f1[0] * c1[2] + f2[0] * c2[2],
+            yz: f1[1] * c1[2] + f2[1] * c2[2],
+        };
         ws.decoy = DecoyScratch {
             rotation: r,
-            cg_position,
+            tow_from_cg,
+            cg_position: ws.decoy.cg_position,
             cg_velocity,
             aero_force,
             aero_moment_body,
+            gyroscopic,
             angle_of_attack: alpha,
             airspeed,
             dynamic_pressure,
-            joint_block: Mat3::identity() * inverse_mass
-                + r * derived.hinge_compliance * r.transpose(),
+            joint_block,
             // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
             joint_rhs: -(force * inverse_mass) - r * rhs_body,
         };
@@ -424,11 +528,32 @@ fn joint_row<T: Real, const N: usize>(
     if j < n {
         // Downstream segment j+1 (index j) seen from its upstream end.
         block += segment_block(&state.directions[j], inverse_masses[j]);
-        (block, ws.joint_rhs[j])
+        (block, ws.joints[j].rhs)
     } else {
-        block += ws.decoy.joint_block;
+        block += ws.decoy.joint_block.matrix();
         (block, ws.tow_rhs)
     }
+}
+
+/// What the back sweep needs of joint j's pivot S_j (segment j+1 with direction e and
+/// mass m): T_j = z_j - Q_j T_{j+1} + U_j (e·T_{j+1}).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pivot<T: Real> {
+    /// Q_j = (2/m) S_j⁻¹ (symmetric).
+    scaled_inverse: Sym3<T>,
+    /// U_j = (3/m) S_j⁻¹ e.
+    scaled_direction: Vec3<T>,
+    /// z_j = S_j⁻¹ y_j (the shooting reference keeps its affine offsets here).
+    pub(crate) reduced_rhs: Vec3<T>,
+}
+
+impl<T: Real> Pivot<T> {
+    /// Every entry zero.
+    const ZERO: Self = Pivot {
+        scaled_inverse: Sym3::ZERO,
+        scaled_direction: zero3(),
+        reduced_rhs: zero3(),
+    };
 }
 
 /// A symmetric 3x3 matrix, six entries (the pivot blocks S_j and their inverses).
@@ -453,44 +578,26 @@ impl<T: Real> Sym3<T> {
         yz: T::ZERO,
     };
 
-    fn zero() -> Self {
-        let z = T::zero();
-        Sym3 {
-            xx: z,
-            yy: z,
-            zz: z,
-            xy: z,
-            xz: z,
-            yz: z,
-        }
-    }
-
-    /// The lower triangle of `m` (which must be symmetric).
+    /// The segment contribution -3 e eᵀ/m to a joint's diagonal block, plus `diagonal`
+    /// times the identity (4/m for (I + 3P)/m = (4I - 3 e eᵀ)/m alone).
     #[inline(always)]
-    fn from_lower(m: &Mat3<T>) -> Self {
-        Sym3 {
-            xx: m[(0, 0)],
-            yy: m[(1, 1)],
-            zz: m[(2, 2)],
-            xy: m[(1, 0)],
-            xz: m[(2, 0)],
-            yz: m[(2, 1)],
-        }
-    }
-
-    /// The segment contribution (I + 3P)/m = (4I - 3 e eᵀ)/m to a joint's diagonal block.
-    #[inline(always)]
-    fn segment(e: &Vec3<T>, inverse_mass: T) -> Self {
-        let d = T::lit(4.0) * inverse_mass;
+    fn segment(e: &Vec3<T>, inverse_mass: T, diagonal: T) -> Self {
         let f = e * (-T::lit(3.0) * inverse_mass);
         Sym3 {
-            xx: d + f.x * e.x,
-            yy: d + f.y * e.y,
-            zz: d + f.z * e.z,
+            xx: diagonal + f.x * e.x,
+            yy: diagonal + f.y * e.y,
+            zz: diagonal + f.z * e.z,
             xy: f.x * e.y,
             xz: f.x * e.z,
             yz: f.y * e.z,
         }
+    }
+
+    /// The full matrix.
+    fn matrix(&self) -> Mat3<T> {
+        Mat3::new(
+            self.xx, self.xy, self.xz, self.xy, self.yy, self.yz, self.xz, self.yz, self.zz,
+        )
     }
 
     #[inline(always)]
@@ -502,18 +609,6 @@ impl<T: Real> Sym3<T> {
             xy: self.xy * k,
             xz: self.xz * k,
             yz: self.yz * k,
-        }
-    }
-
-    #[inline(always)]
-    fn add(&self, o: &Self) -> Self {
-        Sym3 {
-            xx: self.xx + o.xx,
-            yy: self.yy + o.yy,
-            zz: self.zz + o.zz,
-            xy: self.xy + o.xy,
-            xz: self.xz + o.xz,
-            yz: self.yz + o.yz,
         }
     }
 
@@ -609,13 +704,12 @@ pub fn solve_tensions<T: Real, const N: usize>(
     let (model, state, ws) = opaque((model, state, ws));
     let last = last_joint(model);
     let directions = &state.directions;
-    let inverse_masses = model.inverse_masses();
     let t = forward_sweep(model, state, ws)?;
     set_joint_force(ws, last, t);
     let mut t = t;
     let mut probe = t.x + t.y + t.z;
     for j in (0..last).rev() {
-        t = back_substitute(ws, j, &directions[j], inverse_masses[j], &t);
+        t = back_substitute(&ws.pivots[j], &directions[j], &t);
         probe += t.x + t.y + t.z;
         set_joint_force(ws, j, t);
     }
@@ -637,8 +731,6 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     let last = last_joint(model);
     let n = model.segment_count();
     let directions = &state.directions;
-    let rates = &state.rates;
-    let inverse_masses = model.inverse_masses();
     let gains = model.rate_gains();
     let mut t = forward_sweep(model, state, ws)?;
     let mut probe = t.x + t.y + t.z;
@@ -654,22 +746,40 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
             ws.joint_force[last - 1] = t;
         }
         let e = directions[n - 1];
-        out.directions[n - 1] = rates[n - 1].cross(&e);
+        out.directions[n - 1] = ws.joints[n - 1].direction_rate;
         out.rates[n - 1] = -e.cross(&(t + zero)) * gains[n - 1];
         t
     };
     // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
-    for j in (0..last).rev() {
-        let e = directions[j];
-        t = back_substitute(ws, j, &e, inverse_masses[j], &t);
-        probe += t.x + t.y + t.z;
-        // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
-        out.directions[j] = rates[j].cross(&e);
-        out.rates[j] = -e.cross(&(t + downstream)) * gains[j];
-        downstream = t;
-        if j > 0 {
-            ws.joint_force[j - 1] = t;
+    if last > 0 {
+        let range = 1..last;
+        // Through `opaque`: the pivots' own base address in a register, so that their
+        // fields are reached by small offsets (see `opaque`).
+        let rows = opaque(&ws.pivots[range.clone()])
+            .iter()
+            .zip(&directions[range.clone()])
+            .zip(opaque(&ws.joints[range.clone()]))
+            .zip(&gains[range.clone()])
+            .zip(out.directions[range.clone()].iter_mut())
+            .zip(out.rates[range].iter_mut())
+            .zip(ws.joint_force[..last - 1].iter_mut())
+            .rev();
+        for ((((((pivot, e), joint), gain), de), dw), force) in rows {
+            // Copies first: the stores below may alias for all the optimiser knows.
+            let (pivot, e, we, gain) = (*pivot, *e, joint.direction_rate, *gain);
+            t = back_substitute(&pivot, &e, &t);
+            probe += t.x + t.y + t.z;
+            // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
+            *de = we;
+            *dw = -e.cross(&(t + downstream)) * gain;
+            downstream = t;
+            *force = t;
         }
+        let e = &directions[0];
+        t = back_substitute(&ws.pivots[0], e, &t);
+        probe += t.x + t.y + t.z;
+        out.directions[0] = ws.joints[0].direction_rate;
+        out.rates[0] = -e.cross(&(t + downstream)) * gains[0];
     }
     ws.connection_force = t;
     let result = finish_tensions(model, ws, probe);
@@ -678,23 +788,35 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
 }
 
 /// One step of the back sweep: T_j = z_j - X_j T_{j+1}, with
-/// X_j T = (2 S_j⁻¹ T - 3 u_j (e·T))/m (`e`, `inverse_mass`: segment j+1's).
+/// X_j T = (2 S_j⁻¹ T - 3 u_j (e·T))/m = Q_j T - U_j (e·T) from the stored
+/// [`Pivot`] (`e`: segment j+1's direction).
 #[inline(always)]
-fn back_substitute<T: Real, const N: usize>(
-    ws: &Workspace<T, N>,
-    j: usize,
-    e: &Vec3<T>,
-    inverse_mass: T,
-    next: &Vec3<T>,
-) -> Vec3<T> {
-    let (two, three) = (T::lit(2.0), T::lit(3.0));
-    let x_t = (ws.pivot_inverse[j].mul(next) * two - ws.pivot_direction[j] * (three * e.dot(next)))
-        * inverse_mass;
-    ws.reduced_rhs[j] - x_t
+fn back_substitute<T: Real>(pivot: &Pivot<T>, e: &Vec3<T>, next: &Vec3<T>) -> Vec3<T> {
+    let q = &pivot.scaled_inverse;
+    let (u, z) = (&pivot.scaled_direction, &pivot.reduced_rhs);
+    let along = e.x * next.x + e.y * next.y + e.z * next.z;
+    Vec3::new(
+        z.x - q.xx * next.x - q.xy * next.y - q.xz * next.z + u.x * along,
+        z.y - q.xy * next.x - q.yy * next.y - q.yz * next.z + u.y * along,
+        z.z - q.xz * next.x - q.yz * next.y - q.zz * next.z + u.z * along,
+    )
 }
 
-/// The forward sweep of [`solve_tensions`]: fills the pivots, directions and
-/// reduced right-hand sides, and returns T_last = S_last⁻¹ y_last.
+/// The forward sweep of [`solve_tensions`]: fills the pivots, and returns
+/// T_last = S_last⁻¹ y_last.
+///
+/// Per joint j (segment j+1 with e = e_{j+1}, k = 1/m_{j+1}), with the cofactor
+/// matrix C and det of S_j (S_j⁻¹ = C/det, one division):
+///
+/// ```text
+///   Q_j = 2k S_j⁻¹,  U_j = 3k S_j⁻¹ e,  z_j = S_j⁻¹ y_j           (stored)
+///   w   = 2k U_j - 1.5k (e·U_j + 1) e
+///   S_{j+1} = 4k I - 2k Q_j + w eᵀ + e wᵀ + (segment j+2 or decoy block)
+///   y_{j+1} = b_{j+1} - 2k z_j + 3k (e·z_j) e
+/// ```
+///
+/// (B_j S_j⁻¹ B_j = (4 S_j⁻¹ - 6 (u eᵀ + e uᵀ) + 9 (e·u) e eᵀ)/m² with u = S_j⁻¹ e, and
+/// segment j+1's own diagonal contribution (4I - 3 e eᵀ)/m folded into the rank-2 term.)
 #[inline(always)]
 fn forward_sweep<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -703,64 +825,130 @@ fn forward_sweep<T: Real, const N: usize>(
 ) -> Result<Vec3<T>, SolveError> {
     let last = last_joint(model);
     let n = model.segment_count();
-    let inverse_masses = model.inverse_masses();
-    let directions = &state.directions;
-    let (two, three, four, six) = (T::lit(2.0), T::lit(3.0), T::lit(4.0), T::lit(6.0));
-    let (one_and_half, four_and_half) = (T::lit(1.5), T::lit(4.5));
+    let inverse_masses = &model.inverse_masses()[..n];
+    let directions = &state.directions[..n];
+    let four = T::lit(4.0);
     // Joint 0: D_0 = block of segment 1, b_0 = a_0 - F_1/m_1 - c_1.
-    let mut s = Sym3::segment(&directions[0], inverse_masses[0]);
-    let mut y = ws.joint_rhs[0];
-    for j in 0..last {
-        // Segment j+1 (index j) couples joints j and j+1.
-        let e = directions[j];
-        let im = inverse_masses[j];
-        // S_j⁻¹ = C/det: the products with C run while the division does (a shorter
-        // serial chain per joint; the sweep is latency-bound on hosts).
-        let (cofactors, det) = s.cofactors();
-        let cofactor_e = cofactors.mul(&e);
-        let cofactor_y = cofactors.mul(&y);
-        let e_cofactor_e = e.dot(&cofactor_e);
-        let inv_det = T::one() / det;
-        if !s.positive_definite(det, inv_det) {
-            return Err(SolveError::NonPositivePivot { joint: j });
-        }
-        let inv = cofactors.scaled(inv_det);
-        let u = cofactor_e * inv_det;
-        let z = cofactor_y * inv_det;
-        ws.pivot_inverse[j] = inv;
-        ws.pivot_direction[j] = u;
-        ws.reduced_rhs[j] = z;
-        let im2 = im * im;
-        let eu = e_cofactor_e * inv_det;
-        let w = u * (six * im2) - e * (four_and_half * im2 * eu + one_and_half * im);
-        let d = four * im;
-        let k = -four * im2;
-        let mut s_next = Sym3 {
-            xx: d + k * inv.xx + two * w.x * e.x,
-            yy: d + k * inv.yy + two * w.y * e.y,
-            zz: d + k * inv.zz + two * w.z * e.z,
-            xy: k * inv.xy + w.x * e.y + e.x * w.y,
-            xz: k * inv.xz + w.x * e.z + e.x * w.z,
-            yz: k * inv.yz + w.y * e.z + e.y * w.z,
+    let mut e = directions[0];
+    let mut k = inverse_masses[0];
+    let mut s = Sym3::segment(&e, k, four * k);
+    let mut y = ws.joints[0].rhs;
+    // Joints 0..n-2: the next joint's own block is segment j+2's (4I - 3 e eᵀ)/m from its
+    // upstream end. Through `opaque`: each array's own base address in a register.
+    let rows = opaque(&mut ws.pivots[..n - 1])
+        .iter_mut()
+        .zip(&directions[1..])
+        .zip(&inverse_masses[1..])
+        .zip(opaque(&ws.joints[1..n]));
+    for (j, (((pivot, e_next), k_next), joint)) in rows.enumerate() {
+        // The next segment's values are loaded after the pivot is stored (fewer
+        // values live across the elimination).
+        let (update, diagonal) = eliminate(&s, &y, &e, k, j, pivot)?;
+        let (e_next, k_next) = (*e_next, *k_next);
+        let block = Sym3::segment(&e_next, k_next, diagonal + four * k_next);
+        (s, y) = update.apply(&block, &joint.rhs, &e);
+        e = e_next;
+        k = k_next;
+    }
+    if last == n {
+        // Joint n-1: the decoy's block at the towing point.
+        let (update, diagonal) = eliminate(&s, &y, &e, k, n - 1, &mut ws.pivots[n - 1])?;
+        let d = &ws.decoy.joint_block;
+        let block = Sym3 {
+            xx: d.xx + diagonal,
+            yy: d.yy + diagonal,
+            zz: d.zz + diagonal,
+            ..*d
         };
-        // b_{j+1}: segment j+1 from its downstream end, then segment j+2 or the decoy.
-        let b_next;
-        if j + 1 < n {
-            s_next = s_next.add(&Sym3::segment(&directions[j + 1], inverse_masses[j + 1]));
-            b_next = ws.joint_rhs[j + 1];
-        } else {
-            s_next = s_next.add(&Sym3::from_lower(&ws.decoy.joint_block));
-            b_next = ws.tow_rhs;
-        }
-        // y_{j+1} = b_{j+1} - B_j z_j.
-        let b_next = b_next - (z * two - e * (three * e.dot(&z))) * im;
-        s = s_next;
-        y = b_next;
+        (s, y) = update.apply(&block, &ws.tow_rhs, &e);
     }
     let inv = s
         .spd_inverse()
         .ok_or(SolveError::NonPositivePivot { joint: last })?;
     Ok(inv.mul(&y))
+}
+
+/// What [`eliminate`] leaves for the next joint: S_{j+1} and y_{j+1} but for the next
+/// joint's own block and right-hand side.
+struct SchurUpdate<T: Real> {
+    /// Q_j.
+    q: Sym3<T>,
+    /// z_j.
+    z: Vec3<T>,
+    /// w of the rank-2 term.
+    w: Vec3<T>,
+    /// 2k.
+    two_k: T,
+    /// 3k (e·z_j).
+    h: T,
+}
+
+impl<T: Real> SchurUpdate<T> {
+    /// S_{j+1} = block - 2k Q_j + w eᵀ + e wᵀ and y_{j+1} = b - 2k z_j + h e.
+    #[inline(always)]
+    fn apply(&self, block: &Sym3<T>, b: &Vec3<T>, e: &Vec3<T>) -> (Sym3<T>, Vec3<T>) {
+        let (q, z, w, two_k, h) = (&self.q, &self.z, &self.w, self.two_k, self.h);
+        let s = Sym3 {
+            xx: block.xx - two_k * q.xx + (w.x + w.x) * e.x,
+            yy: block.yy - two_k * q.yy + (w.y + w.y) * e.y,
+            zz: block.zz - two_k * q.zz + (w.z + w.z) * e.z,
+            xy: block.xy - two_k * q.xy + w.x * e.y + e.x * w.y,
+            xz: block.xz - two_k * q.xz + w.x * e.z + e.x * w.z,
+            yz: block.yz - two_k * q.yz + w.y * e.z + e.y * w.z,
+        };
+        let y = Vec3::new(
+            b.x - two_k * z.x + h * e.x,
+            b.y - two_k * z.y + h * e.y,
+            b.z - two_k * z.z + h * e.z,
+        );
+        (s, y)
+    }
+}
+
+/// Eliminates joint `j` (pivot S_j = `s`, reduced right-hand side `y`; segment j+1
+/// with direction `e` and inverse mass `k`): stores its [`Pivot`] and returns the
+/// Schur update for joint j+1 with the diagonal 4k that segment j+1 adds there.
+#[inline(always)]
+fn eliminate<T: Real>(
+    s: &Sym3<T>,
+    y: &Vec3<T>,
+    e: &Vec3<T>,
+    k: T,
+    j: usize,
+    pivot: &mut Pivot<T>,
+) -> Result<(SchurUpdate<T>, T), SolveError> {
+    let (cofactors, det) = s.cofactors();
+    let cofactor_e = cofactors.mul(e);
+    let cofactor_y = cofactors.mul(y);
+    let inv_det = T::one() / det;
+    if !s.positive_definite(det, inv_det) {
+        return Err(SolveError::NonPositivePivot { joint: j });
+    }
+    let two_k = k + k;
+    let three_k = T::lit(3.0) * k;
+    let q = cofactors.scaled(inv_det * two_k);
+    let u = cofactor_e * (inv_det * three_k);
+    let z = cofactor_y * inv_det;
+    pivot.scaled_inverse = q;
+    pivot.scaled_direction = u;
+    pivot.reduced_rhs = z;
+    let c = T::lit(1.5) * k;
+    let eu = e.x * u.x + e.y * u.y + e.z * u.z;
+    let g = c + c * eu;
+    let w = Vec3::new(
+        two_k * u.x - g * e.x,
+        two_k * u.y - g * e.y,
+        two_k * u.z - g * e.z,
+    );
+    let ez = e.x * z.x + e.y * z.y + e.z * z.z;
+    let update = SchurUpdate {
+        q,
+        z,
+        w,
+        two_k,
+        h: three_k * ez,
+    };
+    Ok((update, T::lit(4.0) * k))
 }
 
 #[inline(always)]
@@ -819,7 +1007,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
     let (mut u_cur, mut v_cur) = (Mat3::identity(), Vec3::zeros());
     // Store the carriers to recover every T_j once T_0 is known.
     ws.elimination[0] = u_cur;
-    ws.reduced_rhs[0] = v_cur;
+    ws.pivots[0].reduced_rhs = v_cur;
     for j in 0..last {
         let (d, b) = joint_row(model, state, ws, j);
         // Row j: B_{j-1} T_{j-1} + D_j T_j + B_j T_{j+1} = b_j.
@@ -842,7 +1030,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
         v_cur = v_next;
         if j + 1 < N {
             ws.elimination[j + 1] = u_cur;
-            ws.reduced_rhs[j + 1] = v_cur;
+            ws.pivots[j + 1].reduced_rhs = v_cur;
         }
     }
     // Residual of the last row: B_{last-1} T_{last-1} + D_last T_last - b_last = α T_0 + β.
@@ -861,7 +1049,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
     ws.connection_force = t0;
     for j in 1..=last {
         let (u, v) = if j < N {
-            (ws.elimination[j], ws.reduced_rhs[j])
+            (ws.elimination[j], ws.pivots[j].reduced_rhs)
         } else {
             (u_cur, v_cur)
         };
@@ -908,21 +1096,182 @@ fn decoy_accelerations<T: Real, const N: usize>(
     ws: &Workspace<T, N>,
     out: &mut Derivative<T, N>,
 ) {
+    (out.decoy_attitude, out.decoy_rate) = decoy_derivative(model, state, ws);
+}
+
+/// The decoy's dq/dt and dw/dt (zero for a free end).
+#[inline(always)]
+fn decoy_derivative<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &Workspace<T, N>,
+) -> ([T; 4], Vec3<T>) {
     let n = model.segment_count();
-    if let Some((decoy, derived)) = model.decoy() {
+    if let Some((_, derived)) = model.decoy() {
         let wb = state.decoy_rate;
         let tension_body = ws.decoy.rotation.tr_mul(&ws.joint_force[n - 1]);
-        let inertia = decoy.inertia_cg;
-        let torque = ws.decoy.aero_moment_body + derived.tow_from_cg.cross(&tension_body)
-            - wb.cross(&inertia.component_mul(&wb));
-        out.decoy_rate = torque.component_mul(&derived.inertia_inv);
-        let [w, x, y, z] = state.decoy_attitude;
-        let dq = Quaternion::new(w, x, y, z) * Quaternion::new(T::zero(), wb.x, wb.y, wb.z);
+        // r x T with r = (a, 0, 0) on the body x axis: a (0, -T_z, T_y).
+        let a = derived.tow_from_cg.x;
+        let m = &ws.decoy.aero_moment_body;
+        let g = &ws.decoy.gyroscopic;
+        let inv = &derived.inertia_inv;
+        let rate = Vec3::new(
+            (m.x - g.x) * inv.x,
+            (m.y - a * tension_body.z - g.y) * inv.y,
+            (m.z + a * tension_body.y - g.z) * inv.z,
+        );
+        // dq/dt = q ⊗ (0, w)/2.
+        let [qw, qx, qy, qz] = state.decoy_attitude;
         let half = T::lit(0.5);
-        out.decoy_attitude = [dq.w * half, dq.i * half, dq.j * half, dq.k * half];
+        let (hx, hy, hz) = (wb.x * half, wb.y * half, wb.z * half);
+        let attitude = [
+            -qx * hx - qy * hy - qz * hz,
+            qw * hx + qy * hz - qz * hy,
+            qw * hy - qx * hz + qz * hx,
+            qw * hz + qx * hy - qy * hx,
+        ];
+        (attitude, rate)
     } else {
-        out.decoy_attitude = [T::zero(); 4];
-        out.decoy_rate = Vec3::zeros();
+        ([T::zero(); 4], Vec3::zeros())
+    }
+}
+
+/// Passes 2 and 3 as [`solve_tensions_and_accelerations`], with the derivative of each
+/// segment (and of the decoy), as it is found in the back sweep, turned into the next
+/// RK4 stage in `stage` itself (the state evaluated, whose entries are no longer
+/// needed once their segment is done) and into the weighted sum: no derivative is
+/// stored and read back. Same arithmetic as the separate passes, so the same bits.
+#[inline(never)]
+pub fn solve_tensions_to_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    stage: &mut State<T, N>,
+    ws: &mut Workspace<T, N>,
+    next: StageUpdate<'_, T, N>,
+) -> Result<(), SolveError> {
+    let (model, stage, ws) = opaque((model, stage, ws));
+    let StageUpdate {
+        base,
+        h,
+        sum,
+        weight,
+    } = next;
+    let (base, sum, weight) = opaque((base, sum, weight));
+    let last = last_joint(model);
+    let n = model.segment_count();
+    let gains = model.rate_gains();
+    let mut t = forward_sweep(model, stage, ws)?;
+    let mut probe = t.x + t.y + t.z;
+    // Segment index j's derivative (de, dw) into the stage and the sum.
+    let update = |stage: &mut State<T, N>,
+                  sum: &mut Derivative<T, N>,
+                  j: usize,
+                  de: Vec3<T>,
+                  dw: Vec3<T>| {
+        stage.directions[j] = base.directions[j] + de * h;
+        stage.rates[j] = base.rates[j] + dw * h;
+        sum.directions[j] += de * weight;
+        sum.rates[j] += dw * weight;
+    };
+    let mut downstream = if last == n {
+        ws.joint_force[n - 1] = t;
+        t
+    } else {
+        let zero = Vec3::zeros();
+        ws.joint_force[n - 1] = zero;
+        if last > 0 {
+            ws.joint_force[last - 1] = t;
+        }
+        let e = stage.directions[n - 1];
+        let dw = -e.cross(&(t + zero)) * gains[n - 1];
+        update(stage, sum, n - 1, ws.joints[n - 1].direction_rate, dw);
+        t
+    };
+    if last > 0 {
+        let range = 1..last;
+        let rows = opaque(&ws.pivots[range.clone()])
+            .iter()
+            .zip(opaque(&ws.joints[range.clone()]))
+            .zip(&gains[range.clone()])
+            .zip(
+                stage.directions[range.clone()]
+                    .iter_mut()
+                    .zip(stage.rates[range.clone()].iter_mut()),
+            )
+            .zip(
+                base.directions[range.clone()]
+                    .iter()
+                    .zip(&base.rates[range.clone()]),
+            )
+            .zip(
+                sum.directions[range.clone()]
+                    .iter_mut()
+                    .zip(sum.rates[range].iter_mut()),
+            )
+            .zip(ws.joint_force[..last - 1].iter_mut())
+            .rev();
+        for ((((((pivot, joint), gain), (e_out, w_out)), (e0, w0)), (se, sw)), force) in rows {
+            // Copies first: the stores below may alias for all the optimiser knows.
+            let (pivot, we, gain, e) = (*pivot, joint.direction_rate, *gain, *e_out);
+            let (e0, w0, s_e, s_w) = (*e0, *w0, *se, *sw);
+            t = back_substitute(&pivot, &e, &t);
+            probe += t.x + t.y + t.z;
+            let dw = -e.cross(&(t + downstream)) * gain;
+            *e_out = e0 + we * h;
+            *w_out = w0 + dw * h;
+            *se = s_e + we * weight;
+            *sw = s_w + dw * weight;
+            downstream = t;
+            *force = t;
+        }
+        let e = stage.directions[0];
+        t = back_substitute(&ws.pivots[0], &e, &t);
+        probe += t.x + t.y + t.z;
+        let dw = -e.cross(&(t + downstream)) * gains[0];
+        update(stage, sum, 0, ws.joints[0].direction_rate, dw);
+    }
+    ws.connection_force = t;
+    let result = finish_tensions(model, ws, probe);
+    let (dq, dw) = decoy_derivative(model, stage, ws);
+    for ((o, b), (s, d)) in stage
+        .decoy_attitude
+        .iter_mut()
+        .zip(&base.decoy_attitude)
+        .zip(sum.decoy_attitude.iter_mut().zip(&dq))
+    {
+        *o = *b + *d * h;
+        *s += *d * weight;
+    }
+    stage.decoy_rate = base.decoy_rate + dw * h;
+    sum.decoy_rate += dw * weight;
+    result
+}
+
+/// [`evaluate`] followed by the next RK4 stage ([`StageUpdate`]) in `stage` itself,
+/// with the same bits, the derivative never stored (see
+/// [`solve_tensions_to_stage`]); the shooting reference evaluates into `out` and
+/// forms the stage from it.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_to_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    stage: &mut State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    method: TensionMethod,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+    next: StageUpdate<'_, T, N>,
+) -> Result<(), SolveError> {
+    match method {
+        TensionMethod::TwoSweep => {
+            prepare(model, stage, connection, air, ws);
+            solve_tensions_to_stage(model, stage, ws, next)
+        }
+        TensionMethod::Shooting => {
+            evaluate(model, stage, connection, air, method, ws, out)?;
+            let n = model.segment_count();
+            stage.set_stage_accumulating(next.base, out, next.h, next.sum, next.weight, n);
+            Ok(())
+        }
     }
 }
 

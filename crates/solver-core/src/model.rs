@@ -137,12 +137,14 @@ pub struct DecoyDerived<T: Real> {
 pub struct Model<T: Real, const N: usize> {
     params: ModelParams<T>,
     segment_count: usize,
+    // The arrays the segment loop reads together are side by side (small address
+    // offsets from one base on the Cortex-M).
     lengths: [T; N],
-    masses: [T; N],
-    inverse_masses: [T; N],
-    rate_gains: [T; N],
     normal_drag_factors: [T; N],
     tangential_drag_factors: [T; N],
+    inverse_masses: [T; N],
+    rate_gains: [T; N],
+    masses: [T; N],
     decoy: Option<DecoyDerived<T>>,
 }
 

@@ -69,6 +69,26 @@ pub trait DerivativeSource<T: Real, const N: usize> {
         false
     }
 
+    /// Evaluates dy/dt at `stage` with `inputs`, then replaces `stage` by the next
+    /// stage and updates the sum as `next` says, with the bits of
+    /// [`DerivativeSource::evaluate`] followed by those updates (the default does
+    /// exactly that, with `out` as the derivative). A source may form the stage as
+    /// it finds the derivative, without storing it: `out` is then scratch whose
+    /// contents are unspecified afterwards.
+    #[inline(always)]
+    fn evaluate_to_stage(
+        &mut self,
+        stage: &mut State<T, N>,
+        inputs: &Self::Inputs,
+        out: &mut Derivative<T, N>,
+        next: StageUpdate<'_, T, N>,
+    ) -> Result<(), SolveError> {
+        self.evaluate(stage, inputs, out)?;
+        let n = self.segment_count();
+        stage.set_stage_accumulating(next.base, out, next.h, next.sum, next.weight, n);
+        Ok(())
+    }
+
     /// Called after the four stages, before the new state is accepted: an error
     /// rejects the step and leaves the state as it was. For a source that records a
     /// failed evaluation and carries on (so that every step does the same work).
@@ -77,6 +97,20 @@ pub trait DerivativeSource<T: Real, const N: usize> {
     fn finish(&mut self) -> Result<(), SolveError> {
         Ok(())
     }
+}
+
+/// The next RK4 stage formed from a derivative as it is found, without keeping it:
+/// `stage = base + h k` and `sum = sum + weight k` (`State::set_stage_accumulating`'s
+/// arithmetic, so the same bits).
+pub struct StageUpdate<'a, T: Real, const N: usize> {
+    /// The state the stage starts from (y).
+    pub base: &'a State<T, N>,
+    /// The stage factor.
+    pub h: T,
+    /// The weighted sum of the stages' derivatives.
+    pub sum: &'a mut Derivative<T, N>,
+    /// The derivative's weight in the sum.
+    pub weight: T,
 }
 
 /// The integrated state and RK4's buffers: the state (`states[current]`), the stage
@@ -169,7 +203,7 @@ impl<T: Real, const N: usize> Rk4<T, N> {
     pub fn step<S, F>(&mut self, source: &mut S, dt: f64, observe: F) -> Result<(), SolveError>
     where
         S: DerivativeSource<T, N> + ?Sized,
-        F: FnOnce(&S, &State<T, N>, &Derivative<T, N>),
+        F: FnOnce(&mut S, &State<T, N>, &Derivative<T, N>),
     {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(InputError::BadTimeStep.into());
@@ -198,15 +232,25 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         }
         observe(source, state, sum);
         let middle = source.inputs_at(t_half)?;
-        // k2 at y + dt/2 k1.
+        // k2 at y + dt/2 k1, turned into the stage y + dt/2 k2 (sum += 2 k2).
         stage.set_stage(state, sum, half, n);
-        source.evaluate(stage, &middle, slope)?;
-        // k3 at y + dt/2 k2 (sum += 2 k2).
-        stage.set_stage_accumulating(state, slope, half, sum, two, n);
-        source.evaluate(stage, &middle, slope)?;
-        // k4 at y + dt k3 (sum += 2 k3).
+        let next = StageUpdate {
+            base: state,
+            h: half,
+            sum: &mut *sum,
+            weight: two,
+        };
+        source.evaluate_to_stage(stage, &middle, slope, next)?;
+        // k3 at y + dt/2 k2, turned into the stage y + dt k3 (sum += 2 k3).
+        let next = StageUpdate {
+            base: state,
+            h: full,
+            sum: &mut *sum,
+            weight: two,
+        };
+        source.evaluate_to_stage(stage, &middle, slope, next)?;
+        // k4 at y + dt k3.
         let end = source.inputs_at(t_end)?;
-        stage.set_stage_accumulating(state, slope, full, sum, two, n);
         source.evaluate(stage, &end, slope)?;
         // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
         let probe = stage.set_final(state, sum, slope, sixth, n);

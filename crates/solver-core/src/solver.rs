@@ -7,7 +7,7 @@ use crate::dynamics::{self, TensionMethod, Workspace};
 use crate::error::{ConfigError, InputError, SolveError};
 use crate::model::{Model, ModelParams};
 use crate::motion::{AircraftState, FlightPath, PointKinematics};
-use crate::rk4::{DerivativeSource, Rk4};
+use crate::rk4::{DerivativeSource, Rk4, StageUpdate};
 use crate::scalar::{Real, Vec3, zero3};
 use crate::state::{Derivative, State};
 
@@ -109,6 +109,26 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
             self.method,
             self.ws,
             out,
+        )
+    }
+
+    #[inline(always)]
+    fn evaluate_to_stage(
+        &mut self,
+        stage: &mut State<T, N>,
+        (connection, air): &Self::Inputs,
+        out: &mut Derivative<T, N>,
+        next: StageUpdate<'_, T, N>,
+    ) -> Result<(), SolveError> {
+        dynamics::evaluate_to_stage(
+            self.model,
+            stage,
+            connection,
+            air,
+            self.method,
+            self.ws,
+            out,
+            next,
         )
     }
 
@@ -256,7 +276,16 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// `dt` is f64 in every precision so that time advances identically for f32 and
     /// f64 solvers; the arithmetic of the step uses `dt` rounded to `T`.
     pub fn step<P: FlightPath<T> + ?Sized>(&mut self, path: &P, dt: f64) -> Result<(), SolveError> {
-        self.step_observed(path, dt, |_| {})
+        // As `step_observed` with nothing to observe (no joint kinematics for outputs).
+        let mut towed = Towed {
+            model: &self.model,
+            path,
+            method: self.method,
+            ws: &mut self.ws,
+            air: &mut self.air,
+            evaluated: &mut self.evaluated,
+        };
+        self.rk4.step(&mut towed, dt, |_, _, _| {})
     }
 
     /// [`Solver::step`], calling `observe` with the outputs at the state *before* the
@@ -284,6 +313,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             evaluated: &mut self.evaluated,
         };
         self.rk4.step(&mut towed, dt, |towed, state, k1| {
+            dynamics::joint_kinematics(towed.model, state, towed.ws);
             observe(&Outputs {
                 model: towed.model,
                 state,
@@ -318,7 +348,9 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// The outputs of the most recent evaluation (the last RK4 stage of a step, or
     /// the last [`Solver::outputs`] call), without evaluating again. After
     /// [`Solver::outputs`] they belong to the current state; after a step, to its
-    /// last stage. Before any evaluation the forces are zero.
+    /// last stage, except the joint and CG positions and the joint velocities, which
+    /// are those of the last [`Solver::outputs`] (or observed first stage): a step's
+    /// stages do not form them. Before any evaluation the forces are zero.
     pub fn last_outputs(&self) -> Outputs<'_, T, N> {
         Outputs {
             model: &self.model,
@@ -352,6 +384,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             &mut self.ws,
             slope,
         )?;
+        dynamics::joint_kinematics(&self.model, state, &mut self.ws);
         self.evaluated = Some(EvaluationKey::new(&connection, &air, self.method));
         Ok(())
     }
@@ -472,7 +505,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection.position
         } else {
-            self.ws.joint_position[j - 1]
+            self.ws.joints[j - 1].position
         }
     }
     /// Velocity of joint `j`, NED, m/s.
@@ -480,7 +513,7 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection.velocity
         } else {
-            self.ws.joint_velocity[j - 1]
+            self.ws.joints[j - 1].velocity
         }
     }
     /// Angular acceleration of segment `i` (1-based), NED, rad/s^2.

@@ -114,17 +114,14 @@ impl<T: Real, const N: usize> State<T, N> {
         let (this, base, k) = crate::scalar::opaque((self, base, k));
         let rows = this.directions[..count]
             .iter_mut()
-            .zip(&base.directions[..count])
-            .zip(&k.directions[..count]);
-        for ((o, b), d) in rows {
-            *o = b + d * h;
-        }
-        let rows = this.rates[..count]
-            .iter_mut()
-            .zip(&base.rates[..count])
-            .zip(&k.rates[..count]);
-        for ((o, b), d) in rows {
-            *o = b + d * h;
+            .zip(this.rates[..count].iter_mut())
+            .zip(base.directions[..count].iter().zip(&base.rates[..count]))
+            .zip(k.directions[..count].iter().zip(&k.rates[..count]));
+        for (((o_e, o_w), (b_e, b_w)), (k_e, k_w)) in rows {
+            // Copies first: the stores may alias for all the optimiser knows.
+            let (b_e, b_w, k_e, k_w) = (*b_e, *b_w, *k_e, *k_w);
+            *o_e = b_e + k_e * h;
+            *o_w = b_w + k_w * h;
         }
         for ((o, b), d) in this
             .decoy_attitude
@@ -150,6 +147,9 @@ impl<T: Real, const N: usize> State<T, N> {
         count: usize,
     ) {
         let (this, base, k, sum) = crate::scalar::opaque((self, base, k, sum));
+        // The weight through `opaque`: a literal 2 would become k + k, and with it a
+        // separate add where a multiply-accumulate does (the same bits either way).
+        let weight = crate::scalar::opaque(weight);
         stage_pass(this, base, k, h, sum, count, |s, k| s + k * weight);
     }
 
@@ -180,8 +180,10 @@ impl<T: Real, const N: usize> State<T, N> {
                     .zip(k.directions[..count].iter().zip(&k.rates[..count])),
             );
         for (((e_out, w_out), (e0, w0)), ((se, sw), (ke, kw))) in rows {
+            // Copies first: the stores may alias for all the optimiser knows.
+            let (e0, w0, se, sw, ke, kw) = (*e0, *w0, *se, *sw, *ke, *kw);
             let e = e0 + (se + ke) * h;
-            let e = e / crate::scalar::norm(&e);
+            let e = e * crate::scalar::inverse_norm(&e);
             let w = w0 + (sw + kw) * h;
             let w = w - e * w.dot(&e);
             probe += (e.x + e.y + e.z) + (w.x + w.y + w.z);
@@ -241,30 +243,24 @@ fn stage_pass<T: Real, const N: usize>(
     count: usize,
     acc: impl Fn(T, T) -> T,
 ) {
-    let acc3 = |s: &mut Vec3<T>, d: &Vec3<T>| {
-        *s = Vec3::new(acc(s.x, d.x), acc(s.y, d.y), acc(s.z, d.z));
-    };
+    let acc3 = |s: &Vec3<T>, d: &Vec3<T>| Vec3::new(acc(s.x, d.x), acc(s.y, d.y), acc(s.z, d.z));
     let rows = out.directions[..count]
         .iter_mut()
-        .zip(&base.directions[..count])
+        .zip(out.rates[..count].iter_mut())
+        .zip(base.directions[..count].iter().zip(&base.rates[..count]))
+        .zip(k.directions[..count].iter().zip(&k.rates[..count]))
         .zip(
-            k.directions[..count]
-                .iter()
-                .zip(sum.directions[..count].iter_mut()),
+            sum.directions[..count]
+                .iter_mut()
+                .zip(sum.rates[..count].iter_mut()),
         );
-    for ((o, b), (d, s)) in rows {
-        let d = *d;
-        *o = b + d * h;
-        acc3(s, &d);
-    }
-    let rows = out.rates[..count]
-        .iter_mut()
-        .zip(&base.rates[..count])
-        .zip(k.rates[..count].iter().zip(sum.rates[..count].iter_mut()));
-    for ((o, b), (d, s)) in rows {
-        let d = *d;
-        *o = b + d * h;
-        acc3(s, &d);
+    for ((((o_e, o_w), (b_e, b_w)), (k_e, k_w)), (s_e, s_w)) in rows {
+        // Copies first: the stores may alias for all the optimiser knows.
+        let (b_e, b_w, k_e, k_w, se, sw) = (*b_e, *b_w, *k_e, *k_w, *s_e, *s_w);
+        *o_e = b_e + k_e * h;
+        *o_w = b_w + k_w * h;
+        *s_e = acc3(&se, &k_e);
+        *s_w = acc3(&sw, &k_w);
     }
     let rows = out
         .decoy_attitude
@@ -276,5 +272,5 @@ fn stage_pass<T: Real, const N: usize>(
         *s = acc(*s, *d);
     }
     out.decoy_rate = base.decoy_rate + k.decoy_rate * h;
-    acc3(&mut sum.decoy_rate, &k.decoy_rate);
+    sum.decoy_rate = acc3(&sum.decoy_rate, &k.decoy_rate);
 }
