@@ -550,7 +550,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// still to fill), its measures, the aircraft at its time and the counter's
     /// reading where the management starts; or the rejection.
     #[inline(never)]
-    #[allow(clippy::type_complexity)]
+    #[allow(clippy::type_complexity, clippy::result_large_err)]
     fn solve(
         &mut self,
         frame: &AircraftStateFrame,

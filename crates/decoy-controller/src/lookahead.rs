@@ -319,6 +319,7 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
     /// solution at its time, `aircraft` the aircraft there, `wave_rate` its
     /// wave-speed rate, `measures` its measures) if none is under way, then takes
     /// at most the configured steps. Returns the steps taken.
+    #[allow(clippy::too_many_arguments)]
     pub fn work<const N: usize>(
         &mut self,
         state: &State<T, N>,
@@ -487,8 +488,10 @@ pub fn coarse_state<T: Real, const N: usize, const P: usize>(
     lengths: &[T],
     coarse: &[T],
 ) -> State<T, P> {
-    let mut copy = State::<T, P>::default();
-    copy.time = state.time;
+    let mut copy = State::<T, P> {
+        time: state.time,
+        ..State::default()
+    };
     // Walks the controller's cable once: `i` its segment, `p`/`v` the position
     // and velocity of its joint i relative to the connection point, `s` its
     // arc length.
@@ -554,8 +557,10 @@ mod tests {
         let r: f64 = 1.3;
         let l0 = 100.0 * (r - 1.0) / (r.powi(16) - 1.0);
         let lengths = core::array::from_fn(|i| l0 * r.powi(15 - i as i32));
-        let mut state = State::<f64, 16>::default();
-        state.time = 2.5;
+        let mut state = State::<f64, 16> {
+            time: 2.5,
+            ..State::default()
+        };
         for i in 0..16 {
             let a = 0.1 + 0.02 * i as f64;
             let e = Vec3::new(
