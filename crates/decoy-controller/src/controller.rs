@@ -780,21 +780,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
     /// segment i, with the tensions of the solver's last evaluation.
     fn last_wave_rate(&self) -> T {
-        let model = self.solver.model();
-        let out = self.solver.last_outputs();
-        // max_i T_i^2 / l_i^4 from the squared joint forces (two roots in all):
-        // then max_i c_i / l_i = sqrt(sqrt(max) / mu).
-        // (Compare-and-select rather than `max`, which is a libm call on the M4F.)
-        let larger = |a: T, b: T| if b > a { b } else { a };
-        let mut worst = T::zero();
-        let mut upstream = out.joint_force(0).norm_squared();
-        for (i, l) in model.lengths().iter().enumerate() {
-            let downstream = out.joint_force(i + 1).norm_squared();
-            let l2 = *l * *l;
-            worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
-            upstream = downstream;
-        }
-        (worst.square_root() / model.params().cable.linear_density).square_root()
+        crate::lookahead::wave_rate_of(&self.solver)
     }
 
     /// [`Controller::integrate`] with `steps` steps, again with more when a step

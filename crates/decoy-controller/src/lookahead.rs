@@ -531,10 +531,15 @@ pub fn coarse_state<T: Real, const N: usize, const P: usize>(
     copy
 }
 
-/// max_i c_i / l_i (1/s) of the solver's last evaluation (as the controller's).
+/// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
+/// segment i, with the tensions of the solver's last evaluation: the stepping
+/// rule's input, the controller's and the look-ahead's.
 pub(crate) fn wave_rate_of<T: Real, const N: usize>(solver: &Solver<T, N>) -> T {
     let model = solver.model();
     let out = solver.last_outputs();
+    // max_i T_i^2 / l_i^4 from the squared joint forces (two roots in all):
+    // then max_i c_i / l_i = sqrt(sqrt(max) / mu).
+    // (Compare-and-select rather than `max`, which is a libm call on the M4F.)
     let larger = |a: T, b: T| if b > a { b } else { a };
     let mut worst = T::zero();
     let mut upstream = out.joint_force(0).norm_squared();
