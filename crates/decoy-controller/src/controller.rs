@@ -187,6 +187,13 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     /// A valid frame arrived since the last [`Controller::poll_silence`].
     activity: bool,
     last_activity_ms: Option<u32>,
+    /// The last accepted frame's look-ahead slice is still to run
+    /// ([`Controller::background`]).
+    slice_due: bool,
+    /// Steps and instructions of the slice that ran since the last Output
+    /// (reported, then cleared, by the next one).
+    slice_steps: u32,
+    slice_instructions: u32,
 }
 
 impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
@@ -229,6 +236,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         wave_rate: T::ZERO,
         activity: false,
         last_activity_ms: None,
+        slice_due: false,
+        slice_steps: 0,
+        slice_instructions: 0,
     };
 
     /// A controller for `config`, waiting for its first State frame to trim at.
@@ -282,6 +292,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.hazard_flags = 0;
         self.wave_rate = T::zero();
         self.activity = false;
+        self.slice_due = false;
+        self.slice_steps = 0;
+        self.slice_instructions = 0;
         self.last_activity_ms = None;
         Ok(())
     }
@@ -353,6 +366,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     fn reset_management(&mut self) {
         self.monitors.reset();
         self.lookahead.reset();
+        self.slice_due = false;
+        self.slice_steps = 0;
+        self.slice_instructions = 0;
         self.last_management = self.monitors.report();
     }
 
@@ -388,15 +404,38 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
 
     /// Answers one decoded host message. `counter` measures the instructions a
     /// State frame costs.
+    ///
+    /// An accepted State frame's answer carries the solution and the monitors;
+    /// the look-ahead's slice of prediction steps for that frame is left due, to
+    /// run after the answer is sent ([`Controller::background`]). If it has not
+    /// run when the next message comes, it runs first, here: the answers are the
+    /// same bits whenever the slice runs (docs/protocol.md §3, "The look-ahead").
     pub fn handle(
         &mut self,
         message: HostMessage,
         counter: &mut impl InstructionCounter,
     ) -> DeviceMessage {
+        self.background(counter);
         match message {
             HostMessage::State(frame) => self.on_state(&frame, counter),
             HostMessage::Command(command) => self.on_command(command),
         }
+    }
+
+    /// Runs the last accepted frame's look-ahead slice if it is due (at most
+    /// `prediction_steps_per_frame` RK4 steps of the prediction model); the
+    /// firmware calls this once the frame's answer is written, so that the
+    /// answer does not wait for the prediction. Returns the steps taken.
+    pub fn background(&mut self, counter: &mut impl InstructionCounter) -> u32 {
+        if !self.slice_due {
+            return 0;
+        }
+        self.slice_due = false;
+        let start = counter.now();
+        let steps = self.lookahead.advance(&self.geometry, &self.management);
+        self.slice_steps = steps;
+        self.slice_instructions = counter.elapsed(start);
+        steps
     }
 
     /// The answer to a frame that could not be decoded: a Rejected with no seq.
@@ -511,9 +550,12 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         counter: &mut impl InstructionCounter,
     ) -> DeviceMessage {
         match self.solve(frame, counter) {
-            Ok((mut output, measures, aircraft, start)) => {
+            Ok((mut output, measures, aircraft, _)) => {
+                let start = counter.now();
                 self.manage(&mut output, &measures, &aircraft, frame.time_s);
-                output.management_instructions = counter.elapsed(start);
+                output.management_instructions = counter
+                    .elapsed(start)
+                    .wrapping_add(core::mem::take(&mut self.slice_instructions));
                 DeviceMessage::Output(output)
             }
             Err(answer) => answer,
@@ -521,8 +563,10 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     }
 
     /// Decoy management after an accepted frame's solution: the monitors take
-    /// its `measures`, then one slice of the look-ahead; the report goes into
-    /// `output`.
+    /// its `measures`, a prediction starts from it if none is under way, and
+    /// the report goes into `output`, with the steps of the look-ahead slice
+    /// that ran since the last Output (the previous accepted frame's). This
+    /// frame's slice is left due ([`Controller::background`]).
     #[inline(never)]
     fn manage(
         &mut self,
@@ -532,18 +576,18 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         now: f64,
     ) {
         self.monitors.update(measures, &self.management);
-        self.lookahead.work(
+        self.lookahead.begin(
             self.solver.state(),
             self.solver.model().lengths(),
             aircraft,
             self.wave_rate,
             measures,
-            &self.geometry,
             &self.management,
         );
-        output.prediction_steps = self.lookahead.last_steps as u16;
+        output.prediction_steps = core::mem::take(&mut self.slice_steps) as u16;
         output.management = self.management_report(now);
         self.last_management = output.management;
+        self.slice_due = self.lookahead.available();
     }
 
     /// A State frame's real-time solution: the accepted Output (its management

@@ -315,10 +315,8 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
         self.running.map_or([None; 4], |r| r.violation_at)
     }
 
-    /// One frame's slice of work: starts a prediction from `state` (the accepted
-    /// solution at its time, `aircraft` the aircraft there, `wave_rate` its
-    /// wave-speed rate, `measures` its measures) if none is under way, then takes
-    /// at most the configured steps. Returns the steps taken.
+    /// One frame's slice of work, all at once: [`Lookahead::begin`], then
+    /// [`Lookahead::advance`]. Returns the steps taken.
     #[allow(clippy::too_many_arguments)]
     pub fn work<const N: usize>(
         &mut self,
@@ -330,35 +328,65 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
         geometry: &Geometry<T>,
         config: &ManagementConfig<T>,
     ) -> u32 {
+        self.begin(state, lengths, aircraft, wave_rate, measures, config);
+        self.advance(geometry, config)
+    }
+
+    /// The first, cheap part of a frame's slice, at the accepted frame: starts
+    /// a prediction from `state` (the accepted solution at its time, `aircraft`
+    /// the aircraft there, `wave_rate` its wave-speed rate, `measures` its
+    /// measures) unless one is under way whose manoeuvre the aircraft still
+    /// flies. Reads `state` only here, so that [`Lookahead::advance`] may run
+    /// later (after the frame's answer is sent) or elsewhere (another thread).
+    pub fn begin<const N: usize>(
+        &mut self,
+        state: &State<T, N>,
+        lengths: &[T],
+        aircraft: &AircraftState<T>,
+        wave_rate: T,
+        measures: &Measures<T>,
+        config: &ManagementConfig<T>,
+    ) {
+        if !self.available {
+            return;
+        }
+        // A prediction whose manoeuvre the aircraft no longer flies (the pull-up
+        // stopped rotating, a turn began) is abandoned for a new one from now.
+        if self.running.is_some_and(|r| !r.path.departs_from(aircraft)) {
+            return;
+        }
+        self.running = None;
+        let copy = coarse_state(state, lengths, self.solver.model().lengths());
+        if self.solver.set_state(copy).is_err() {
+            return;
+        }
+        let [p, y] = measures.pitch_yaw;
+        let mut r = Running {
+            path: HeldManoeuvre::new(state.time, aircraft),
+            from: state.time,
+            worst: [T::lit(f64::INFINITY); 4],
+            violation_at: [None; 4],
+            ranges: [[p, p], [y, y]],
+            wave_rate,
+            accepted: 0,
+        };
+        r.take(measures, config);
+        self.running = Some(r);
+    }
+
+    /// The frame's slice of prediction steps: at most the configured steps of
+    /// the prediction under way ([`Lookahead::begin`]); a prediction that
+    /// reaches its horizon becomes the last completed one. Returns the steps
+    /// taken (also kept as [`Lookahead::last_steps`]).
+    pub fn advance(&mut self, geometry: &Geometry<T>, config: &ManagementConfig<T>) -> u32 {
         self.last_steps = 0;
         if !self.available {
             return 0;
         }
-        let solver = &mut self.solver;
-        // A prediction whose manoeuvre the aircraft no longer flies (the pull-up
-        // stopped rotating, a turn began) is abandoned for a new one from now.
-        let running = self.running.filter(|r| !r.path.departs_from(aircraft));
-        let mut running = match running {
-            Some(r) => r,
-            None => {
-                let copy = coarse_state(state, lengths, solver.model().lengths());
-                if solver.set_state(copy).is_err() {
-                    return 0;
-                }
-                let [p, y] = measures.pitch_yaw;
-                let mut r = Running {
-                    path: HeldManoeuvre::new(state.time, aircraft),
-                    from: state.time,
-                    worst: [T::lit(f64::INFINITY); 4],
-                    violation_at: [None; 4],
-                    ranges: [[p, p], [y, y]],
-                    wave_rate,
-                    accepted: 0,
-                };
-                r.take(measures, config);
-                r
-            }
+        let Some(mut running) = self.running else {
+            return 0;
         };
+        let solver = &mut self.solver;
         let end = running.from + config.horizon_s;
         let mut steps = 0;
         let mut done = false;

@@ -47,8 +47,10 @@ pub fn send<W: Write>(link: &mut W, message: &DeviceMessage) -> Result<(), Error
 }
 
 /// One turn of the loop: at most one byte from `link` through `decoder` into
-/// `controller`, the answer to a completed frame written back, then the silence
-/// supervision at `clock.now_ms()`. `observe` sees what happened.
+/// `controller`, the answer to a completed frame written back and then the
+/// frame's look-ahead slice run ([`Controller::background`]: the answer does not
+/// wait for the prediction), then the silence supervision at `clock.now_ms()`.
+/// `observe` sees what happened.
 pub fn poll<T, const N: usize, const CAP: usize, L, C>(
     controller: &mut Controller<T, N>,
     decoder: &mut Decoder<CAP>,
@@ -76,6 +78,8 @@ pub fn poll<T, const N: usize, const CAP: usize, L, C>(
                             Ok(()) => observe(Event::Answered(&answer)),
                             Err(kind) => observe(Event::WriteFailed(kind)),
                         }
+                        // The frame's look-ahead slice, once its answer is out.
+                        controller.background(&mut counter);
                     }
                 }
                 Ok(_) => {}

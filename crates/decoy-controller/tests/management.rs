@@ -306,7 +306,63 @@ fn predicted_margins_against_the_margins_reached() {
     // the solver's arithmetic changed: the snatch is sensitive to them) and the
     // decoy's to the aircraft within 0.34 m; its peak tension, a jerk of a slack
     // cable, depends on the model and the step: the predicted peak differs by
-    // 205 N (a tension advisory comes at 7.44 s that no violation follows).
+    // 205 N (a tension advisory comes at 7.45 s that no violation follows).
     assert!(climb[1] < 0.4 && climb[3] < 0.08, "{climb:?}");
     assert!(climb[2] < 300.0, "{climb:?}");
+}
+
+/// Where the look-ahead's slice runs changes no bit (docs/management.md): after
+/// each answer (`background`: the firmware's serve loop, the bridge) or first
+/// thing in the next `handle` (nobody called `background`). Through the 0.20
+/// rad/s pull-up, whose snatch load and advisories exercise every branch of the
+/// slice, with rejected frames between.
+#[test]
+fn the_slice_gives_the_same_bits_wherever_it_runs() {
+    let system = shipped();
+    let messages: Vec<HostMessage> = {
+        let select = HostMessage::Command(Command::SelectProfile(Profile::PullUp {
+            rate_milli_radps: 200,
+        }));
+        let mut m = vec![select];
+        for k in 0..=1000u32 {
+            let t = 0.01 * f64::from(k);
+            let f = AircraftState::<f64>::level(9000.0, 200.0);
+            m.push(HostMessage::State(state_frame(k, t, &f)));
+            if k % 97 == 5 {
+                // Time not increasing: rejected, must not disturb the slices.
+                m.push(HostMessage::State(state_frame(k, t, &f)));
+            }
+        }
+        m.push(HostMessage::Command(Command::GetStatus));
+        m
+    };
+
+    let mut lazy = controller::<f32>(&system);
+    let lazy: Vec<DeviceMessage> = messages
+        .iter()
+        .map(|m| lazy.handle(*m, &mut NoCounter))
+        .collect();
+
+    let mut eager = controller::<f32>(&system);
+    let mut ran = 0;
+    let eager: Vec<DeviceMessage> = messages
+        .iter()
+        .map(|m| {
+            let a = eager.handle(*m, &mut NoCounter);
+            ran += eager.background(&mut NoCounter);
+            a
+        })
+        .collect();
+
+    assert!(ran > 2000, "the slices ran ({ran} steps)");
+    let advised = lazy
+        .iter()
+        .any(|a| matches!(a, DeviceMessage::Output(o) if o.management.advisories != 0));
+    assert!(advised, "the pull-up is advised");
+    let rejected = lazy
+        .iter()
+        .filter(|a| matches!(a, DeviceMessage::Rejected(_)))
+        .count();
+    assert_eq!(rejected, 11);
+    assert_eq!(lazy, eager, "background after each answer");
 }

@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 3;
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -136,11 +136,14 @@ pub struct OutputFrame {
     pub step_instructions: u32,
     /// RK4 steps taken for this frame (0 for the frame that trimmed).
     pub steps: u16,
-    /// Instructions of this frame's decoy management, run after the real-time
-    /// solution is complete (not in [`OutputFrame::instructions`]): the monitors'
-    /// measures and update, and this frame's slice of the look-ahead.
+    /// Instructions of the decoy management since the last Output, run after
+    /// the real-time solution is complete (not in [`OutputFrame::instructions`]):
+    /// the look-ahead slice of the previous accepted frame (run after that
+    /// frame's answer was sent), then this frame's monitors' measures and
+    /// update and the prediction's start.
     pub management_instructions: u32,
-    /// Look-ahead RK4 steps taken in this frame's slice.
+    /// Look-ahead RK4 steps of the slice that ran since the last Output (the
+    /// previous accepted frame's, run after its answer was sent).
     pub prediction_steps: u16,
     /// The decoy-management monitors and the look-ahead (docs/protocol.md §3,
     /// "Management").

@@ -421,7 +421,7 @@ fn encode_reports_a_short_buffer() {
 }
 
 /// The example of docs/protocol.md and firmware/README.md, byte for byte: the
-/// ping and its answer (protocol version 3).
+/// ping and its answer (protocol version 4).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
@@ -435,6 +435,6 @@ fn the_documented_ping_frame() {
     };
     assert_eq!(
         wire(&pong),
-        [0x00, 0x08, 0x03, 0x07, 0x03, 0x36, 0xa0, 0x4f, 0x2b, 0x00]
+        [0x00, 0x08, 0x03, 0x07, 0x04, 0x95, 0x35, 0x2b, 0xb5, 0x00]
     );
 }

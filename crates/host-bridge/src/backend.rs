@@ -98,6 +98,9 @@ pub struct ModelInfo {
 pub trait Backend {
     /// The one answer to `message` (a link failure is an error, not an answer).
     fn handle(&mut self, message: HostMessage) -> Result<DeviceMessage, BridgeError>;
+    /// Called once the answer of [`Backend::handle`] is sent: work that the
+    /// answer need not wait for (the host controller's look-ahead slice).
+    fn background(&mut self) {}
     /// What runs.
     fn info(&self) -> &ModelInfo;
 }
@@ -112,6 +115,11 @@ impl<T: Real, const N: usize> Backend for HostBackend<T, N> {
         // No silence polling here: the bridge supervises its clients itself, so
         // that an answer never depends on the client's pace (docs/bridge.md).
         Ok(self.controller.handle(message, &mut NoCounter))
+    }
+    fn background(&mut self) {
+        // The frame's look-ahead slice, after its answer went out (as the
+        // firmware does): the answer does not wait for the prediction.
+        self.controller.background(&mut NoCounter);
     }
     fn info(&self) -> &ModelInfo {
         &self.info

@@ -532,6 +532,8 @@ impl Ports {
             // by any id, so `OUTPUT` would only wake the client a second time).
             self.publish(&answer);
             self.notify(event::ANSWER);
+            // The frame's look-ahead slice, once its answer is out.
+            engine.backend.background();
         }
         let mut any = false;
         while let Some(sample) = self.state.receive().map_err(|e| ipc(format!("{e:?}")))? {
@@ -554,6 +556,7 @@ impl Ports {
             let answer = engine.on_state(sample.payload());
             drop(sample);
             self.publish(&answer);
+            engine.backend.background();
         }
         if any {
             self.notify(event::OUTPUT);
