@@ -550,8 +550,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         counter: &mut impl InstructionCounter,
     ) -> DeviceMessage {
         match self.solve(frame, counter) {
-            Ok((mut output, measures, aircraft, _)) => {
-                let start = counter.now();
+            Ok((mut output, measures, aircraft, start)) => {
                 self.manage(&mut output, &measures, &aircraft, frame.time_s);
                 output.management_instructions = counter
                     .elapsed(start)

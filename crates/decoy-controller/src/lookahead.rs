@@ -222,7 +222,7 @@ pub struct Lookahead<T: Real, const P: usize> {
     available: bool,
     running: Option<Running<T>>,
     last: Option<Prediction<T>>,
-    /// Steps taken by the last call to [`Lookahead::work`].
+    /// Steps taken by the last call to [`Lookahead::advance`].
     pub last_steps: u32,
 }
 
@@ -313,23 +313,6 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
     /// times): an advisory need not wait for the whole horizon.
     pub fn running_violations(&self) -> [Option<f64>; 4] {
         self.running.map_or([None; 4], |r| r.violation_at)
-    }
-
-    /// One frame's slice of work, all at once: [`Lookahead::begin`], then
-    /// [`Lookahead::advance`]. Returns the steps taken.
-    #[allow(clippy::too_many_arguments)]
-    pub fn work<const N: usize>(
-        &mut self,
-        state: &State<T, N>,
-        lengths: &[T],
-        aircraft: &AircraftState<T>,
-        wave_rate: T,
-        measures: &Measures<T>,
-        geometry: &Geometry<T>,
-        config: &ManagementConfig<T>,
-    ) -> u32 {
-        self.begin(state, lengths, aircraft, wave_rate, measures, config);
-        self.advance(geometry, config)
     }
 
     /// The first, cheap part of a frame's slice, at the accepted frame: starts

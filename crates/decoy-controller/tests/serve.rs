@@ -187,7 +187,11 @@ fn the_serve_loop_runs_each_frame_slice_after_its_answer() {
         link.incoming.extend(encode_vec(&m).unwrap());
         let (answers, _) = drain(&mut served, &mut decoder, &mut link, &clock);
         assert_eq!(answers, [expected], "frame {k}");
-        assert_eq!(served.background(&mut NoCounter), 0, "frame {k}: a slice left due");
+        assert_eq!(
+            served.background(&mut NoCounter),
+            0,
+            "frame {k}: a slice left due"
+        );
         // `handle` alone leaves the slice due (it runs at the next message):
         // check on a copy, so that `direct` keeps that path.
         due_direct += direct.clone().background(&mut NoCounter);
