@@ -102,7 +102,7 @@ fn sigint_and_sigterm_end_the_bridge_cleanly() {
         signal(&child, sig);
         let (v, out) = summary_of(child);
         assert!(out.status.success(), "{out:?}");
-        assert_eq!(v["ended_by"], "SIGINT/SIGTERM", "SIG{sig}");
+        assert_eq!(v["ended_by"], format!("SIG{sig}"));
         assert_eq!(v["counters"]["accepted"], 10);
         assert_eq!(v["counters"]["commands"], 1);
         assert_eq!(v["rejected"], 0);
@@ -141,7 +141,7 @@ fn a_stopped_and_continued_bridge_serves_on() {
     signal(&child, "INT");
     let (v, out) = summary_of(child);
     assert!(out.status.success(), "{out:?}");
-    assert_eq!(v["ended_by"], "SIGINT/SIGTERM");
+    assert_eq!(v["ended_by"], "SIGINT");
     assert_eq!(v["counters"]["accepted"], 21);
     assert_eq!(iso.leftovers(), Vec::<std::path::PathBuf>::new());
 }

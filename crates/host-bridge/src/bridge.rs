@@ -92,8 +92,8 @@ pub struct BridgeSummary {
     pub segments: u16,
     /// Grading ratio.
     pub grading_ratio: f64,
-    /// Why it ended: `SIGINT/SIGTERM` (iceoryx2 does not tell them apart), or
-    /// `stop request` (a bridge on a thread).
+    /// Why it ended: `SIGINT`, `SIGTERM`, or `stop request` (a bridge on a
+    /// thread).
     pub ended_by: String,
     /// Seconds it ran.
     pub uptime_s: f64,
@@ -573,6 +573,9 @@ pub fn run_bridge(
     ready: impl FnOnce(&Status),
 ) -> Result<BridgeSummary, BridgeError> {
     let ports = Ports::open(options)?;
+    // After the node (iceoryx2's handler is in place): signal-hook chains it, so
+    // both run; iceoryx2's ends the wait, these flags say which signal it was.
+    let signals = Signals::register();
     let mut engine = Engine::new(&options.instance, backend);
     let waitset = WaitSetBuilder::new()
         .create::<Ipc>()
@@ -631,8 +634,8 @@ pub fn run_bridge(
     }
     let ended_by = match outcome {
         // iceoryx2 reports SIGINT and SIGTERM alike once its handler consumed
-        // the signal: the summary does not pretend to know which.
-        Ok(WaitSetRunResult::Interrupt | WaitSetRunResult::TerminationRequest) => "SIGINT/SIGTERM",
+        // the signal; the flags chained before it tell them apart.
+        Ok(WaitSetRunResult::Interrupt | WaitSetRunResult::TerminationRequest) => signals.which(),
         Ok(_) => "stop request",
         Err(e) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
     };
@@ -642,6 +645,54 @@ pub fn run_bridge(
     drop(waitset);
     drop(ports);
     Ok(summary)
+}
+
+/// Flags set by SIGINT and SIGTERM, registered for the bridge's run (and
+/// unregistered after it: bridges on threads come and go in one process).
+struct Signals {
+    interrupt: Arc<AtomicBool>,
+    terminate: Arc<AtomicBool>,
+    ids: Vec<signal_hook::SigId>,
+}
+
+impl Signals {
+    fn register() -> Self {
+        let interrupt = Arc::new(AtomicBool::new(false));
+        let terminate = Arc::new(AtomicBool::new(false));
+        let ids = [
+            (signal_hook::consts::SIGINT, &interrupt),
+            (signal_hook::consts::SIGTERM, &terminate),
+        ]
+        .into_iter()
+        // A signal that cannot be registered is reported as "SIGINT/SIGTERM".
+        .filter_map(|(signal, flag)| signal_hook::flag::register(signal, Arc::clone(flag)).ok())
+        .collect();
+        Signals {
+            interrupt,
+            terminate,
+            ids,
+        }
+    }
+
+    /// The signal that ended the run (SIGTERM if both came).
+    fn which(&self) -> &'static str {
+        match (
+            self.interrupt.load(Ordering::Relaxed),
+            self.terminate.load(Ordering::Relaxed),
+        ) {
+            (_, true) => "SIGTERM",
+            (true, false) => "SIGINT",
+            (false, false) => "SIGINT/SIGTERM",
+        }
+    }
+}
+
+impl Drop for Signals {
+    fn drop(&mut self) {
+        for id in self.ids.drain(..) {
+            signal_hook::low_level::unregister(id);
+        }
+    }
 }
 
 #[cfg(test)]
