@@ -279,8 +279,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.lookahead
             .configure(&config.params, config.management.prediction_segments);
         self.management = config.management;
-        self.monitors.reset();
-        self.last_management = self.monitors.report();
+        self.reset_management();
         self.geometry = config.geometry;
         self.allowable_tension_n = allowable_tension_n;
         self.profile = Profile::Streamed;
@@ -292,9 +291,6 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.hazard_flags = 0;
         self.wave_rate = T::zero();
         self.activity = false;
-        self.slice_due = false;
-        self.slice_steps = 0;
-        self.slice_instructions = 0;
         self.last_activity_ms = None;
         Ok(())
     }

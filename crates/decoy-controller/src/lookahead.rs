@@ -222,8 +222,6 @@ pub struct Lookahead<T: Real, const P: usize> {
     available: bool,
     running: Option<Running<T>>,
     last: Option<Prediction<T>>,
-    /// Steps taken by the last call to [`Lookahead::advance`].
-    pub last_steps: u32,
 }
 
 impl<T: Real, const P: usize> PartialEq for Lookahead<T, P> {
@@ -260,7 +258,6 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
             worst: [T::ZERO; 4],
             violation_at: [None; 4],
         }),
-        last_steps: 0,
     };
 
     /// A look-ahead for `model` with a copy of `segments` segments
@@ -280,7 +277,6 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
             .configure(&prediction_params(params, segments))
             .is_ok();
         self.reset();
-        self.last_steps = 0;
     }
 
     /// The copy's model (when [`Lookahead::available`]).
@@ -360,9 +356,8 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
     /// The frame's slice of prediction steps: at most the configured steps of
     /// the prediction under way ([`Lookahead::begin`]); a prediction that
     /// reaches its horizon becomes the last completed one. Returns the steps
-    /// taken (also kept as [`Lookahead::last_steps`]).
+    /// taken.
     pub fn advance(&mut self, geometry: &Geometry<T>, config: &ManagementConfig<T>) -> u32 {
-        self.last_steps = 0;
         if !self.available {
             return 0;
         }
@@ -425,7 +420,6 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
                 }
             }
         }
-        self.last_steps = steps;
         if done || solver.state().time >= end - 1e-9 {
             self.last = Some(Prediction {
                 from: running.from,
