@@ -42,6 +42,7 @@ from pathlib import Path
 from decoy_bridge import Bridge, BridgeError, NoBridge
 from decoy_bridge import f16 as F
 from decoy_bridge import flight
+from decoy_bridge.affinity import parse_cpu_list, pin
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -59,6 +60,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--decoy", default=None, help="the decoy binary for the built-in comparison (default: $DECOY_BIN, "
                    "target/release/decoy, target/debug/decoy, then PATH)")
     p.add_argument("--no-compare", action="store_true", help="do not fly the built-in profile with decoy feed")
+    p.add_argument("--cpu", default=None, metavar="LIST",
+                   help="run on these CPUs only (0, 0,2, 0-3), as decoy bridge --cpu; the built-in comparison too "
+                   "(docs/bridge.md, \"Cores\")")
     p.add_argument("--no-plots", action="store_true")
     p.add_argument("--json", action="store_true", help="print summary.json on stdout")
     a = p.parse_args(argv)
@@ -78,6 +82,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         a.rate = F.DEFAULT_RATE[a.manoeuvre]
     if a.rate is not None and not (0.0 < abs(a.rate) <= 1.0):
         p.error(f"--rate {a.rate}: 0 < |rate| <= 1 rad/s")
+    if a.cpu is not None:
+        try:
+            a.cpus = parse_cpu_list(a.cpu)
+        except ValueError as e:
+            p.error(str(e))
     return a
 
 
@@ -137,6 +146,8 @@ def run_feed(decoy: str, a: argparse.Namespace, scenario: Path, out_dir: Path) -
     """``decoy feed`` of the built-in profile through the same bridge; its summary."""
     cmd = [decoy, "feed", "--instance", a.instance, "--scenario", str(scenario), "--out", str(out_dir), "--no-plots",
            "--json"]
+    if a.cpu is not None:
+        cmd += ["--cpu", a.cpu]
     env = dict(os.environ)
     if a.prefix:
         env["DECOY_IOX_PREFIX"] = a.prefix
@@ -233,6 +244,12 @@ def plots(out: Path, f16_rows: list[dict], traj: list[F.AircraftState], builtin:
 
 def main(argv: list[str] | None = None) -> int:
     a = parse_args(argv)
+    if a.cpu is not None:
+        try:
+            pin(a.cpus)
+        except ValueError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
     a.out.mkdir(parents=True, exist_ok=True)
     wall0 = time.perf_counter()
     try:

@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
 use decoy_sim::Scenario;
+use host_bridge::affinity::{Cpus, pin_process};
 use host_bridge::backend::{BackendKind, BackendOptions, Precision, make_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::feed::{FeedMode, FeedOptions, FeedRun, run_feed};
@@ -40,6 +41,9 @@ pub struct BridgeArgs {
     /// Length ratio of neighbouring segments, short at the decoy (default: solver.grading_ratio_embedded; 1 = uniform).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     grading: Option<f64>,
+    /// Run on these CPUs only (Linux list format: 0, 0,2, 0-3; QEMU too). A lockstep client on the same core is fastest (docs/bridge.md, "Cores").
+    #[arg(long, value_name = "LIST")]
+    cpu: Option<String>,
 }
 
 #[derive(Args, Debug)]
@@ -71,6 +75,9 @@ pub struct FeedArgs {
     /// Deadline of each answer, s.
     #[arg(long, value_name = "S", default_value_t = 5.0)]
     timeout: f64,
+    /// Run on these CPUs only (Linux list format: 0, 0,2, 0-3). Lockstep is fastest on the bridge's core (docs/bridge.md, "Cores").
+    #[arg(long, value_name = "LIST")]
+    cpu: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -115,6 +122,15 @@ fn bridge_failure(e: host_bridge::BridgeError) -> Failure {
     }
 }
 
+/// `--cpu`: this process (and what it starts) on those CPUs only.
+fn pin(cpu: Option<&str>) -> Result<(), Failure> {
+    if let Some(text) = cpu {
+        let cpus = Cpus::parse(text).map_err(bridge_failure)?;
+        pin_process(&cpus).map_err(bridge_failure)?;
+    }
+    Ok(())
+}
+
 pub fn bridge_command(
     config: Option<SystemConfig>,
     args: &BridgeArgs,
@@ -134,6 +150,7 @@ pub fn bridge_command(
         Some(c) => c,
         None => SystemConfig::builtin()?,
     };
+    pin(args.cpu.as_deref())?;
     quiet_iceoryx_log();
     let iox = iox_config(None, None).map_err(bridge_failure)?;
     let options = BackendOptions {
@@ -241,6 +258,7 @@ pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Resul
         )));
     }
     let scenario = Scenario::load(&args.scenario)?;
+    pin(args.cpu.as_deref())?;
     quiet_iceoryx_log();
     let iox = iox_config(None, None).map_err(bridge_failure)?;
     let options = FeedOptions {

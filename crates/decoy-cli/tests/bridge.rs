@@ -355,6 +355,111 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--cpu`: the bridge (every thread) and the feed run on the CPU named, say so
+/// in their summaries, and answer bit for bit as anywhere else; a CPU list that
+/// cannot be used is a usage error (exit 2) before anything starts.
+#[test]
+fn cpu_puts_the_bridge_and_its_client_on_one_core() {
+    let cpu = host_bridge::affinity::Cpus::of_this_thread()
+        .unwrap()
+        .list()[0]
+        .to_string();
+    let iso = Isolated::new().unwrap();
+    let child = bridge(&iso, "pinned", &["--cpu", &cpu, "--json"]);
+    let tasks: Vec<_> = std::fs::read_dir(format!("/proc/{}/task", child.id()))
+        .unwrap()
+        .map(|t| t.unwrap().path())
+        .collect();
+    assert!(!tasks.is_empty());
+    for task in &tasks {
+        let status = std::fs::read_to_string(task.join("status")).unwrap();
+        let allowed = status
+            .lines()
+            .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
+            .unwrap()
+            .trim();
+        assert_eq!(allowed, cpu, "{}", task.display());
+    }
+    let dir = std::env::temp_dir().join(format!("decoy-bridge-cpu-{}", std::process::id()));
+    let out = feed(
+        &iso,
+        "pinned",
+        &dir,
+        &[
+            "--scenario",
+            "steady",
+            "--t-end",
+            "1",
+            "--cpu",
+            &cpu,
+            "--no-plots",
+            "--json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["client_cpus"], cpu.as_str());
+    assert_eq!(v["frames_answered"], 101);
+    assert_eq!(v["frames_identical_to_host_same_precision"], 101);
+    signal(&child, "INT");
+    let (v, out) = summary_of(child);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(v["cpus"], cpu.as_str());
+    let _ = std::fs::remove_dir_all(&dir);
+
+    for (command, list, says) in [
+        ("bridge", "1024", "CPU 1024 is above 1023"),
+        ("bridge", "0-x", "\"x\" is not a CPU number"),
+        ("feed", "2-1", "the range 2-1 runs backwards"),
+    ] {
+        let mut args = vec![command, "--instance", "pinned-bad", "--cpu", list];
+        if command == "feed" {
+            args.extend(["--scenario", "steady"]);
+        }
+        let out = Command::new(DECOY)
+            .args(&args)
+            .envs(iso.env())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{command} --cpu {list}: {stderr}"
+        );
+        assert!(stderr.contains(says), "{command} --cpu {list}: {stderr}");
+    }
+    // CPUs this process may not run on (on a machine with all 1,024, none):
+    // alone, and beside one it may use (which the kernel would silently keep).
+    let allowed = host_bridge::affinity::Cpus::of_this_thread().unwrap();
+    if let Some(absent) = (0..1024).find(|c| !allowed.list().contains(c)) {
+        for (list, says) in [
+            (
+                absent.to_string(),
+                "none of these CPUs is available to this process".to_owned(),
+            ),
+            (
+                format!("{cpu},{absent}"),
+                format!("CPU {absent} is not available to this process"),
+            ),
+        ] {
+            let out = Command::new(DECOY)
+                .args(["bridge", "--instance", "pinned-bad", "--cpu", &list])
+                .envs(iso.env())
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "--cpu {list}: {stderr}");
+            assert!(stderr.contains(&says), "--cpu {list}: {stderr}");
+        }
+    }
+    assert_eq!(iso.leftovers(), Vec::<std::path::PathBuf>::new());
+}
+
 /// The layout JSON a mirror in another language is checked against.
 #[test]
 fn the_layout_json_describes_every_type() {

@@ -12,6 +12,11 @@
 //! p50/p99/p99.9/max, frames per second flat out, the solver's own time per frame
 //! (the host controller in this process on the same frames), samples lost, and
 //! the server process's CPU at 100 Hz (a real-time paced client, 10 s).
+//!
+//! Then 1 and 2 again with the client and the server on one core
+//! (`BRIDGE_BENCH_CPU`, default 0; what `decoy bridge --cpu` and `decoy feed
+//! --cpu` do): each hand-off a context switch instead of the wake-up of an idle
+//! core (docs/bridge.md, "Cores").
 //! `BRIDGE_BENCH_FRAMES` scales the flat-out runs (default 20,000).
 
 use std::process::{Child, Command};
@@ -21,6 +26,7 @@ use bridge_types::{AircraftState, Answer, event};
 use decoy_config::SystemConfig;
 use decoy_hil::flight::scenario_frames;
 use decoy_link::{AircraftStateFrame, HostMessage};
+use host_bridge::affinity::{Cpus, pin_process};
 use host_bridge::backend::{BackendKind, BackendOptions, Precision, make_backend};
 use host_bridge::bridge::{BridgeOptions, Percentiles, run_bridge};
 use host_bridge::client::BridgeClient;
@@ -36,6 +42,9 @@ fn main() {
     quiet_iceoryx_log();
     let args: Vec<String> = std::env::args().collect();
     if let Some(i) = args.iter().position(|a| a == "--serve") {
+        if let Some(j) = args.iter().position(|a| a == "--cpu") {
+            pin_process(&Cpus::parse(&args[j + 1]).unwrap()).unwrap();
+        }
         serve(&args[i + 1]);
         return;
     }
@@ -50,10 +59,15 @@ fn main() {
         "| run | frames | p50 us | p99 us | p99.9 us | max us | frames/s | solver p50 us | lost | server CPU at 100 Hz |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let cpu: usize = std::env::var("BRIDGE_BENCH_CPU")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     run(
         "iceoryx2 request-response, empty handler",
         "bare",
         frames,
+        None,
         None,
     );
     run(
@@ -61,18 +75,35 @@ fn main() {
         "host-f32-16",
         frames,
         Some((Precision::F32, 16, 1.3)),
+        None,
     );
     run(
         "bridge lockstep, host f64, 300 uniform",
         "host-f64-300",
         frames / 10,
         Some((Precision::F64, 300, 1.0)),
+        None,
     );
     run(
         "bridge lockstep, qemu M4 f32, 16 graded",
         "qemu",
         frames / 40,
         None,
+        None,
+    );
+    run(
+        &format!("iceoryx2 request-response, empty handler, both on CPU {cpu}"),
+        "bare",
+        frames,
+        None,
+        Some(cpu),
+    );
+    run(
+        &format!("bridge lockstep, host f32, 16 graded, both on CPU {cpu}"),
+        "host-f32-16",
+        frames,
+        Some((Precision::F32, 16, 1.3)),
+        Some(cpu),
     );
 }
 
@@ -88,13 +119,14 @@ fn flight(n: usize) -> Vec<AircraftStateFrame> {
     scenario_frames(&turn, n as u32)
 }
 
-fn spawn(kind: &str, iso: &Isolated) -> Child {
+fn spawn(kind: &str, iso: &Isolated, cpu: Option<usize>) -> Child {
     let exe = std::env::current_exe().unwrap();
-    Command::new(exe)
-        .args(["--serve", kind])
-        .envs(iso.env())
-        .spawn()
-        .unwrap()
+    let mut command = Command::new(exe);
+    command.args(["--serve", kind]);
+    if let Some(c) = cpu {
+        command.args(["--cpu", &c.to_string()]);
+    }
+    command.envs(iso.env()).spawn().unwrap()
 }
 
 fn cpu_ticks(pid: u32) -> u64 {
@@ -123,9 +155,20 @@ fn connect(iso: &Isolated) -> BridgeClient {
     }
 }
 
-fn run(label: &str, kind: &str, n: usize, solver: Option<(Precision, usize, f64)>) {
+fn run(
+    label: &str,
+    kind: &str,
+    n: usize,
+    solver: Option<(Precision, usize, f64)>,
+    cpu: Option<usize>,
+) {
+    // The client (this process) on `cpu` for the run, as the server.
+    let unpinned = Cpus::of_this_thread().unwrap();
+    if let Some(c) = cpu {
+        pin_process(&Cpus::parse(&c.to_string()).unwrap()).unwrap();
+    }
     let iso = Isolated::new().unwrap();
-    let mut server = spawn(kind, &iso);
+    let mut server = spawn(kind, &iso, cpu);
     let mut client = connect(&iso);
     client.set_timeout(Duration::from_secs(30));
     let frames = flight(n + 1000);
@@ -159,7 +202,7 @@ fn run(label: &str, kind: &str, n: usize, solver: Option<(Precision, usize, f64)
         }
         client.step(&from_link_frame(f)).unwrap();
     }
-    let cpu = (cpu_ticks(server.id()) - c0) as f64 / ticks_per_s / t0.elapsed().as_secs_f64();
+    let cpu_share = (cpu_ticks(server.id()) - c0) as f64 / ticks_per_s / t0.elapsed().as_secs_f64();
     drop(client);
     let _ = Command::new("kill")
         .args(["-INT", &server.id().to_string()])
@@ -175,8 +218,9 @@ fn run(label: &str, kind: &str, n: usize, solver: Option<(Precision, usize, f64)
         p.max,
         fps,
         solver_p50.map_or("-".to_owned(), |s| format!("{s:.1}")),
-        cpu * 100.0
+        cpu_share * 100.0
     );
+    pin_process(&unpinned).unwrap();
 }
 
 /// The controller's own time per frame in this process (median), us.

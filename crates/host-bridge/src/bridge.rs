@@ -92,6 +92,9 @@ pub struct BridgeSummary {
     pub segments: u16,
     /// Grading ratio.
     pub grading_ratio: f64,
+    /// The CPUs the bridge's thread could run on (Linux's list format, `0-1`;
+    /// `--cpu` sets them; empty where unknown).
+    pub cpus: String,
     /// Why it ended: `SIGINT`, `SIGTERM`, or `stop request` (a bridge on a
     /// thread).
     pub ended_by: String,
@@ -112,13 +115,18 @@ impl BridgeSummary {
     pub fn text(&self) -> String {
         let c = &self.counters;
         let mut s = format!(
-            "bridge {} ({} {}, f{}, {} segments graded {}) ended by {} after {:.1} s\n",
+            "bridge {} ({} {}, f{}, {} segments graded {}, CPUs {}) ended by {} after {:.1} s\n",
             self.instance,
             self.backend,
             self.board,
             self.precision_bits,
             self.segments,
             self.grading_ratio,
+            if self.cpus.is_empty() {
+                "?"
+            } else {
+                &self.cpus
+            },
             self.ended_by,
             self.uptime_s
         );
@@ -415,7 +423,7 @@ impl Engine {
         self.last_line = Instant::now();
     }
 
-    fn summary(&self, ended_by: &str) -> BridgeSummary {
+    fn summary(&self, ended_by: &str, cpus: String) -> BridgeSummary {
         let mut all: Vec<f64> = self.timing.all_us.iter().map(|&u| f64::from(u)).collect();
         BridgeSummary {
             instance: self.instance.clone(),
@@ -424,6 +432,7 @@ impl Engine {
             precision_bits: self.info.precision_bits,
             segments: self.info.segments,
             grading_ratio: self.info.grading_ratio,
+            cpus,
             ended_by: ended_by.to_owned(),
             uptime_s: self.started.elapsed().as_secs_f64(),
             counters: self.counters,
@@ -639,7 +648,10 @@ pub fn run_bridge(
         Ok(_) => "stop request",
         Err(e) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
     };
-    let summary = engine.summary(ended_by);
+    let cpus = crate::affinity::Cpus::of_this_thread()
+        .map(|c| c.to_string())
+        .unwrap_or_default();
+    let summary = engine.summary(ended_by, cpus);
     drop(tick);
     drop(wake);
     drop(waitset);

@@ -102,6 +102,9 @@ pub struct FeedSummary {
     pub mode: String,
     /// Paced at real time.
     pub realtime: bool,
+    /// The CPUs the client could run on (Linux's list format; `--cpu` sets
+    /// them; empty where unknown).
+    pub client_cpus: String,
     /// State frames sent (the reset command before them not counted).
     pub frames_sent: usize,
     /// Of those, answered by an output.
@@ -496,6 +499,9 @@ pub fn run_feed(
         grading_ratio: status.grading_ratio,
         mode: options.mode.name().to_owned(),
         realtime: options.realtime,
+        client_cpus: crate::affinity::Cpus::of_this_thread()
+            .map(|c| c.to_string())
+            .unwrap_or_default(),
         frames_sent: flown.sent.len(),
         frames_answered: answered,
         frames_rejected: rejected,

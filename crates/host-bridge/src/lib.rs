@@ -18,8 +18,10 @@
 //! - [`feed`]: `decoy feed`.
 //! - [`local`]: a bridge on a thread, in an iceoryx2 setup of its own (tests,
 //!   benchmarks, examples).
+//! - [`affinity`]: `--cpu`, the bridge and its clients on chosen cores.
 #![deny(missing_docs)]
 
+pub mod affinity;
 pub mod backend;
 pub mod bridge;
 pub mod client;
@@ -45,6 +47,8 @@ pub enum BridgeError {
     Backend(String),
     /// Writing an output failed.
     Output(String),
+    /// An operating-system call failed (the CPU affinity).
+    System(String),
 }
 
 impl BridgeError {
@@ -62,7 +66,8 @@ impl fmt::Display for BridgeError {
             | BridgeError::NoBridge(m)
             | BridgeError::NoAnswer(m)
             | BridgeError::Backend(m)
-            | BridgeError::Output(m) => f.write_str(m),
+            | BridgeError::Output(m)
+            | BridgeError::System(m) => f.write_str(m),
         }
     }
 }

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import wire
+from .affinity import current_cpus
 from .client import Bridge, make_state
 from .errors import Rejected
 from .f16 import EXTRA_COLUMNS, AircraftState
@@ -349,6 +350,7 @@ def summarize(
             "grading_ratio": float(status.grading_ratio) if status is not None else None,
             "mode": "lockstep",
             "realtime": False,
+            "client_cpus": current_cpus(),
             "frames_sent": sent,
             "frames_answered": answered,
             "frames_rejected": rejected,
