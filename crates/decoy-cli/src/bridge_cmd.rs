@@ -180,7 +180,7 @@ pub fn bridge_command(
     };
     let summary = run_bridge(&bridge, backend, |_| {
         eprintln!(
-            "decoy bridge: instance {} ready ({}, f{}, {} segments graded {}): services decoy/{}/*; Ctrl-C to stop",
+            "decoy bridge: instance {} ready ({}, f{}, {} segments graded {}, CPUs {}): services decoy/{}/*; Ctrl-C to stop",
             args.instance,
             if info.backend == bridge_types::backend::QEMU {
                 format!("qemu, firmware on {}", info.board)
@@ -190,6 +190,7 @@ pub fn bridge_command(
             info.precision_bits,
             info.segments,
             info.grading_ratio,
+            Cpus::of_this_thread().map_or_else(|_| "?".to_owned(), |c| c.to_string()),
             args.instance
         );
     })
@@ -315,8 +316,17 @@ fn feed_text(run: &FeedRun) -> String {
     );
     let _ = writeln!(
         s,
-        "  {} frames sent, {} answered, {} rejected, {} lost; {:.0} frames/s",
-        f.frames_sent, f.frames_answered, f.frames_rejected, f.frames_lost, f.frames_per_s
+        "  {} frames sent, {} answered, {} rejected, {} lost; {:.0} frames/s (client on CPUs {})",
+        f.frames_sent,
+        f.frames_answered,
+        f.frames_rejected,
+        f.frames_lost,
+        f.frames_per_s,
+        if f.client_cpus.is_empty() {
+            "?"
+        } else {
+            &f.client_cpus
+        }
     );
     let l = &f.latency_us;
     let _ = writeln!(
