@@ -6,9 +6,9 @@
 use std::time::{Duration, Instant};
 
 use decoy_config::SystemConfig;
-use decoy_controller::{Controller, NoCounter};
+use decoy_controller::{Controller, FramePath, NoCounter};
 use decoy_link::{AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame};
-use solver_core::{FlightPath, Real};
+use solver_core::{AircraftState, FlightPath, Real, SegmentLayout, Solver, Vec3};
 
 use crate::link::{LinkError, Session};
 
@@ -125,6 +125,93 @@ pub fn host_controller<T: Real>(
     Controller::new(controller_config)
         .map(Box::new)
         .map_err(|e| HostSetupError(e.to_string()))
+}
+
+/// Segment capacity of [`frame_reference`] (the host model's 300 segments).
+pub const REFERENCE_CAPACITY: usize = 512;
+
+/// The host's converged solution along the very frames a controller receives:
+/// the model of `config` with `layout` in f64, trimmed at the first frame as the
+/// controller trims (steady straight flight at that frame, positions relative
+/// to its horizontal position), then integrated frame by frame along the same
+/// [`decoy_controller::FramePath`] the controller integrates along, with fixed
+/// RK4 steps of at most `max_step_s` (no wave-speed rule: choose the step
+/// small enough to converge). Returns the connection tension (N) at every
+/// frame's time, one per frame, the first the trim's.
+///
+/// This separates the embedded model's error (segments, steps, f32) from the
+/// input's: a controller sees the aircraft only every 10 ms, while
+/// `decoy simulate` integrates the scenario's analytic flight path, and through
+/// a snatch load the two inputs alone move the peak by a few percent
+/// (`hil-tests/tests/host_accuracy.rs`).
+pub fn frame_reference(
+    config: &SystemConfig,
+    frames: &[AircraftStateFrame],
+    layout: SegmentLayout<f64>,
+    max_step_s: f64,
+) -> Result<Vec<f64>, HostSetupError> {
+    let params = config
+        .controller_config::<f64>(layout)
+        .map_err(|e| HostSetupError(e.to_string()))?
+        .params;
+    let frames = frames.to_vec();
+    // The solver of 512 segments is large: built in place on the heap, run on
+    // a thread with room for the solver's temporaries.
+    std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(move || -> Result<Vec<f64>, HostSetupError> {
+            let fail = |what: &str, e: &dyn std::fmt::Display| {
+                HostSetupError(format!("the frame reference: {what}: {e}"))
+            };
+            let Some(first) = frames.first() else {
+                return Ok(Vec::new());
+            };
+            let mut solver: Box<Solver<f64, REFERENCE_CAPACITY>> = Box::new(Solver::UNCONFIGURED);
+            solver
+                .configure(&params)
+                .map_err(|e| fail("configure", &e))?;
+            let p = first.position_ned_m;
+            let origin = [p[0], p[1], 0.0];
+            let start = FramePath::<f64>::single(first, origin);
+            let steady = AircraftState {
+                acceleration: Vec3::zeros(),
+                angular_rate: Vec3::zeros(),
+                angular_acceleration: Vec3::zeros(),
+                ..start.state_at(first.time_s)
+            };
+            solver
+                .trim(&steady, first.time_s)
+                .map_err(|e| fail("trim", &e))?;
+            let mut tensions = vec![
+                solver
+                    .outputs(&start)
+                    .map_err(|e| fail("outputs", &e))?
+                    .connection_tension(),
+            ];
+            for pair in frames.windows(2) {
+                let (from, to) = (&pair[0], &pair[1]);
+                let path = FramePath::<f64>::new(from, to, origin);
+                let span = to.time_s - from.time_s;
+                let steps = (span / max_step_s - 1e-9).ceil().max(1.0);
+                let h = span / steps;
+                for _ in 0..steps as u32 {
+                    solver
+                        .step(&path, h)
+                        .map_err(|e| fail(&format!("t = {} s", to.time_s), &e))?;
+                }
+                solver.set_time(to.time_s);
+                tensions.push(
+                    solver
+                        .outputs(&path)
+                        .map_err(|e| fail("outputs", &e))?
+                        .connection_tension(),
+                );
+            }
+            Ok(tensions)
+        })
+        .map_err(|e| HostSetupError(format!("cannot start the reference's thread: {e}")))?
+        .join()
+        .map_err(|_| HostSetupError("the frame reference panicked".to_owned()))?
 }
 
 /// Feeds `messages` to the host controller and returns its answers, one per

@@ -2,38 +2,59 @@
 //! f32 controller with the embedded model (16 segments graded 1.3, the firmware's
 //! bits: `tests/hil_link.rs` shows the M4 and the STM32F405 answer bit for bit as
 //! this host controller) flies every shipped manoeuvre frame by frame at 10 ms
-//! with its stepping rule (docs/protocol.md §5), and its peak connection tension is
-//! compared with that of the host model, 300 uniform segments in f64 at the
-//! scenario's own RK4 step (1 ms; 0.5 ms for the recorded flight, 0.25 ms for the
-//! pull-ups), sampled at the same 10 ms frame times.
+//! with its stepping rule (docs/protocol.md §5), and its peak connection tension
+//! (at the frame times, where it answers) is compared with two host solutions of
+//! 300 uniform segments in f64, sampled at the same frame times:
 //!
-//! The issue's target is 2 % on every manoeuvre. It holds in steady flight, the
-//! acceleration and the turns ([`WITHIN_TARGET`]). It does not hold where the
-//! cable is jerked taut (the pull-ups' snatch load at about 8.7 s, and the recorded
-//! flight's pull-up): there the controller's RK4 steps, at the wave-speed stability
-//! limit (0.8 l/c on the 0.46 m segment at the decoy), overshoot the peak by 4.4 to
-//! 16.4 % (firmware/README.md, "The worst frame and the accuracy"). Most of that
-//! is the step: the same f32 controller stepping at 0.125 ms (80 steps a frame) is
-//! -0.43 % and -0.62 % off on the 0.05 and 0.10 rad/s pull-ups; but it is still
-//! -3.19 % (0.20 rad/s) and -2.66 % (recorded flight) off there, and in f64 alike
-//! (-3.22 %, -2.64 %), so for those two the 16-segment model itself, compared at
-//! the frame times, misses 2 % (measured 2026-12-02 with this file's comparison;
-//! 16 graded 1.35 at the same steps: -0.08 % and -2.10 %). Those scenarios are held to the error
-//! measured today ([`KNOWN_GAPS`]) so that a change making them worse fails, and
-//! the gap is printed.
+//! - **the same frames** ([`flight::frame_reference`]): the host model integrated
+//!   along the very frames the controller receives (the same `FramePath`
+//!   between them), with fixed RK4 steps of 0.125 ms (converged: 0.0625 ms moves
+//!   the 0.20 rad/s snatch peak by 0.06 %). This isolates the embedded model and
+//!   its integration from the input;
+//! - **the analytic flight path** (`decoy simulate`'s run of the scenario, at its
+//!   own RK4 step: 1 ms; 0.5 ms for the recorded flight, 0.25 ms for the
+//!   pull-ups). A controller sees the aircraft only every 10 ms, and through a
+//!   snatch load that alone moves the peak: the 300-segment model's 0.20 rad/s
+//!   peak is 841.3 N on the frames against 853.2 N on the analytic path
+//!   (-1.4 %), the recorded flight's 497.0 N against 513.5 N (-3.2 %).
 //!
-//! Each scenario is its own test (they run in parallel); the 300-segment runs take
-//! a few seconds to about 12 s each.
+//! What holds and what does not (measured 2026-12-02):
+//!
+//! - **The embedded model is accurate enough**: 16 graded 1.3 in f64 along the
+//!   same frames with the reference's converged steps is within the issue's 2 %
+//!   of the 300-segment solution on all eight manoeuvres (worst: -1.85 %, the
+//!   0.20 rad/s pull-up), asserted by [`the_embedded_model_converged_is_within_two_percent`].
+//! - **Its integration at the frame budget is not**: with the stepping rule's RK4
+//!   steps at the wave-speed stability limit (0.8 l/c on the 0.46 m segment at
+//!   the decoy) the snatch peaks overshoot (against the same frames) by 5.30 %,
+//!   17.78 %, 5.93 % (pull-ups 0.05 / 0.10 / 0.20) and 9.60 % (recorded flight).
+//!   Steps of at most 0.5 ms (20 a frame, about 620,000 instructions on the M4)
+//!   bring all four within 2 % (+0.08, +0.57, -1.42, +0.82 %); 1 ms steps leave
+//!   the 0.20 rad/s pull-up at +2.75 %. Steady flight, the acceleration and the
+//!   turns are within 0.1 % at the shipped rule.
+//!
+//! The manoeuvres within the target are asserted on it ([`WITHIN_TARGET`]); the
+//! others are held to the error measured today ([`KNOWN_GAPS`], both
+//! comparisons) so that a change making them worse fails, and the gap is
+//! printed.
+//!
+//! Each scenario is its own test (they run in parallel); each takes a few
+//! seconds to about 20 s.
 
 use decoy_config::SystemConfig;
 use decoy_hil::flight;
 use decoy_link::DeviceMessage;
 use decoy_sim::{RunOptions, Scenario, TraceOptions, trace};
+use solver_core::SegmentLayout;
 
 /// The issue's accuracy target on the peak connection tension.
 const TARGET: f64 = 0.02;
 
-/// The scenarios within [`TARGET`]: (name, rate, simulated seconds).
+/// RK4 step of the same-frames references, s (converged; see the module's text).
+const REFERENCE_STEP_S: f64 = 0.000125;
+
+/// The scenarios within [`TARGET`] against both references: (name, rate,
+/// simulated seconds).
 const WITHIN_TARGET: [(&str, Option<f64>, f64); 4] = [
     ("steady", None, 10.0),
     ("acceleration", None, 12.0),
@@ -41,23 +62,55 @@ const WITHIN_TARGET: [(&str, Option<f64>, f64); 4] = [
     ("turn", Some(0.20), 10.0),
 ];
 
-/// The scenarios that miss [`TARGET`], with the relative error measured (the
-/// controller over the 300-segment solution's peak: +4.72 %, +16.39 %, +4.45 %,
-/// +6.09 %; a guard 0.5 point above it). Deterministic runs: these are exact
-/// numbers, not a noise band. They were +4.51 %, +16.09 %, +4.89 %, +6.46 % before
-/// the solver's arithmetic was reordered for the M4 (the same equations, other
-/// roundings): through a snatch load, integrated at the wave-speed stability limit,
-/// last-bit differences move the peaks by tenths of a point.
-const KNOWN_GAPS: [(&str, Option<f64>, f64, f64); 4] = [
-    ("pull-up", Some(0.05), 10.0, 0.052),
-    ("pull-up", Some(0.10), 10.0, 0.169),
-    ("pull-up", Some(0.20), 10.0, 0.050),
-    ("recorded", None, 10.0, 0.066),
+/// The scenarios that miss [`TARGET`]: (name, rate, simulated seconds, limit
+/// against the same frames, limit against the analytic path), each limit the
+/// relative error measured plus a guard of 0.5 point. Deterministic runs: these
+/// are exact numbers, not a noise band.
+///
+/// Measured against the same frames: +5.30 %, +17.78 %, +5.93 %, +9.60 %;
+/// against the analytic path: +4.72 %, +16.39 %, +4.45 %, +6.09 % (they were
+/// +4.51 %, +16.09 %, +4.89 %, +6.46 % before the solver's arithmetic was
+/// reordered for the M4: through a snatch load integrated at the stability
+/// limit, last-bit differences move the peaks by tenths of a point).
+const KNOWN_GAPS: [(&str, Option<f64>, f64, f64, f64); 4] = [
+    ("pull-up", Some(0.05), 10.0, 0.058, 0.052),
+    ("pull-up", Some(0.10), 10.0, 0.183, 0.169),
+    ("pull-up", Some(0.20), 10.0, 0.065, 0.050),
+    ("recorded", None, 10.0, 0.101, 0.066),
 ];
 
-/// (controller's peak, 300-segment peak) connection tension, N, over the frames
-/// of `name` at `rate` for `t_end` s.
-fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> (f64, f64) {
+/// Every shipped manoeuvre, for the converged embedded model.
+const ALL: [(&str, Option<f64>, f64); 8] = [
+    ("steady", None, 10.0),
+    ("acceleration", None, 12.0),
+    ("pull-up", Some(0.05), 10.0),
+    ("pull-up", Some(0.10), 10.0),
+    ("pull-up", Some(0.20), 10.0),
+    ("turn", Some(0.10), 10.0),
+    ("turn", Some(0.20), 10.0),
+    ("recorded", None, 10.0),
+];
+
+/// Peak connection tensions (N) at the frame times of one manoeuvre.
+struct Peaks {
+    /// The f32 controller with its stepping rule (the firmware's bits).
+    controller: f64,
+    /// 300 uniform segments f64 along the same frames.
+    same_frames: f64,
+    /// 300 uniform segments f64 along the analytic flight path.
+    analytic: f64,
+}
+
+/// The configuration, the plan and the frames of `name` at `rate` for `t_end` s.
+fn setup(
+    name: &str,
+    rate: Option<f64>,
+    t_end: f64,
+) -> (
+    SystemConfig,
+    decoy_sim::RunPlan,
+    Vec<decoy_link::AircraftStateFrame>,
+) {
     let config = SystemConfig::builtin().unwrap_or_else(|e| panic!("{e}"));
     let plan = Scenario::builtin(name)
         .and_then(|s| {
@@ -72,6 +125,17 @@ fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> (f64, f64) {
             )
         })
         .unwrap_or_else(|e| panic!("{e}"));
+    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(t_end));
+    (config, plan, frames)
+}
+
+/// The largest of `values`.
+fn peak(values: impl IntoIterator<Item = f64>) -> f64 {
+    values.into_iter().fold(0.0, f64::max)
+}
+
+fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> Peaks {
+    let (config, plan, frames) = setup(name, rate, t_end);
     assert_eq!(plan.layout.count(), config.solver.segments_host);
     let host = trace(
         &config,
@@ -88,8 +152,17 @@ fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> (f64, f64) {
         "{name}: the host run stopped: {:?}",
         host.stopped
     );
+    let same_frames = flight::frame_reference(
+        &config,
+        &frames,
+        SegmentLayout::Uniform {
+            count: config.solver.segments_host,
+        },
+        REFERENCE_STEP_S,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(same_frames.len(), frames.len());
 
-    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(t_end));
     let mut controller = flight::host_controller::<f32>(&config).unwrap_or_else(|e| panic!("{e}"));
     let answers = flight::replay(&mut controller, &flight::scenario_messages(&frames));
     let outputs = flight::outputs(&answers);
@@ -100,54 +173,117 @@ fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> (f64, f64) {
     assert_eq!(rejected, 0, "{name}: the controller rejected frames");
     assert_eq!(outputs.len(), frames.len(), "{name}: one output per frame");
 
-    // The host's peak at the frame times (the controller answers only there).
-    let mut host_peak = 0.0f64;
-    for out in &outputs {
-        let sample = host
-            .samples
+    // The analytic run's samples at the frame times (the controller answers only there).
+    let analytic = peak(outputs.iter().map(|out| {
+        host.samples
             .iter()
             .find(|s| (s.t - out.time_s).abs() < 1e-6)
-            .unwrap_or_else(|| panic!("{name}: no host sample at t = {}", out.time_s));
-        host_peak = host_peak.max(sample.tension_connection);
+            .unwrap_or_else(|| panic!("{name}: no host sample at t = {}", out.time_s))
+            .tension_connection
+    }));
+    Peaks {
+        controller: peak(outputs.iter().map(|o| f64::from(o.connection_tension_n))),
+        same_frames: peak(same_frames),
+        analytic,
     }
-    let peak = outputs
-        .iter()
-        .map(|o| f64::from(o.connection_tension_n))
-        .fold(0.0, f64::max);
-    (peak, host_peak)
 }
 
-fn check(name: &str, rate: Option<f64>, t_end: f64, limit: f64) -> f64 {
-    let (peak, host_peak) = peaks(name, rate, t_end);
-    let error = peak / host_peak - 1.0;
+/// Checks `name` against both references with the limits given; returns the
+/// errors (same frames, analytic).
+fn check(
+    name: &str,
+    rate: Option<f64>,
+    t_end: f64,
+    limit_frames: f64,
+    limit_analytic: f64,
+) -> (f64, f64) {
+    let p = peaks(name, rate, t_end);
+    let frames = p.controller / p.same_frames - 1.0;
+    let analytic = p.controller / p.analytic - 1.0;
     println!(
-        "{name} {rate:?} ({t_end} s): peak connection tension {peak:.2} N, 300 segments f64 \
-         {host_peak:.2} N: {:+.2} % (target {:.0} %)",
-        error * 100.0,
+        "{name} {rate:?} ({t_end} s): peak connection tension {:.2} N; 300 segments f64 on the \
+         same frames {:.2} N: {:+.2} %; on the analytic path {:.2} N: {:+.2} % (target {:.0} %)",
+        p.controller,
+        p.same_frames,
+        frames * 100.0,
+        p.analytic,
+        analytic * 100.0,
         TARGET * 100.0
     );
     assert!(
-        error.abs() <= limit,
+        frames.abs() <= limit_frames,
         "{name} {rate:?}: the peak connection tension is {:+.2} % off the 300-segment f64 \
-         solution, over {:.1} %",
-        error * 100.0,
-        limit * 100.0
+         solution on the same frames, over {:.1} %",
+        frames * 100.0,
+        limit_frames * 100.0
     );
-    error
+    assert!(
+        analytic.abs() <= limit_analytic,
+        "{name} {rate:?}: the peak connection tension is {:+.2} % off the 300-segment f64 \
+         solution on the analytic path, over {:.1} %",
+        analytic * 100.0,
+        limit_analytic * 100.0
+    );
+    (frames, analytic)
 }
 
 fn within_target(i: usize) {
     let (name, rate, t_end) = WITHIN_TARGET[i];
-    check(name, rate, t_end, TARGET);
+    check(name, rate, t_end, TARGET, TARGET);
 }
 
 fn known_gap(i: usize) {
-    let (name, rate, t_end, measured) = KNOWN_GAPS[i];
-    let error = check(name, rate, t_end, measured);
+    let (name, rate, t_end, limit_frames, limit_analytic) = KNOWN_GAPS[i];
+    let (frames, analytic) = check(name, rate, t_end, limit_frames, limit_analytic);
     println!(
-        "{name} {rate:?}: issue 14's target of {:.0} % is not met ({:+.2} %)",
+        "{name} {rate:?}: issue 14's target of {:.0} % is not met ({:+.2} % on the same frames, \
+         {:+.2} % on the analytic path)",
         TARGET * 100.0,
-        error * 100.0
+        frames * 100.0,
+        analytic * 100.0
+    );
+}
+
+/// The embedded model (16 graded 1.3, f64) integrated with the reference's
+/// converged steps along the same frames is within [`TARGET`] of the
+/// 300-segment solution on every shipped manoeuvre: the model is accurate
+/// enough, its integration at the frame budget is what misses.
+#[test]
+fn the_embedded_model_converged_is_within_two_percent() {
+    let mut worst: (f64, &str, Option<f64>) = (0.0, "", None);
+    for (name, rate, t_end) in ALL {
+        let (config, _, frames) = setup(name, rate, t_end);
+        let reference = |layout| {
+            peak(
+                flight::frame_reference(&config, &frames, layout, REFERENCE_STEP_S)
+                    .unwrap_or_else(|e| panic!("{e}")),
+            )
+        };
+        let host = reference(SegmentLayout::Uniform {
+            count: config.solver.segments_host,
+        });
+        let embedded = reference(config.embedded_layout());
+        let error = embedded / host - 1.0;
+        println!(
+            "{name} {rate:?}: embedded model converged {embedded:.2} N, 300 segments {host:.2} N: \
+             {:+.2} %",
+            error * 100.0
+        );
+        if error.abs() > worst.0.abs() {
+            worst = (error, name, rate);
+        }
+        assert!(
+            error.abs() <= TARGET,
+            "{name} {rate:?}: the embedded model, converged, is {:+.2} % off the 300-segment \
+             solution on the same frames",
+            error * 100.0
+        );
+    }
+    println!(
+        "worst: {} {:?}, {:+.2} %",
+        worst.1,
+        worst.2,
+        worst.0 * 100.0
     );
 }
 
