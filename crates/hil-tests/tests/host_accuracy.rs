@@ -32,10 +32,12 @@
 //!   bring all four within 2 % (+0.08, +0.57, -1.42, +0.82 %); 1 ms steps leave
 //!   the 0.20 rad/s pull-up at +2.75 %. Steady flight, the acceleration and the
 //!   turns are within 0.1 % at the shipped rule.
-//! - **A model and step that would meet it** (`examples/step_study.rs` in
-//!   decoy-hil, firmware/README.md): 16 segments graded 1.15 at a fixed 2 ms step
-//!   is within 0.61 % on all eight; five such steps fit 100,000 instructions
-//!   only with a step about half as costly as today's.
+//! - **Models and steps that would meet it** (`examples/step_study.rs` in
+//!   decoy-hil, firmware/README.md): 12 segments graded 1.22 to 1.26 with steps
+//!   of at most 2.5 ms are within 2 % on all eight in f64 (12 graded 1.25 on the
+//!   M4: 117,680 instructions in every frame, the f32 controller +2.06 % on the
+//!   0.20 rad/s pull-up); 16 graded 1.15 at a fixed 2 ms step within 0.61 %
+//!   (about 172,000 a frame). Within 100,000 either needs a cheaper evaluation.
 //! - Against the analytic path no controller fed 100 Hz frames can meet 2 % on
 //!   the recorded flight: the 300-segment model itself, fed the frames, is 3.2 %
 //!   below it.
