@@ -9,7 +9,7 @@ use clap::{Args, ValueEnum};
 use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
 use decoy_sim::Scenario;
-use host_bridge::affinity::{Cpus, pin_process};
+use host_bridge::affinity::{Cpus, current_list, pin_process, shown};
 use host_bridge::backend::{BackendKind, BackendOptions, Precision, make_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::feed::{FeedMode, FeedOptions, FeedRun, run_feed};
@@ -190,7 +190,7 @@ pub fn bridge_command(
             info.precision_bits,
             info.segments,
             info.grading_ratio,
-            Cpus::of_this_thread().map_or_else(|_| "?".to_owned(), |c| c.to_string()),
+            shown(&current_list()),
             args.instance
         );
     })
@@ -322,11 +322,7 @@ fn feed_text(run: &FeedRun) -> String {
         f.frames_rejected,
         f.frames_lost,
         f.frames_per_s,
-        if f.client_cpus.is_empty() {
-            "?"
-        } else {
-            &f.client_cpus
-        }
+        shown(&f.client_cpus)
     );
     let l = &f.latency_us;
     let _ = writeln!(

@@ -5,13 +5,13 @@
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 use solver_core::{
     AircraftState, Atmosphere, ConfigError, FlightPath, Model, ModelParams, Real, SolveError,
-    Solver, State, Vec3,
+    Solver, State,
 };
 
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
 use crate::lookahead::Lookahead;
 use crate::monitor::{ManagementConfig, Measures, Monitors};
-use crate::path::FramePath;
+use crate::path::{FramePath, steady_flight};
 use crate::validate::{is_finite, validate_streamed};
 use decoy_link::{
     Advisories, AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello,
@@ -731,11 +731,10 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         if self.solver.model().segment_count() == 0 {
             return Err(RejectReason::NotTrimmed);
         }
-        let p = frame.position_ned_m;
         let run = Run {
             last: *frame,
             start_time_s: frame.time_s,
-            origin: [p[0], p[1], 0.0],
+            origin: FramePath::<T>::run_origin(frame),
         };
         let (aircraft, time, streamed): (AircraftState<T>, f64, _) = match self.builtin {
             Some(path) => (path.state_at(0.0), 0.0, None),
@@ -744,17 +743,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 (path.state_at(frame.time_s), frame.time_s, Some(path))
             }
         };
-        // Trim in steady straight flight: the frame's position, velocity and
-        // attitude, its acceleration and rotation set to zero.
-        let steady = AircraftState {
-            acceleration: Vec3::zeros(),
-            angular_rate: Vec3::zeros(),
-            angular_acceleration: Vec3::zeros(),
-            ..aircraft
-        };
         // In place (the caller restores its saved state on error).
         self.solver
-            .trim(&steady, time)
+            .trim(&steady_flight(&aircraft), time)
             .map_err(|_| RejectReason::NotTrimmed)?;
         Ok((run, 0, streamed))
     }

@@ -164,6 +164,24 @@ impl<T: Real> FramePath<T> {
     pub fn single(frame: &AircraftStateFrame, origin: [f64; 3]) -> Self {
         FramePath::new(frame, frame, origin)
     }
+
+    /// The origin of a run that trims at `frame`: the frame's horizontal
+    /// position (so that an f32 solver keeps centimetre resolution, above).
+    pub fn run_origin(frame: &AircraftStateFrame) -> [f64; 3] {
+        let p = frame.position_ned_m;
+        [p[0], p[1], 0.0]
+    }
+}
+
+/// `aircraft` in steady straight flight, the trim's condition: its position,
+/// velocity and attitude, its acceleration and rotation set to zero.
+pub fn steady_flight<T: Real>(aircraft: &AircraftState<T>) -> AircraftState<T> {
+    AircraftState {
+        acceleration: Vec3::zeros(),
+        angular_rate: Vec3::zeros(),
+        angular_acceleration: Vec3::zeros(),
+        ..*aircraft
+    }
 }
 
 impl<T: Real> FlightPath<T> for FramePath<T> {

@@ -12,20 +12,7 @@
 
 use decoy_config::SystemConfig;
 use decoy_hil::flight;
-use decoy_sim::{RunOptions, Scenario};
 use solver_core::SegmentLayout;
-
-/// The shipped manoeuvres: (name, rate, simulated seconds).
-const SCENARIOS: [(&str, Option<f64>, f64); 8] = [
-    ("steady", None, 10.0),
-    ("acceleration", None, 12.0),
-    ("pull-up", Some(0.05), 10.0),
-    ("pull-up", Some(0.10), 10.0),
-    ("pull-up", Some(0.20), 10.0),
-    ("turn", Some(0.10), 10.0),
-    ("turn", Some(0.20), 10.0),
-    ("recorded", None, 10.0),
-];
 
 /// The reference's step, s.
 const REFERENCE_STEP_S: f64 = 0.000125;
@@ -56,21 +43,9 @@ fn main() {
     let peak = |v: Vec<f64>| v.into_iter().fold(0.0, f64::max);
     let mut references = Vec::new();
     let mut all_frames = Vec::new();
-    for (name, rate, t_end) in SCENARIOS {
-        let plan = Scenario::builtin(name)
-            .and_then(|s| {
-                s.plan(
-                    &config,
-                    &RunOptions {
-                        rate,
-                        t_end: Some(t_end),
-                        plots: false,
-                        ..RunOptions::default()
-                    },
-                )
-            })
-            .unwrap_or_else(|e| panic!("{e}"));
-        let frames = flight::scenario_frames(&plan.profile, flight::frame_count(t_end));
+    for (name, rate, t_end) in flight::SHIPPED_MANOEUVRES {
+        let (_, frames) =
+            flight::builtin_frames(&config, name, rate, t_end).unwrap_or_else(|e| panic!("{e}"));
         let reference = flight::frame_reference(
             &config,
             &frames,

@@ -6,9 +6,11 @@
 use std::time::{Duration, Instant};
 
 use decoy_config::SystemConfig;
+use decoy_controller::path::steady_flight;
 use decoy_controller::{Controller, FramePath, NoCounter};
 use decoy_link::{AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame};
-use solver_core::{AircraftState, FlightPath, Real, SegmentLayout, Solver, Vec3};
+use decoy_sim::{RunOptions, RunPlan, Scenario, SimError};
+use solver_core::{FlightPath, Real, SegmentLayout, Solver};
 
 use crate::link::{LinkError, Session};
 
@@ -36,6 +38,40 @@ pub fn scenario_frames<P: FlightPath<f64>>(path: &P, count: u32) -> Vec<Aircraft
 /// Frames needed to fly `t_end` seconds: the last one at or just after `t_end`.
 pub fn frame_count(t_end: f64) -> u32 {
     (t_end / CONTROL_PERIOD_S - 1e-9).ceil().max(1.0) as u32
+}
+
+/// Every manoeuvre the product ships, as issue 14's accuracy and worst-frame
+/// studies fly them: (built-in scenario, rate, simulated seconds).
+pub const SHIPPED_MANOEUVRES: [(&str, Option<f64>, f64); 8] = [
+    ("steady", None, 10.0),
+    ("acceleration", None, 12.0),
+    ("pull-up", Some(0.05), 10.0),
+    ("pull-up", Some(0.10), 10.0),
+    ("pull-up", Some(0.20), 10.0),
+    ("turn", Some(0.10), 10.0),
+    ("turn", Some(0.20), 10.0),
+    ("recorded", None, 10.0),
+];
+
+/// The plan (`decoy simulate`'s, with `config`) and the frames of built-in
+/// scenario `name` at `rate` over `t_end` seconds.
+pub fn builtin_frames(
+    config: &SystemConfig,
+    name: &str,
+    rate: Option<f64>,
+    t_end: f64,
+) -> Result<(RunPlan, Vec<AircraftStateFrame>), SimError> {
+    let plan = Scenario::builtin(name)?.plan(
+        config,
+        &RunOptions {
+            rate,
+            t_end: Some(t_end),
+            plots: false,
+            ..RunOptions::default()
+        },
+    )?;
+    let frames = scenario_frames(&plan.profile, frame_count(t_end));
+    Ok((plan, frames))
 }
 
 /// A run's messages: `ResetToTrim`, then every frame (the first one trims).
@@ -170,17 +206,10 @@ pub fn frame_reference(
             solver
                 .configure(&params)
                 .map_err(|e| fail("configure", &e))?;
-            let p = first.position_ned_m;
-            let origin = [p[0], p[1], 0.0];
+            let origin = FramePath::<f64>::run_origin(first);
             let start = FramePath::<f64>::single(first, origin);
-            let steady = AircraftState {
-                acceleration: Vec3::zeros(),
-                angular_rate: Vec3::zeros(),
-                angular_acceleration: Vec3::zeros(),
-                ..start.state_at(first.time_s)
-            };
             solver
-                .trim(&steady, first.time_s)
+                .trim(&steady_flight(&start.state_at(first.time_s)), first.time_s)
                 .map_err(|e| fail("trim", &e))?;
             let mut tensions = vec![
                 solver

@@ -53,7 +53,7 @@
 use decoy_config::SystemConfig;
 use decoy_hil::flight;
 use decoy_link::DeviceMessage;
-use decoy_sim::{RunOptions, Scenario, TraceOptions, trace};
+use decoy_sim::{TraceOptions, trace};
 use solver_core::SegmentLayout;
 
 /// The accuracy target on the peak connection tension.
@@ -88,18 +88,6 @@ const KNOWN_GAPS: [(&str, Option<f64>, f64, f64, f64); 4] = [
     ("recorded", None, 10.0, 0.101, 0.066),
 ];
 
-/// Every shipped manoeuvre, for the converged embedded model.
-const ALL: [(&str, Option<f64>, f64); 8] = [
-    ("steady", None, 10.0),
-    ("acceleration", None, 12.0),
-    ("pull-up", Some(0.05), 10.0),
-    ("pull-up", Some(0.10), 10.0),
-    ("pull-up", Some(0.20), 10.0),
-    ("turn", Some(0.10), 10.0),
-    ("turn", Some(0.20), 10.0),
-    ("recorded", None, 10.0),
-];
-
 /// Peak connection tensions (N) at the frame times of one manoeuvre.
 struct Peaks {
     /// The f32 controller with its stepping rule (the firmware's bits).
@@ -121,20 +109,8 @@ fn setup(
     Vec<decoy_link::AircraftStateFrame>,
 ) {
     let config = SystemConfig::builtin().unwrap_or_else(|e| panic!("{e}"));
-    let plan = Scenario::builtin(name)
-        .and_then(|s| {
-            s.plan(
-                &config,
-                &RunOptions {
-                    rate,
-                    t_end: Some(t_end),
-                    plots: false,
-                    ..RunOptions::default()
-                },
-            )
-        })
-        .unwrap_or_else(|e| panic!("{e}"));
-    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(t_end));
+    let (plan, frames) =
+        flight::builtin_frames(&config, name, rate, t_end).unwrap_or_else(|e| panic!("{e}"));
     (config, plan, frames)
 }
 
@@ -260,7 +236,7 @@ fn known_gap(i: usize) {
 #[test]
 fn the_embedded_model_converged_is_within_two_percent() {
     let mut worst: (f64, &str, Option<f64>) = (0.0, "", None);
-    for (name, rate, t_end) in ALL {
+    for (name, rate, t_end) in flight::SHIPPED_MANOEUVRES {
         let (config, _, frames) = setup(name, rate, t_end);
         let reference = |layout| {
             peak(

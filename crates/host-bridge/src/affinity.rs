@@ -114,6 +114,17 @@ impl fmt::Display for Cpus {
     }
 }
 
+/// The CPUs the calling thread may run on, in the list format, as the
+/// summaries record them: empty where unknown.
+pub fn current_list() -> String {
+    Cpus::of_this_thread().map_or_else(|_| String::new(), |c| c.to_string())
+}
+
+/// A recorded list for people: `?` for the empty (unknown) one.
+pub fn shown(list: &str) -> &str {
+    if list.is_empty() { "?" } else { list }
+}
+
 /// Restricts every thread of this process to `cpus` (threads and child
 /// processes started later inherit it). A set with a CPU this process may not
 /// run on (offline, absent, outside its cgroup) is refused with a usage error

@@ -122,11 +122,7 @@ impl BridgeSummary {
             self.precision_bits,
             self.segments,
             self.grading_ratio,
-            if self.cpus.is_empty() {
-                "?"
-            } else {
-                &self.cpus
-            },
+            crate::affinity::shown(&self.cpus),
             self.ended_by,
             self.uptime_s
         );
@@ -648,10 +644,7 @@ pub fn run_bridge(
         Ok(_) => "stop request",
         Err(e) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
     };
-    let cpus = crate::affinity::Cpus::of_this_thread()
-        .map(|c| c.to_string())
-        .unwrap_or_default();
-    let summary = engine.summary(ended_by, cpus);
+    let summary = engine.summary(ended_by, crate::affinity::current_list());
     drop(tick);
     drop(wake);
     drop(waitset);

@@ -499,9 +499,7 @@ pub fn run_feed(
         grading_ratio: status.grading_ratio,
         mode: options.mode.name().to_owned(),
         realtime: options.realtime,
-        client_cpus: crate::affinity::Cpus::of_this_thread()
-            .map(|c| c.to_string())
-            .unwrap_or_default(),
+        client_cpus: crate::affinity::current_list(),
         frames_sent: flown.sent.len(),
         frames_answered: answered,
         frames_rejected: rejected,
