@@ -163,13 +163,14 @@ fn log_answer(answer: &DeviceMessage, accepted: &mut u32) {
             *accepted = accepted.wrapping_add(1);
             if accepted.is_multiple_of(LOG_EVERY_FRAMES) || o.steps == 0 {
                 defmt::info!(
-                    "seq={=u32} t={=f64} T0={=f32} TN={=f32} steps={=u16} instr={=u32} flags={=u16:#x} stack={=u32}",
+                    "seq={=u32} t={=f64} T0={=f32} TN={=f32} steps={=u16} instr={=u32} step_instr={=u32} flags={=u16:#x} stack={=u32}",
                     o.seq,
                     o.time_s,
                     o.connection_tension_n,
                     o.tow_tension_n,
                     o.steps,
                     o.instructions,
+                    o.step_instructions,
                     o.flags,
                     board::stack_high_water()
                 );

@@ -123,5 +123,5 @@ def bridge_factory(decoy: str, tmp_path: Path) -> Iterator:
 
 @pytest.fixture
 def bridge(bridge_factory) -> RunningBridge:
-    """One bridge: host backend, f32, the embedded model (16 segments graded 1.3)."""
+    """One bridge: host backend, f32, the embedded model (12 segments graded 1.26)."""
     return bridge_factory()

@@ -1003,7 +1003,7 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
         assert!(summary.get(key).is_some(), "no `{key}` in {summary}");
     }
     assert_eq!(summary["board"], "m4");
-    assert_eq!(num(&summary, "segments"), 16.0);
+    assert_eq!(num(&summary, "segments"), 12.0);
     // Like with like: the State frames sent and the Outputs answering them.
     assert_eq!(num(&summary, "frames_sent"), 101.0);
     assert_eq!(num(&summary, "frames_answered"), 101.0);

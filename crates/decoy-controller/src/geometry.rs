@@ -9,7 +9,8 @@
 //! Generic over the solver's scalar (`f32` on the Cortex-M4, `f64` on hosts).
 
 use nalgebra::{Rotation3, UnitQuaternion};
-use solver_core::{AircraftState, Real, Vec3};
+use solver_core::scalar::norm;
+use solver_core::{AircraftState, Mat3, Real, Vec3};
 
 /// Speed below which the flight-path frame falls back to the aircraft's axes, m/s.
 const MIN_SPEED_MPS: f64 = 1e-6;
@@ -30,19 +31,26 @@ impl<T: Real> FlightPathFrame<T> {
     /// the aircraft's body axes stand in for the missing directions. Reduces to NED
     /// rotated to the heading in level flight.
     pub fn of(aircraft: &AircraftState<T>) -> Self {
-        let rotation = aircraft.rotation();
-        let speed = aircraft.velocity.norm();
+        // The body axes only where the velocity leaves a direction undefined.
+        let body_axis = |k: usize| -> Vec3<T> {
+            solver_core::scalar::rotation_matrix(aircraft.attitude)
+                .column(k)
+                .into_owned()
+        };
+        let speed = norm(&aircraft.velocity);
         let x = if speed > T::lit(MIN_SPEED_MPS) {
             aircraft.velocity / speed
         } else {
-            rotation * Vec3::x()
+            body_axis(0)
         };
         let right = Vec3::z().cross(&x);
-        let y = if right.norm() > T::lit(1e-6) {
-            right.normalize()
+        let right_norm = norm(&right);
+        let y = if right_norm > T::lit(1e-6) {
+            right / right_norm
         } else {
-            let body_y = rotation * Vec3::y();
-            (body_y - x * x.dot(&body_y)).normalize()
+            let body_y = body_axis(1);
+            let y = body_y - x * x.dot(&body_y);
+            y / norm(&y)
         };
         FlightPathFrame {
             x,
@@ -65,8 +73,15 @@ impl<T: Real> FlightPathFrame<T> {
 
     /// Roll, pitch, yaw (ZYX), rad, of the body attitude `attitude` (body to NED)
     /// relative to this frame.
+    ///
+    /// From the rotation matrix Fᵀ R (F: this frame's axes as columns, R: the
+    /// attitude's matrix) with [`solver_core::scalar::euler_zyx`].
     pub fn relative_euler(&self, attitude: &UnitQuaternion<T>) -> (T, T, T) {
-        (self.rotation().inverse() * attitude).euler_angles()
+        let q = attitude.quaternion();
+        let r = solver_core::scalar::rotation_matrix([q.w, q.i, q.j, q.k]);
+        let axes = [&self.x, &self.y, &self.z];
+        let relative = Mat3::from_fn(|i, j| axes[i].dot(&r.column(j)));
+        solver_core::scalar::euler_zyx(&relative)
     }
 }
 
@@ -118,24 +133,20 @@ impl<T: Real> ExhaustPlume<T> {
     pub fn clearance(&self, p: &Vec3<T>) -> T {
         let d = p - self.nozzle;
         let s = d.dot(&self.axis);
-        let rho = (d - self.axis * s).norm();
+        let rho = norm(&(d - self.axis * s));
         let zero = T::zero();
         let end_radius = self.nozzle_radius + self.length * self.tan_half_angle;
         let q = [s, rho];
         // The nearest edge by squared distance, one square root at the end (the
         // root is monotonic, so this is the root of the smallest distance).
-        let distance2 = segment_distance2(q, [zero, zero], [zero, self.nozzle_radius])
-            .min(segment_distance2(
-                q,
-                [zero, self.nozzle_radius],
-                [self.length, end_radius],
-            ))
-            .min(segment_distance2(
-                q,
-                [self.length, end_radius],
-                [self.length, zero],
-            ));
-        let distance = distance2.sqrt();
+        let distance2 = smaller(
+            smaller(
+                segment_distance2(q, [zero, zero], [zero, self.nozzle_radius]),
+                segment_distance2(q, [zero, self.nozzle_radius], [self.length, end_radius]),
+            ),
+            segment_distance2(q, [self.length, end_radius], [self.length, zero]),
+        );
+        let distance = distance2.square_root();
         let inside =
             s >= zero && s <= self.length && rho <= self.nozzle_radius + s * self.tan_half_angle;
         if inside { -distance } else { distance }
@@ -174,7 +185,7 @@ impl<T: Real> Envelope<T> {
         } else {
             T::zero()
         };
-        (p - (self.fore + axis * t)).norm() - self.radius
+        norm(&(p - (self.fore + axis * t))) - self.radius
     }
 }
 
@@ -211,9 +222,7 @@ impl<T: Real> Geometry<T> {
 
 /// The NED point `p` in the aircraft body frame (relative to its reference point).
 pub fn to_body<T: Real>(aircraft: &AircraftState<T>, p: &Vec3<T>) -> Vec3<T> {
-    aircraft
-        .rotation()
-        .inverse_transform_vector(&(p - aircraft.position))
+    solver_core::scalar::rotation_matrix(aircraft.attitude).tr_mul(&(p - aircraft.position))
 }
 
 /// The smallest plume clearance of a cable given by its joint positions (NED,
@@ -226,7 +235,7 @@ pub fn cable_plume_clearance<T: Real>(
     joints: impl IntoIterator<Item = Vec3<T>>,
 ) -> (T, usize) {
     // NED to body, formed once for all the points.
-    let rotation = aircraft.rotation().to_rotation_matrix().into_inner();
+    let rotation = solver_core::scalar::rotation_matrix(aircraft.attitude);
     let to_body = rotation.transpose();
     let clearance = |p: &Vec3<T>| plume.clearance(&(to_body * (p - aircraft.position)));
     // The plume lies inside the sphere about the middle of its axis through its
@@ -236,8 +245,13 @@ pub fn cable_plume_clearance<T: Real>(
     // every point).
     let half = T::lit(0.5);
     let half_length = plume.length * half;
-    let rim = (plume.nozzle_radius + plume.length * plume.tan_half_angle).max(plume.nozzle_radius);
-    let radius = (half_length * half_length + rim * rim).sqrt();
+    let far_rim = plume.nozzle_radius + plume.length * plume.tan_half_angle;
+    let rim = if far_rim > plume.nozzle_radius {
+        far_rim
+    } else {
+        plume.nozzle_radius
+    };
+    let radius = (half_length * half_length + rim * rim).square_root();
     let centre = aircraft.position + rotation * (plume.nozzle + plume.axis * half_length);
     let margin = T::lit(1.001);
     let mut best = (T::lit(f64::INFINITY), 0);
@@ -269,8 +283,20 @@ fn lit3<T: Real>(v: [f64; 3]) -> Vec3<T> {
     Vec3::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]))
 }
 
+/// `t` clamped to [0, 1] by comparisons (no library call; NaN gives 1).
 fn clamp01<T: Real>(t: T) -> T {
-    t.max(T::zero()).min(T::one())
+    if t > T::zero() {
+        if t < T::one() { t } else { T::one() }
+    } else if t <= T::zero() {
+        T::zero()
+    } else {
+        T::one()
+    }
+}
+
+/// The smaller of `a` and `b` by comparison (`b` when `a` is NaN).
+fn smaller<T: Real>(a: T, b: T) -> T {
+    if a <= b { a } else { b }
 }
 
 /// Squared distance from `q` to the segment a-b in the plane.
@@ -380,11 +406,7 @@ mod tests {
         joints: &[Vec3<T>],
     ) -> (T, usize) {
         // The same NED-to-body transform as `cable_plume_clearance`.
-        let to_body = aircraft
-            .rotation()
-            .to_rotation_matrix()
-            .into_inner()
-            .transpose();
+        let to_body = solver_core::scalar::rotation_matrix(aircraft.attitude).transpose();
         let mut best = (T::lit(f64::INFINITY), 0);
         let mut consider = |p: Vec3<T>, k: usize| {
             let c = plume.clearance(&(to_body * (p - aircraft.position)));

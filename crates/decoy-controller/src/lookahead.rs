@@ -27,15 +27,15 @@
 //! (and at the horizon's end): at most 18 ms between the samples of the margins
 //! (the measures cost about a fifth of a step; the slice's instruction budget). A step that fails ends the prediction at the time reached.
 //!
-//! **The copy is a coarser model** ([`prediction_params`]): `[management]
-//! prediction_segments` segments graded as the controller's (the same ratio),
-//! the same cable, decoy and environment. With the reference's 16 segments at
-//! ratio 1.3 and 8 in the copy, the longest segment, at the aircraft, is about
-//! as long (26.3 m against 23.4 m: the cable's path past the plume is resolved
-//! alike) and the shortest, at the decoy, whose wave-speed limit sets the step
-//! in a snatch, is 4.2 m instead of 0.46 m: half the segments halve a step's
-//! cost and the steps can be several times longer, so the same slice of work
-//! flies several times further ahead. A prediction starts from the controller's
+//! **The copy is a coarser model, or the same** ([`prediction_params`]):
+//! `[management] prediction_segments` segments graded as the controller's (the
+//! same ratio), the same cable, decoy and environment. With fewer segments than
+//! the controller's the shortest segment, at the decoy, whose wave-speed limit
+//! sets the step in a snatch, is longer, and the same slice of work flies
+//! further ahead (with the earlier embedded model, 16 segments at ratio 1.3, 12
+//! in the copy had 1.35 m at the decoy instead of 0.46 m). The reference
+//! system's embedded model has 12 segments graded 1.26 (issue 14) and its copy
+//! is that same model, stepped at its own longer steps (up to 12 ms). A prediction starts from the controller's
 //! solution mapped onto it ([`coarse_state`]). A copy of more than `P` segments
 //! does not exist: that controller has no look-ahead (its reports say so: no
 //! prediction ever completes).

@@ -69,7 +69,7 @@ fn wire_output(o: &decoy_link::OutputFrame) -> Vec<u8> {
 }
 
 #[test]
-fn steady_flight_stays_at_the_trim_with_two_steps_per_frame() {
+fn steady_flight_stays_at_the_trim_with_four_steps_per_frame() {
     let mut c = controller();
     let first = output(send(&mut c, frame(0, 0.0)));
     assert_eq!(first.steps, 0);
@@ -78,7 +78,7 @@ fn steady_flight_stays_at_the_trim_with_two_steps_per_frame() {
     assert!(t0 > 50.0 && t0 < 1200.0, "{t0}");
     for k in 1..=100 {
         let o = output(send(&mut c, frame(k, 0.01 * f64::from(k))));
-        assert_eq!((o.seq, o.steps), (k, 2));
+        assert_eq!((o.seq, o.steps), (k, 4));
         assert_eq!(o.time_s, 0.01 * f64::from(k));
         assert!(
             ((o.connection_tension_n - t0) / t0).abs() < 5e-3,
@@ -93,10 +93,18 @@ fn steady_flight_stays_at_the_trim_with_two_steps_per_frame() {
 
 #[test]
 fn the_stepping_rule() {
-    // n = ceil(dt / 5 ms - 1e-9): 5 ms -> 1, 10 ms -> 2, 12 ms -> 3, 100 ms -> 20.
+    // n = ceil(dt / 2.5 ms - 1e-9), at most 20: 2.5 ms -> 1, 5 ms -> 2, 10 ms -> 4,
+    // 12 ms -> 5, 100 ms -> 20 (5 ms steps).
     let mut c = running(0);
     let mut t = 0.0;
-    for (dt, steps) in [(0.005, 1), (0.01, 2), (0.012, 3), (0.0001, 1), (0.1, 20)] {
+    for (dt, steps) in [
+        (0.0025, 1),
+        (0.005, 2),
+        (0.01, 4),
+        (0.012, 5),
+        (0.0001, 1),
+        (0.1, 20),
+    ] {
         t += dt;
         assert_eq!(output(send(&mut c, frame(1, t))).steps, steps, "{dt}");
         assert_eq!(c.state().time, t);
@@ -180,7 +188,7 @@ fn a_reset_accepts_any_time_and_trims_again() {
     let trimmed = output(send(&mut c, frame(7, 100.0)));
     assert_eq!(trimmed.steps, 0);
     let stepped = output(send(&mut c, frame(8, 100.01)));
-    assert_eq!(stepped.steps, 2);
+    assert_eq!(stepped.steps, 4);
     // Exactly what a fresh controller trimmed at that frame answers.
     let mut fresh = controller();
     assert_eq!(
@@ -331,10 +339,10 @@ fn commands_are_answered() {
             board: decoy_link::BoardName::new("mps2-an386").unwrap(),
             core_clock_hz: 168_000_000,
             precision_bits: 32,
-            segments: 16,
+            segments: 12,
             capacity: CAPACITY as u16,
             control_period_us: 10_000,
-            max_step_us: 5_000,
+            max_step_us: 2_500,
         })
     );
     assert_eq!(
@@ -351,7 +359,7 @@ fn commands_are_answered() {
         DeviceMessage::Status(s) => {
             assert_eq!(
                 (s.protocol_version, s.segments, s.time_s),
-                (PROTOCOL_VERSION, 16, 0.01)
+                (PROTOCOL_VERSION, 12, 0.01)
             );
             assert_eq!(s.counters.frames_ok, 4);
             assert_eq!(s.flags, StatusFlags::TRIMMED);
@@ -448,10 +456,10 @@ fn f64_controllers_agree_with_f32_ones() {
             board: decoy_link::BoardName::new("a-new-board").unwrap(),
             core_clock_hz: 168_000_000,
             precision_bits: 64,
-            segments: 16,
+            segments: 12,
             capacity: 16,
             control_period_us: 10_000,
-            max_step_us: 5_000,
+            max_step_us: 2_500,
         })
     );
 }
@@ -488,8 +496,8 @@ fn fly_builtin<T: solver_core::Real>(profile: Profile, seconds: f64) -> (f32, u1
 #[test]
 fn the_paper_manoeuvres_fly_through_with_the_wave_step_limit() {
     // The snatch load after the pull-up (the cable jerked taut at about 8.6 s)
-    // diverges with a fixed 5 ms step; the wave-speed limit shortens the step for
-    // those frames only. Steady flight keeps two steps per 10 ms frame.
+    // would diverge with a step fixed at the cap; the wave-speed limit shortens the
+    // step for those frames only. Steady flight keeps four steps per 10 ms frame.
     let cases = [
         (Profile::Steady, 5.0),
         (Profile::Acceleration, 25.0),
@@ -525,7 +533,7 @@ fn the_paper_manoeuvres_fly_through_with_the_wave_step_limit() {
             "{profile:?}: peak {peak32} N (f64 {peak64} N), at most {steps32} steps (f64 {steps64})"
         );
         if profile == Profile::Steady {
-            assert_eq!(steps32, 2);
+            assert_eq!(steps32, 4);
         }
         assert!(
             ((peak32 - peak64) / peak64).abs() < 0.05,

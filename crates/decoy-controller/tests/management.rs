@@ -1,6 +1,6 @@
 //! Decoy management end to end in the controller: the monitors' levels and the
 //! look-ahead's advisories over the paper's manoeuvres and the steady envelope,
-//! in f32 (the Cortex-M4's precision, 16 graded segments) as the firmware runs it.
+//! in f32 (the Cortex-M4's precision, the embedded model) as the firmware runs it.
 //!
 //! **Installation.** The reference configuration as shipped (`config/`: the
 //! decoy launcher 2 m aft and 1.7 m below the engine axis, a 35 m hot plume),
@@ -85,9 +85,9 @@ fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); 4] {
 const NAMES: [&str; 4] = decoy_link::REQUIREMENTS;
 
 /// The least advisory lead asserted, s: the issue's 1 s. The look-ahead flies
-/// a 12-segment model (`[management] prediction_segments`) whose 1.35 m
-/// shortest segment lets it take 12 ms steps (the 16-segment model's 0.46 m
-/// allowed 6 ms and cut them to 2.6 ms in a snatch), 5 per frame.
+/// a 12-segment model (`[management] prediction_segments`, graded as the
+/// embedded model: now the embedded model itself) whose 1.73 m shortest segment
+/// lets it take 12 ms steps, 5 per frame.
 const LEAST_LEAD_S: f64 = 1.0;
 
 /// In the paper's pull-up and turn at 0.20 rad/s the look-ahead advises before
@@ -296,7 +296,8 @@ fn predicted_margins_against_the_margins_reached() {
     assert!(compared >= 2, "{compared} predictions compared");
     // The prediction holds a constant-rate pull-up and a straight climb exactly,
     // so what separates predicted from reached is the look-ahead's coarser model
-    // (12 segments against 16) and its longer step (13 ms against 5 ms). Measured
+    // step (13 ms against the controller's 2.5 ms; the same 12 segments since the
+    // embedded model has 12, until issue 14 they were 12 against 16). Measured
     // in the rotation: collision 0.116 m, tension 0.69 N, exhaust 0.012 m.
     let [rotation, climb] = worst_error;
     assert!(rotation[1] < 0.15 && rotation[3] < 0.02, "{rotation:?}");

@@ -382,7 +382,7 @@ pub struct InstructionStats {
     pub mean: f64,
     /// The `seq` of the costliest step.
     pub max_seq: u32,
-    /// Control steps that took the nominal two RK4 steps of 5 ms.
+    /// Control steps that took the nominal four RK4 steps of 2.5 ms.
     pub nominal_steps: usize,
     /// Most solver instructions (`step_instructions`: the RK4 steps) in a nominal
     /// control step.
@@ -393,8 +393,11 @@ pub struct InstructionStats {
     pub most_rk4_steps: u16,
 }
 
-/// RK4 steps of a nominal 10 ms control step (two of `decoy_controller::MAX_STEP_S`).
-pub const NOMINAL_RK4_STEPS: u16 = 2;
+/// RK4 steps of a nominal 10 ms control step (four of `decoy_controller::MAX_STEP_S`).
+pub const NOMINAL_RK4_STEPS: u16 = 4;
+
+// A nominal control step is the period in steps of the controller's largest step.
+const _: () = assert!(NOMINAL_RK4_STEPS as f64 * decoy_controller::MAX_STEP_S == CONTROL_PERIOD_S);
 
 /// The instruction statistics of the outputs among `answers` that integrated
 /// (the trim frame, with no RK4 step, is left out).

@@ -5,7 +5,8 @@
 //!
 //! 1. iceoryx2's own request-response with an empty handler (the same payload
 //!    types and the same event wake-up as the bridge, the answer a zero `Answer`);
-//! 2. the bridge's lockstep round trip, host backend, 16 graded segments f32;
+//! 2. the bridge's lockstep round trip, host backend, the configuration's embedded
+//!    model (12 segments graded 1.26 for the reference system) in f32;
 //! 3. the same, 300 uniform segments f64;
 //! 4. the same, qemu backend (the M4 firmware under QEMU);
 //!
@@ -59,6 +60,10 @@ fn main() {
         "| run | frames | p50 us | p99 us | p99.9 us | max us | frames/s | solver p50 us | lost | server CPU at 100 Hz |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let embedded = SystemConfig::builtin()
+        .map(|c| (c.solver.segments_embedded, c.solver.grading_ratio_embedded))
+        .unwrap_or_else(|e| panic!("the built-in configuration: {e}"));
+    let label = format!("{} graded {}", embedded.0, embedded.1);
     let cpu: usize = std::env::var("BRIDGE_BENCH_CPU")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -71,10 +76,10 @@ fn main() {
         None,
     );
     run(
-        "bridge lockstep, host f32, 16 graded",
-        "host-f32-16",
+        &format!("bridge lockstep, host f32, {label}"),
+        "host-f32-embedded",
         frames,
-        Some((Precision::F32, 16, 1.3)),
+        Some((Precision::F32, embedded.0, embedded.1)),
         None,
     );
     run(
@@ -85,7 +90,7 @@ fn main() {
         None,
     );
     run(
-        "bridge lockstep, qemu M4 f32, 16 graded",
+        &format!("bridge lockstep, qemu M4 f32, {label}"),
         "qemu",
         frames / 40,
         None,
@@ -99,10 +104,10 @@ fn main() {
         Some(cpu),
     );
     run(
-        &format!("bridge lockstep, host f32, 16 graded, both on CPU {cpu}"),
-        "host-f32-16",
+        &format!("bridge lockstep, host f32, {label}, both on CPU {cpu}"),
+        "host-f32-embedded",
         frames,
-        Some((Precision::F32, 16, 1.3)),
+        Some((Precision::F32, embedded.0, embedded.1)),
         Some(cpu),
     );
 }
@@ -272,7 +277,7 @@ fn serve(kind: &str) {
     }
     let system = SystemConfig::builtin().unwrap();
     let options = match kind {
-        "host-f32-16" => BackendOptions::default(),
+        "host-f32-embedded" => BackendOptions::default(),
         "host-f64-300" => BackendOptions {
             precision: Some(Precision::F64),
             segments: Some(300),

@@ -303,7 +303,7 @@ fn commands_answer_with_the_status() {
         (r.result, r.nonce, r.command),
         (result::OK, 0xDEC0, command::PING)
     );
-    assert_eq!(r.status.segments, 16);
+    assert_eq!(r.status.segments, 12);
     assert_eq!(r.status.precision_bits, 32);
     assert_eq!(r.status.capacity, 64);
     assert_eq!(bridge_types::field_text(&r.status.board), "host");
@@ -387,7 +387,7 @@ fn instances_side_by_side_never_cross_talk() {
     );
     assert_eq!(
         (sa.counters.accepted, sa.segments, sa.precision_bits),
-        (6, 16, 32)
+        (6, 12, 32)
     );
     assert_eq!(
         (sb.counters.accepted, sb.segments, sb.precision_bits),

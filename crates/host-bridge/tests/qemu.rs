@@ -39,7 +39,7 @@ fn lockstep_through(board: Board, board_name: &str) {
     let mut c = BridgeClient::connect("qemu", "qemu-client", &iso.config).unwrap();
     let status = c.get_status().unwrap();
     assert_eq!(bridge_types::field_text(&status.board), board_name);
-    assert_eq!((status.precision_bits, status.segments), (32, 16));
+    assert_eq!((status.precision_bits, status.segments), (32, 12));
     c.simple_command(bridge_types::command::RESET_TO_TRIM)
         .unwrap();
     let scenario = decoy_sim::Scenario::builtin("pull-up").unwrap();

@@ -24,7 +24,7 @@ use std::vec::Vec;
 use nalgebra::{DMatrix, DVector};
 
 use crate::atmosphere::AirColumn;
-use crate::dynamics::{Workspace, prepare};
+use crate::dynamics::{Workspace, prepare_keeping_loads};
 use crate::error::SolveError;
 use crate::model::Model;
 use crate::motion::{FlightPath, PointKinematics};
@@ -67,7 +67,7 @@ pub fn evaluate_dense<T: Real, const N: usize>(
     let n = model.segment_count();
     // Loads (gravity, drag, decoy aerodynamics) from the shared pass 1.
     let mut ws = std::boxed::Box::new(Workspace::<T, N>::default());
-    prepare(model, state, connection, air, &mut ws);
+    prepare_keeping_loads(model, state, connection, air, &mut ws);
     let lengths = model.lengths();
     let masses = model.masses();
     let half = T::lit(0.5);

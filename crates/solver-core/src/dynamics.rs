@@ -67,7 +67,8 @@ pub(crate) struct JointScratch<T: Real> {
     pub(crate) position: Vec3<T>,
     /// Velocity of joint i+1, NED (set by [`joint_kinematics`], with the position).
     pub(crate) velocity: Vec3<T>,
-    /// External force per unit mass on segment i+1 (gravity + drag), F/m.
+    /// External force per unit mass on segment i+1 (gravity + drag), F/m: kept by
+    /// [`prepare_keeping_loads`] only (the product's evaluation does not need it).
     pub(crate) specific_force: Vec3<T>,
     /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
     /// connection-point acceleration), assembled with the loads in pass 1.
@@ -289,7 +290,7 @@ pub fn decoy_aero<T: Real>(
 /// segment centre, u·e its axial part and u_n = u - (u·e) e:
 /// `F/m = g + rho (k_n |u_n|) u_n + rho (k_t |u·e| (u·e)) e`.
 #[inline(always)]
-fn cable_loads<T: Real, const N: usize, const AIR: bool>(
+fn cable_loads<T: Real, const N: usize, const AIR: bool, const LOADS: bool>(
     model: &Model<T, N>,
     state: &State<T, N>,
     connection: &PointKinematics<T>,
@@ -349,7 +350,9 @@ fn cable_loads<T: Real, const N: usize, const AIR: bool>(
             w.x * we.y - w.y * we.x,
         );
         let minus_c = wwe * half_l;
-        joint.specific_force = specific;
+        if LOADS {
+            joint.specific_force = specific;
+        }
         joint.rhs = carry - specific + minus_c;
         joint.direction_rate = we;
         carry = specific + minus_c;
@@ -392,9 +395,35 @@ pub(crate) fn joint_kinematics<T: Real, const N: usize>(
 /// Pass 1: kinematics, loads and the velocity terms.
 ///
 /// Joint 0 is the connection point; `p_i = p_{i-1} + l_i e_i`,
-/// `v_i = v_{i-1} + l_i w_i x e_i`. Cable loads act at segment centres.
+/// `v_i = v_{i-1} + l_i w_i x e_i`. Cable loads act at segment centres; the
+/// product's evaluation needs them only in the right-hand sides, so each
+/// segment's F_i/m_i is not kept ([`prepare_keeping_loads`] keeps it).
 #[inline(never)]
 pub fn prepare<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    ws: &mut Workspace<T, N>,
+) {
+    prepare_loads::<T, N, false>(model, state, connection, air, ws);
+}
+
+/// [`prepare`], keeping each segment's external force per unit mass F_i/m_i in
+/// the workspace (for the dense reference, [`crate::dense`]); the same bits
+/// otherwise.
+pub fn prepare_keeping_loads<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    ws: &mut Workspace<T, N>,
+) {
+    prepare_loads::<T, N, true>(model, state, connection, air, ws);
+}
+
+#[inline(always)]
+fn prepare_loads<T: Real, const N: usize, const LOADS: bool>(
     model: &Model<T, N>,
     state: &State<T, N>,
     connection: &PointKinematics<T>,
@@ -409,11 +438,13 @@ pub fn prepare<T: Real, const N: usize>(
     ws.connection = *connection;
     // The layer choice of the air column, once per evaluation rather than per segment.
     let (tow_rhs, tow_altitude, tow_air) = match air.single_layer() {
-        _ if !has_air => cable_loads::<T, N, false>(model, state, connection, ws, |_| T::zero()),
-        Some(layer) => {
-            cable_loads::<T, N, true>(model, state, connection, ws, |h| layer.density(h))
+        _ if !has_air => {
+            cable_loads::<T, N, false, LOADS>(model, state, connection, ws, |_| T::zero())
         }
-        None => cable_loads::<T, N, true>(model, state, connection, ws, |h| air.density(h)),
+        Some(layer) => {
+            cable_loads::<T, N, true, LOADS>(model, state, connection, ws, |h| layer.density(h))
+        }
+        None => cable_loads::<T, N, true, LOADS>(model, state, connection, ws, |h| air.density(h)),
     };
     ws.tow_rhs = tow_rhs;
 
@@ -1244,6 +1275,134 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
     stage.decoy_rate = base.decoy_rate + dw * h;
     sum.decoy_rate += dw * weight;
     result
+}
+
+/// Passes 2 and 3 as [`solve_tensions_and_accelerations`] at `state` (RK4's first
+/// stage, k1, into `out`), with the second stage's state `stage = state + h k1`
+/// formed in the back sweep as each segment's derivative is found (and the
+/// decoy's after it): the bits of the separate passes followed by
+/// `State::set_stage`, without reading the derivative back.
+#[inline(never)]
+pub fn solve_tensions_first_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+    stage: &mut State<T, N>,
+    h: T,
+) -> Result<(), SolveError> {
+    let (model, state, ws, out, stage) = opaque((model, state, ws, out, stage));
+    let last = last_joint(model);
+    let n = model.segment_count();
+    let directions = &state.directions;
+    let gains = model.rate_gains();
+    let mut t = forward_sweep(model, state, ws)?;
+    let mut probe = t.x + t.y + t.z;
+    // Segment index j's derivative (de, dw) into `out` and the stage.
+    let write = |out: &mut Derivative<T, N>, stage: &mut State<T, N>, j: usize, de, dw| {
+        out.directions[j] = de;
+        out.rates[j] = dw;
+        stage.directions[j] = state.directions[j] + de * h;
+        stage.rates[j] = state.rates[j] + dw * h;
+    };
+    let mut downstream = if last == n {
+        ws.joint_force[n - 1] = t;
+        t
+    } else {
+        let zero = Vec3::zeros();
+        ws.joint_force[n - 1] = zero;
+        if last > 0 {
+            ws.joint_force[last - 1] = t;
+        }
+        let e = directions[n - 1];
+        let dw = -e.cross(&(t + zero)) * gains[n - 1];
+        write(out, stage, n - 1, ws.joints[n - 1].direction_rate, dw);
+        t
+    };
+    if last > 0 {
+        let range = 1..last;
+        let rows = opaque(&ws.pivots[range.clone()])
+            .iter()
+            .zip(opaque(&ws.joints[range.clone()]))
+            .zip(&gains[range.clone()])
+            .zip(
+                directions[range.clone()]
+                    .iter()
+                    .zip(&state.rates[range.clone()]),
+            )
+            .zip(
+                out.directions[range.clone()]
+                    .iter_mut()
+                    .zip(out.rates[range.clone()].iter_mut()),
+            )
+            .zip(
+                stage.directions[range.clone()]
+                    .iter_mut()
+                    .zip(stage.rates[range].iter_mut()),
+            )
+            .zip(ws.joint_force[..last - 1].iter_mut())
+            .rev();
+        for ((((((pivot, joint), gain), (e, w)), (de, dw_out)), (e_out, w_out)), force) in rows {
+            // Copies first: the stores below may alias for all the optimiser knows.
+            let (pivot, we, gain, e, w) = (*pivot, joint.direction_rate, *gain, *e, *w);
+            t = back_substitute(&pivot, &e, &t);
+            probe += t.x + t.y + t.z;
+            let dw = -e.cross(&(t + downstream)) * gain;
+            *de = we;
+            *dw_out = dw;
+            *e_out = e + we * h;
+            *w_out = w + dw * h;
+            downstream = t;
+            *force = t;
+        }
+        let e = directions[0];
+        t = back_substitute(&ws.pivots[0], &e, &t);
+        probe += t.x + t.y + t.z;
+        let dw = -e.cross(&(t + downstream)) * gains[0];
+        write(out, stage, 0, ws.joints[0].direction_rate, dw);
+    }
+    ws.connection_force = t;
+    let result = finish_tensions(model, ws, probe);
+    decoy_accelerations(model, state, ws, out);
+    for ((o, b), d) in stage
+        .decoy_attitude
+        .iter_mut()
+        .zip(&state.decoy_attitude)
+        .zip(&out.decoy_attitude)
+    {
+        *o = *b + *d * h;
+    }
+    stage.decoy_rate = state.decoy_rate + out.decoy_rate * h;
+    result
+}
+
+/// [`evaluate`] at `state` (RK4's first stage) with the second stage's state
+/// `stage = state + h k1` formed as the derivative is found
+/// ([`solve_tensions_first_stage`]); the shooting reference evaluates and then
+/// forms the stage. The same bits either way.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_first_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    connection: &PointKinematics<T>,
+    air: &AirColumn<T>,
+    method: TensionMethod,
+    ws: &mut Workspace<T, N>,
+    stage: &mut State<T, N>,
+    out: &mut Derivative<T, N>,
+    h: T,
+) -> Result<(), SolveError> {
+    match method {
+        TensionMethod::TwoSweep => {
+            prepare(model, state, connection, air, ws);
+            solve_tensions_first_stage(model, state, ws, out, stage, h)
+        }
+        TensionMethod::Shooting => {
+            evaluate(model, state, connection, air, method, ws, out)?;
+            stage.set_stage(state, out, h, model.segment_count());
+            Ok(())
+        }
+    }
 }
 
 /// [`evaluate`] followed by the next RK4 stage ([`StageUpdate`]) in `stage` itself,

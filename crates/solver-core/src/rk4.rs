@@ -89,6 +89,26 @@ pub trait DerivativeSource<T: Real, const N: usize> {
         Ok(())
     }
 
+    /// Evaluates dy/dt at `state` with `inputs` into `out` (RK4's first stage, k1)
+    /// and forms the second stage's state `stage = state + h k1` (its first
+    /// segments and the decoy), with the bits of [`DerivativeSource::evaluate`]
+    /// followed by `State::set_stage` (the default does exactly that). A source
+    /// may form the stage as it finds the derivative.
+    #[inline(always)]
+    fn evaluate_first_stage(
+        &mut self,
+        state: &State<T, N>,
+        inputs: &Self::Inputs,
+        stage: &mut State<T, N>,
+        out: &mut Derivative<T, N>,
+        h: T,
+    ) -> Result<(), SolveError> {
+        self.evaluate(state, inputs, out)?;
+        let n = self.segment_count();
+        stage.set_stage(state, out, h, n);
+        Ok(())
+    }
+
     /// Called after the four stages, before the new state is accepted: an error
     /// rejects the step and leaves the state as it was. For a source that records a
     /// failed evaluation and carries on (so that every step does the same work).
@@ -205,6 +225,26 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         S: DerivativeSource<T, N> + ?Sized,
         F: FnOnce(&mut S, &State<T, N>, &Derivative<T, N>),
     {
+        self.step_from(source, dt, None, observe).map(|_| ())
+    }
+
+    /// [`Rk4::step`] with the source's inputs at the step's start given (`start`,
+    /// when the caller has them: the inputs at the end of the step before, on the
+    /// same source, are those of this step's start, bit for bit); returns the
+    /// inputs at the step's end for the next. With `start` the inputs the source
+    /// gives at the current time, the same bits as [`Rk4::step`].
+    #[inline(always)]
+    pub fn step_from<S, F>(
+        &mut self,
+        source: &mut S,
+        dt: f64,
+        start: Option<S::Inputs>,
+        observe: F,
+    ) -> Result<S::Inputs, SolveError>
+    where
+        S: DerivativeSource<T, N> + ?Sized,
+        F: FnOnce(&mut S, &State<T, N>, &Derivative<T, N>),
+    {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(InputError::BadTimeStep.into());
         }
@@ -221,19 +261,24 @@ impl<T: Real, const N: usize> Rk4<T, N> {
 
         // The inputs are sampled once per distinct time: k2 and k3 both evaluate at
         // t0 + dt/2.
-        let start = source.inputs_at(t0)?;
+        let start = match start {
+            Some(inputs) => inputs,
+            None => source.inputs_at(t0)?,
+        };
         // k1 at the current state, straight into the weighted sum (sum = k1); or, when
         // the source says the last evaluation was at this state with the same inputs,
         // a copy of it: the same bits without evaluating again.
+        // Either way the stage y + dt/2 k1 follows, formed as k1 is found when it
+        // is evaluated.
         if source.holds_first_stage(&start) {
             sum.copy_used(slope, n);
+            stage.set_stage(state, sum, half, n);
         } else {
-            source.evaluate(state, &start, sum)?;
+            source.evaluate_first_stage(state, &start, stage, sum, half)?;
         }
         observe(source, state, sum);
         let middle = source.inputs_at(t_half)?;
         // k2 at y + dt/2 k1, turned into the stage y + dt/2 k2 (sum += 2 k2).
-        stage.set_stage(state, sum, half, n);
         let next = StageUpdate {
             base: state,
             h: half,
@@ -266,7 +311,7 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         }
         // The stage buffer holds the new state: swap the roles.
         self.current = 1 - self.current;
-        Ok(())
+        Ok(end)
     }
 }
 

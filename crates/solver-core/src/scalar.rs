@@ -26,6 +26,10 @@ pub trait Real: RealField + Copy + Default + core::fmt::Debug + core::fmt::Displ
     /// `sqrtf` costs about 60 instructions per root against about 20. The host uses the
     /// same f32 root, so that host and firmware f32 runs stay bit-identical.
     fn square_root(self) -> Self;
+    /// Truncated toward zero to a `usize`, saturating (NaN and negatives give 0): one
+    /// instruction for f32 on the Cortex-M4F (a conversion through f64 would be two
+    /// software calls).
+    fn truncated_index(self) -> usize;
     /// True when both values have the same bit pattern (unlike `==`, +0 and -0
     /// differ and a NaN equals itself): "the same input" for a cached result.
     fn same_bits(self, other: Self) -> bool;
@@ -55,6 +59,10 @@ impl Real for f32 {
         sqrt_f32_soft(self)
     }
     #[inline(always)]
+    fn truncated_index(self) -> usize {
+        self as usize
+    }
+    #[inline(always)]
     fn same_bits(self, other: Self) -> bool {
         self.to_bits() == other.to_bits()
     }
@@ -82,6 +90,10 @@ impl Real for f64 {
     #[inline(always)]
     fn square_root(self) -> Self {
         <f64 as nalgebra::ComplexField>::sqrt(self)
+    }
+    #[inline(always)]
+    fn truncated_index(self) -> usize {
+        self as usize
     }
     #[inline(always)]
     fn same_bits(self, other: Self) -> bool {
@@ -145,6 +157,29 @@ pub fn rotation_matrix<T: Real>(q: [T; 4]) -> Mat3<T> {
         yz + wx,
         one - (xx + yy),
     )
+}
+
+/// Roll, pitch, yaw (ZYX convention), rad, of the rotation matrix `r` (body to
+/// reference frame): `r = Rz(yaw) Ry(pitch) Rx(roll)`.
+///
+/// The angles of nalgebra's `Rotation3::euler_angles`, computed with three
+/// `atan2` and one square root: pitch = atan2(-r20, sqrt(r21² + r22²)),
+/// roll = atan2(r21, r22), yaw = atan2(r10, r00) (the same angles as dividing both
+/// arguments by cos(pitch) > 0, without `asin`, whose f32 library form works in
+/// f64, all in software on a Cortex-M4). At the poles (|r20| >= 1) yaw is 0 and the
+/// whole heading goes to roll, as nalgebra does.
+#[inline]
+pub fn euler_zyx<T: Real>(r: &Mat3<T>) -> (T, T, T) {
+    let (r20, r21, r22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
+    let one = T::one();
+    if r20.abs() < one {
+        let pitch = (-r20).atan2((r21 * r21 + r22 * r22).square_root());
+        (r21.atan2(r22), pitch, r[(1, 0)].atan2(r[(0, 0)]))
+    } else if r20 <= -one {
+        (r[(0, 1)].atan2(r[(0, 2)]), T::frac_pi_2(), T::zero())
+    } else {
+        (-r[(0, 1)].atan2(-r[(0, 2)]), -T::frac_pi_2(), T::zero())
+    }
 }
 
 /// Euclidean norm |v| with [`Real::square_root`].
@@ -232,6 +267,42 @@ mod tests {
         assert_eq!(sqrt_f32_soft(f32::INFINITY), f32::INFINITY);
         assert!(sqrt_f32_soft(-1.0).is_nan() && sqrt_f32_soft(f32::NAN).is_nan());
         assert_eq!(sqrt_f32_soft(4.0), 2.0);
+    }
+
+    #[test]
+    fn euler_zyx_matches_nalgebra() {
+        use nalgebra::UnitQuaternion;
+        let cases: [(f64, f64, f64); 5] = [
+            (0.3, -0.4, 2.0),
+            (-2.9, 1.2, -0.7),
+            (0.0, 0.0, 0.0),
+            (3.1, -1.5, 3.0),
+            (0.2, 1.5, -3.1),
+        ];
+        for (roll, pitch, yaw) in cases {
+            let q = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+            let m = *q.to_rotation_matrix().matrix();
+            let (r, p, y) = super::euler_zyx(&m);
+            let (er, ep, ey) = q.euler_angles();
+            assert!(
+                (r - er).abs() < 1e-9 && (p - ep).abs() < 1e-9 && (y - ey).abs() < 1e-9,
+                "{:?} vs {:?}",
+                (r, p, y),
+                (er, ep, ey)
+            );
+        }
+        // The poles: nalgebra's convention (yaw 0, the heading in roll).
+        for pitch in [core::f64::consts::FRAC_PI_2, -core::f64::consts::FRAC_PI_2] {
+            let m = *UnitQuaternion::from_euler_angles(0.0, pitch, 0.7)
+                .to_rotation_matrix()
+                .matrix();
+            let mut pole = m;
+            pole[(2, 0)] = -pitch.signum();
+            let (r, p, y) = super::euler_zyx(&pole);
+            let rotation = nalgebra::Rotation3::from_matrix_unchecked(pole);
+            let (er, ep, ey) = rotation.euler_angles();
+            assert_eq!((r, p, y), (er, ep, ey));
+        }
     }
 
     #[test]

@@ -132,6 +132,28 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
         )
     }
 
+    #[inline(always)]
+    fn evaluate_first_stage(
+        &mut self,
+        state: &State<T, N>,
+        (connection, air): &Self::Inputs,
+        stage: &mut State<T, N>,
+        out: &mut Derivative<T, N>,
+        h: T,
+    ) -> Result<(), SolveError> {
+        dynamics::evaluate_first_stage(
+            self.model,
+            state,
+            connection,
+            air,
+            self.method,
+            self.ws,
+            stage,
+            out,
+            h,
+        )
+    }
+
     /// The evaluation [`Solver::outputs`] left is the first stage when its inputs are
     /// the same bits (it is forgotten either way: the step overwrites it).
     #[inline(always)]
@@ -286,6 +308,33 @@ impl<T: Real, const N: usize> Solver<T, N> {
             evaluated: &mut self.evaluated,
         };
         self.rk4.step(&mut towed, dt, |_, _, _| {})
+    }
+
+    /// `count` steps of `dt` seconds along `path`: the same bits as `count` calls of
+    /// [`Solver::step`], sampling the path one time fewer per step (a step's start
+    /// is the step before's end: its inputs are carried over, not sampled again).
+    ///
+    /// On an error the steps before the failing one stand and the failing one
+    /// leaves the state as it was, as with the calls of [`Solver::step`].
+    pub fn steps<P: FlightPath<T> + ?Sized>(
+        &mut self,
+        path: &P,
+        dt: f64,
+        count: u32,
+    ) -> Result<(), SolveError> {
+        let mut towed = Towed {
+            model: &self.model,
+            path,
+            method: self.method,
+            ws: &mut self.ws,
+            air: &mut self.air,
+            evaluated: &mut self.evaluated,
+        };
+        let mut start = None;
+        for _ in 0..count {
+            start = Some(self.rk4.step_from(&mut towed, dt, start, |_, _, _| {})?);
+        }
+        Ok(())
     }
 
     /// [`Solver::step`], calling `observe` with the outputs at the state *before* the
@@ -533,7 +582,9 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
             cg_position: d.cg_position,
             cg_velocity: d.cg_velocity,
             attitude,
-            euler: attitude.euler_angles(),
+            euler: crate::scalar::euler_zyx(&crate::scalar::rotation_matrix(
+                self.state.decoy_attitude,
+            )),
             rate: self.state.decoy_rate,
             angular_acceleration: self.derivative.decoy_rate,
             angle_of_attack: d.angle_of_attack,

@@ -81,6 +81,28 @@ impl<T: Real, const N: usize> Derivative<T, N> {
 }
 
 /// [`Derivative::ZERO`], built at run time.
+impl<T: Real, const N: usize> State<T, N> {
+    /// Makes this the time, the first `count` segments and the decoy of `other`,
+    /// in place, leaving the rest of the capacity as it is: on a state whose
+    /// unused capacity is zero (as a solver's), the copy is the state itself, at
+    /// the cost of the used part where a whole copy moves the whole capacity
+    /// (about 1.6 KB at 64 segments in f32).
+    pub fn copy_used(&mut self, other: &Self, count: usize) {
+        self.time = other.time;
+        // One pass over both arrays (two slice copies become two library calls).
+        let rows = self.directions[..count]
+            .iter_mut()
+            .zip(&mut self.rates[..count])
+            .zip(other.directions[..count].iter().zip(&other.rates[..count]));
+        for ((d, r), (e, w)) in rows {
+            *d = *e;
+            *r = *w;
+        }
+        self.decoy_attitude = other.decoy_attitude;
+        self.decoy_rate = other.decoy_rate;
+    }
+}
+
 impl<T: Real, const N: usize> Default for Derivative<T, N> {
     fn default() -> Self {
         Derivative {

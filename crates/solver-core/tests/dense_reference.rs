@@ -91,6 +91,7 @@ fn towed_system_two_sweep_matches_dense() {
 fn fused_matches_separate<T: Real, const N: usize>(model: Model<T, N>, state: State<T, N>) {
     use solver_core::dynamics::{
         accelerations, prepare, solve_tensions, solve_tensions_and_accelerations,
+        solve_tensions_first_stage,
     };
     let aircraft = AircraftState::<T>::level(T::lit(9000.0), T::lit(180.0));
     let (connection, air) = connection_and_air(&model, &aircraft).unwrap();
@@ -105,6 +106,50 @@ fn fused_matches_separate<T: Real, const N: usize>(model: Model<T, N>, state: St
     assert_eq!(format!("{fused:?}"), format!("{separate:?}"));
     let forces = |ws: &Workspace<T, N>| format!("{ws:?}");
     assert_eq!(forces(&fused_ws), forces(&separate_ws));
+
+    // RK4's first stage with the second stage's state formed in the back sweep:
+    // the same derivative, and the stage y + h k1 as `State::set_stage` forms it.
+    let h = T::lit(0.00125);
+    let mut first_ws = Box::new(Workspace::<T, N>::default());
+    let mut first = Derivative::<T, N>::default();
+    let mut stage = Box::new(State::<T, N>::default());
+    prepare(&model, &state, &connection, &air, &mut first_ws);
+    solve_tensions_first_stage(&model, &state, &mut first_ws, &mut first, &mut stage, h).unwrap();
+    let n = model.segment_count();
+    assert_eq!(
+        format!("{:?}", &first.directions[..n]),
+        format!("{:?}", &separate.directions[..n])
+    );
+    assert_eq!(
+        format!("{:?}", &first.rates[..n]),
+        format!("{:?}", &separate.rates[..n])
+    );
+    assert_eq!(
+        format!("{:?}", (first.decoy_attitude, first.decoy_rate)),
+        format!("{:?}", (separate.decoy_attitude, separate.decoy_rate))
+    );
+    assert_eq!(forces(&first_ws), forces(&separate_ws));
+    let mut expected = Box::new(State::<T, N>::default());
+    for i in 0..n {
+        expected.directions[i] = state.directions[i] + separate.directions[i] * h;
+        expected.rates[i] = state.rates[i] + separate.rates[i] * h;
+    }
+    for k in 0..4 {
+        expected.decoy_attitude[k] = state.decoy_attitude[k] + separate.decoy_attitude[k] * h;
+    }
+    expected.decoy_rate = state.decoy_rate + separate.decoy_rate * h;
+    assert_eq!(
+        format!("{:?}", &stage.directions[..n]),
+        format!("{:?}", &expected.directions[..n])
+    );
+    assert_eq!(
+        format!("{:?}", &stage.rates[..n]),
+        format!("{:?}", &expected.rates[..n])
+    );
+    assert_eq!(
+        format!("{:?}", (stage.decoy_attitude, stage.decoy_rate)),
+        format!("{:?}", (expected.decoy_attitude, expected.decoy_rate))
+    );
 }
 
 #[test]

@@ -217,3 +217,67 @@ fn a_smaller_model_in_place_of_a_larger_one_leaves_no_trace() {
     // Equal as a whole (the unused entries beyond the 4 segments included).
     assert_eq!(solver.model(), &Model::new(params).unwrap());
 }
+
+/// `Solver::steps` carries each step's end inputs to the next step's start: the
+/// same bits as the steps one by one, through the snatch of the pull-up, in both
+/// precisions.
+fn steps_in_a_row_as_one_by_one<T: Real>() {
+    let path = pull_up();
+    let params = graded::<T>(12, 1.26);
+    let mut one_by_one =
+        Solver::new(Model::<T, CAPACITY>::new(params).unwrap(), State::default()).unwrap();
+    let start = trim(one_by_one.model(), &FlightPath::<T>::state_at(&path, 0.0)).unwrap();
+    one_by_one.set_state(start).unwrap();
+    let mut in_a_row = one_by_one.clone();
+    for frame in 0..150 {
+        let count = 1 + frame % 4;
+        let dt = 0.01 / f64::from(count);
+        for _ in 0..count {
+            one_by_one.step(&path, dt).unwrap();
+        }
+        in_a_row.steps(&path, dt, count).unwrap();
+        assert_eq!(
+            bits(in_a_row.state()),
+            bits(one_by_one.state()),
+            "frame {frame}"
+        );
+        let tension = |s: &mut Solver<T, CAPACITY>| s.outputs(&path).unwrap().connection_tension();
+        assert_eq!(
+            tension(&mut in_a_row).to_f64().to_bits(),
+            tension(&mut one_by_one).to_f64().to_bits()
+        );
+    }
+    // A rejected step ends the run where the one-by-one steps end it.
+    let rejected = in_a_row.steps(&path, f64::NAN, 3);
+    assert!(rejected.is_err());
+    assert_eq!(bits(in_a_row.state()), bits(one_by_one.state()));
+}
+
+#[test]
+fn steps_in_a_row_are_the_steps_one_by_one() {
+    steps_in_a_row_as_one_by_one::<f32>();
+    steps_in_a_row_as_one_by_one::<f64>();
+}
+
+/// `State::copy_used` into a zero state keeps every used value and the time,
+/// and is the state to the bit for the solver.
+#[test]
+fn a_used_copy_is_the_state_for_the_solver() {
+    let path = pull_up();
+    let mut solver = Solver::new(
+        Model::<f32, CAPACITY>::new(graded(12, 1.26)).unwrap(),
+        State::default(),
+    )
+    .unwrap();
+    let start = trim(solver.model(), &FlightPath::<f32>::state_at(&path, 0.0)).unwrap();
+    solver.set_state(start).unwrap();
+    solver.steps(&path, 0.0025, 8).unwrap();
+    let mut copy = State::ZERO;
+    copy.copy_used(solver.state(), 12);
+    assert_eq!(&copy, solver.state());
+    let mut restored = solver.clone();
+    solver.steps(&path, 0.0025, 4).unwrap();
+    restored.set_state(copy).unwrap();
+    restored.steps(&path, 0.0025, 4).unwrap();
+    assert_eq!(bits(restored.state()), bits(solver.state()));
+}

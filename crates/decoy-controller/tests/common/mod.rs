@@ -13,7 +13,7 @@ pub const SPEED: f64 = 182.0;
 /// Altitude of the test frames, m.
 pub const ALTITUDE: f64 = 9000.0;
 
-/// The reference system's controller configuration in `T`, 16 graded segments.
+/// The reference system's controller configuration in `T` (its embedded model).
 pub fn config<T: Real>() -> ControllerConfig<T> {
     let system = SystemConfig::builtin().unwrap();
     system.controller_config(system.embedded_layout()).unwrap()
