@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -132,7 +133,10 @@ def test_commands_and_status(bridge):
         assert d["instance"] == bridge.instance
         assert wire.LAYOUT.code_name("backend", st.backend) == "host"
         assert st.precision_bits == 32
-        assert st.segments == 16
+        # the bridge's host backend runs the embedded model of the reference system
+        with open(REPO / "config/reference-system.toml", "rb") as f:
+            embedded = tomllib.load(f)["solver"]["segments_embedded"]
+        assert st.segments == embedded
         assert st.header.protocol_version == wire.PROTOCOL_VERSION
         with pytest.raises(Rejected):
             c.select_profile("turn", rate_radps=1.5)  # above 1 rad/s
