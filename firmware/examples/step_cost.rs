@@ -132,7 +132,8 @@ fn main() -> ! {
         };
         let mut path = FramePath::<Scalar>::single(&current, origin);
         let path_cost = measure(&mut || {
-            path = FramePath::new(&previous, &current, origin);
+            path = FramePath::new(&previous, &current, origin)
+                .towing(solver.model().params().connection_point);
             true
         });
         let dt = FRAME_S / STEPS_PER_FRAME as f64;

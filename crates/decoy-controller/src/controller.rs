@@ -5,13 +5,13 @@
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 use solver_core::{
     AircraftState, Atmosphere, ConfigError, FlightPath, Model, ModelParams, Real, SolveError,
-    Solver, State,
+    Solver, State, Vec3,
 };
 
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
 use crate::lookahead::Lookahead;
 use crate::monitor::{ManagementConfig, Measures, Monitors};
-use crate::path::{FramePath, steady_flight};
+use crate::path::{FramePath, PathEnd, steady_flight};
 use crate::validate::{is_finite, validate_streamed};
 use decoy_link::{
     Advisories, AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello,
@@ -128,7 +128,7 @@ impl core::error::Error for ControllerError {}
 
 /// A run after a State frame: the run, the RK4 steps taken, and the streamed
 /// path they followed (None for a built-in profile).
-type Advanced<T> = (Run, u16, Option<FramePath<T>>);
+type Advanced = (Run, u16);
 
 /// What the controller integrates after a trim.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -181,6 +181,9 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     /// when the profile is selected.
     builtin: Option<BuiltinPath>,
     run: Option<Run>,
+    /// Where the last streamed frame's path ended, for the next one to start
+    /// from (a cache: the paths have the same bits without it).
+    path_end: PathEnd<T>,
     counters: Counters,
     degraded: bool,
     recovered_pending: bool,
@@ -234,6 +237,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             acceleration: 0.0,
         })),
         run: None,
+        path_end: PathEnd::NONE,
         counters: Counters::ZERO,
         degraded: false,
         recovered_pending: false,
@@ -290,6 +294,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.profile = Profile::Streamed;
         self.builtin = None;
         self.run = None;
+        self.path_end = PathEnd::NONE;
         self.counters = Counters::ZERO;
         self.degraded = false;
         self.recovered_pending = false;
@@ -626,13 +631,15 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         let mut saved = State::ZERO;
         saved.copy_used(self.solver.state(), self.solver.model().segment_count());
         let integration = counter.now();
+        // A streamed run's path, built in place by `start_run` or `advance`.
+        let mut path = None;
         let result = match self.run {
-            None => self.start_run(frame),
-            Some(run) => self.advance(&run, frame, &saved),
+            None => self.start_run(frame, &mut path),
+            Some(run) => self.advance(&run, frame, &saved, &mut path),
         };
         let step_instructions = counter.elapsed(integration);
         match result {
-            Ok((run, steps, path)) => match self.output(frame, steps, path.as_ref()) {
+            Ok((run, steps)) => match self.output(frame, steps, path.as_ref()) {
                 Ok((mut output, aircraft)) => {
                     let solution_instructions = counter.elapsed(start);
                     // Decoy management, after the real-time solution is complete
@@ -674,6 +681,12 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 Err(self.reject(seq, reason))
             }
         }
+    }
+
+    /// The model's connection point (aircraft body frame), whose kinematics the
+    /// frame path interpolates ([`FramePath::towing`]).
+    fn connection_point(&self) -> Vec3<T> {
+        self.solver.model().params().connection_point
     }
 
     fn restore(&mut self, saved: &State<T, N>) {
@@ -733,7 +746,11 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// Trims at the frame (streamed) or at the profile's start (built-in).
     ///
     /// Returns the new run, 0 steps and (streamed) the constant path at the frame.
-    fn start_run(&mut self, frame: &AircraftStateFrame) -> Result<Advanced<T>, RejectReason> {
+    fn start_run(
+        &mut self,
+        frame: &AircraftStateFrame,
+        streamed: &mut Option<FramePath<T>>,
+    ) -> Result<Advanced, RejectReason> {
         // Unconfigured (`Controller::UNCONFIGURED`): no model to trim.
         if self.solver.model().segment_count() == 0 {
             return Err(RejectReason::NotTrimmed);
@@ -743,18 +760,21 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             start_time_s: frame.time_s,
             origin: FramePath::<T>::run_origin(frame),
         };
-        let (aircraft, time, streamed): (AircraftState<T>, f64, _) = match self.builtin {
-            Some(path) => (path.state_at(0.0), 0.0, None),
+        let (aircraft, time): (AircraftState<T>, f64) = match self.builtin {
+            Some(path) => (path.state_at(0.0), 0.0),
             None => {
-                let path = FramePath::<T>::single(frame, run.origin);
-                (path.state_at(frame.time_s), frame.time_s, Some(path))
+                let path = streamed.insert(
+                    FramePath::<T>::single(frame, run.origin).towing(self.connection_point()),
+                );
+                self.path_end = path.end(frame, run.origin);
+                (path.state_at(frame.time_s), frame.time_s)
             }
         };
         // In place (the caller restores its saved state on error).
         self.solver
             .trim(&steady_flight(&aircraft), time)
             .map_err(|_| RejectReason::NotTrimmed)?;
-        Ok((run, 0, streamed))
+        Ok((run, 0))
     }
 
     /// Integrates from the run's last frame to `frame`.
@@ -766,7 +786,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         run: &Run,
         frame: &AircraftStateFrame,
         saved: &State<T, N>,
-    ) -> Result<Advanced<T>, RejectReason> {
+        streamed: &mut Option<FramePath<T>>,
+    ) -> Result<Advanced, RejectReason> {
         let dt = frame.time_s - run.last.time_s;
         let steps = self.step_count(dt);
         let next = Run {
@@ -774,26 +795,28 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             ..*run
         };
         let failure = |_: SolveError| RejectReason::SolverFailure;
-        let (streamed, steps) = match self.builtin {
+        let steps = match self.builtin {
             Some(path) => {
                 let (t0, t1) = (
                     run.last.time_s - run.start_time_s,
                     frame.time_s - run.start_time_s,
                 );
-                let steps = self
-                    .integrate_checked(saved, &path, t0, t1, steps)
-                    .map_err(failure)?;
-                (None, steps)
+                self.integrate_checked(saved, &path, t0, t1, steps)
+                    .map_err(failure)?
             }
             None => {
-                let path = FramePath::<T>::new(&run.last, frame, run.origin);
-                let steps = self
-                    .integrate_checked(saved, &path, run.last.time_s, frame.time_s, steps)
-                    .map_err(failure)?;
-                (Some(path), steps)
+                // Built in the caller's slot, where the outputs read it (not moved).
+                let point = self.connection_point();
+                let path = streamed.insert(
+                    FramePath::<T>::after(&self.path_end, &run.last, frame, run.origin)
+                        .towing(point),
+                );
+                self.path_end = path.end(frame, run.origin);
+                self.integrate_checked(saved, path, run.last.time_s, frame.time_s, steps)
+                    .map_err(failure)?
             }
         };
-        Ok((next, steps as u16, streamed))
+        Ok((next, steps as u16))
     }
 
     /// The RK4 steps for a frame `dt` seconds after the last one: enough for steps of
@@ -804,7 +827,12 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// (the cable jerked taut after a pull-up) raises the tension, and with it the
     /// wave speed, tenfold for a moment, and the step shrinks with it.
     fn step_count(&self, dt: f64) -> f64 {
-        let by_period = libm::ceil(dt / MAX_STEP_S - 1e-9).max(1.0);
+        // dt / MAX_STEP_S as dt times its reciprocal (400 for 2.5 ms), a soft-float
+        // multiply rather than a divide on the M4F (the quotient and the product
+        // differ by at most an ulp, far inside the 1e-9 allowance); the floor of
+        // one step by comparison.
+        let periods = libm::ceil(dt * (1.0 / MAX_STEP_S) - 1e-9);
+        let by_period = if periods > 1.0 { periods } else { 1.0 };
         let by_wave = wave_steps(dt, self.wave_rate);
         let steps = if by_wave > by_period {
             by_wave

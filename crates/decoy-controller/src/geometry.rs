@@ -254,29 +254,41 @@ pub fn cable_plume_clearance<T: Real>(
     let radius = (half_length * half_length + rim * rim).square_root();
     let centre = aircraft.position + rotation * (plume.nozzle + plume.axis * half_length);
     let margin = T::lit(1.001);
-    let mut best = (T::lit(f64::INFINITY), 0);
-    let mut consider = |p: &Vec3<T>, index: usize| {
-        let reach = best.0 + radius;
-        if reach.finite()
-            && reach > T::zero()
-            && (p - centre).norm_squared() > reach * reach * margin
-        {
-            return;
-        }
-        let c = clearance(p);
-        if c < best.0 {
-            best = (c, index);
+    let infinity = T::lit(f64::INFINITY);
+    // The squared distance from the centre beyond which a point is skipped once
+    // the best clearance is `best` (infinite, so that no point is skipped, while
+    // best + radius is not finite and positive: compared, not classified, which
+    // would cost about 20 instructions a point on the M4F).
+    let skip_beyond2 = |best: T| {
+        let reach = best + radius;
+        if reach > T::zero() && reach < infinity {
+            reach * reach * margin
+        } else {
+            infinity
         }
     };
+    // Locals rather than a closure's captures, so that they stay in registers.
+    let (mut best, mut best_index, mut skip) = (infinity, 0, infinity);
     let mut previous: Option<Vec3<T>> = None;
     for (j, p) in joints.into_iter().enumerate() {
         if let Some(q) = previous {
-            consider(&((q + p) * half), 2 * j - 1);
+            let midpoint = (q + p) * half;
+            if !((midpoint - centre).norm_squared() > skip) {
+                let c = clearance(&midpoint);
+                if c < best {
+                    (best, best_index, skip) = (c, 2 * j - 1, skip_beyond2(c));
+                }
+            }
         }
-        consider(&p, 2 * j);
+        if !((p - centre).norm_squared() > skip) {
+            let c = clearance(&p);
+            if c < best {
+                (best, best_index, skip) = (c, 2 * j, skip_beyond2(c));
+            }
+        }
         previous = Some(p);
     }
-    best
+    (best, best_index)
 }
 
 fn lit3<T: Real>(v: [f64; 3]) -> Vec3<T> {

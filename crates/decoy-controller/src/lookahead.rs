@@ -548,8 +548,8 @@ pub(crate) fn wave_rate_of<T: Real, const N: usize>(solver: &Solver<T, N>) -> T 
     let larger = |a: T, b: T| if b > a { b } else { a };
     let mut worst = T::zero();
     let mut upstream = out.joint_force(0).norm_squared();
-    for (i, l) in model.lengths().iter().enumerate() {
-        let downstream = out.joint_force(i + 1).norm_squared();
+    for (l, force) in model.lengths().iter().zip(out.downstream_joint_forces()) {
+        let downstream = force.norm_squared();
         let l2 = *l * *l;
         worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
         upstream = downstream;

@@ -1,7 +1,7 @@
 //! [`FramePath`]: the aircraft's flight path between two State frames, the one
 //! path the controller and the host reference both integrate along.
 
-use solver_core::{AircraftState, FlightPath, Real, Vec3};
+use solver_core::{AircraftState, FlightPath, InputError, PointKinematics, Real, Vec3};
 
 use decoy_link::AircraftStateFrame;
 
@@ -105,11 +105,17 @@ fn wide3<T: Real>(v: [f32; 3]) -> Vec3<T> {
 pub struct FramePath<T: Real> {
     /// Time of the previous frame, s.
     t0: f64,
+
     /// Bits of t1 - t0 (s, f64) as an integer, where t1 is the current frame's
     /// time; 0 when t1 is not after t0 (a constant path at `to`).
     span_bits: i64,
     /// 1 / (t1 - t0), 1/s (zero for a constant path).
     inverse_span: T,
+    /// When 0 < t0 < t1 lie in one binade or two adjacent ones (every frame but
+    /// the first, at t = 0) of exponents in range: the bits of t0 and t1 and
+    /// the ulps of their binades in `T` ([`FramePath::fraction`]); `None`
+    /// otherwise.
+    binades: Option<Binades<T>>,
     /// t1 - t0, s.
     span: T,
     from: Sample<T>,
@@ -118,6 +124,118 @@ pub struct FramePath<T: Real> {
     to_attitude_near: [T; 4],
     /// p1 - p0 taken in f64, then rounded once.
     delta: Vec3<T>,
+    /// The towing point's own interpolation, when set ([`FramePath::towing`]).
+    towing: Option<Towing<T>>,
+    /// The towing point and its kinematics at the previous frame, from the path
+    /// that ended there ([`FramePath::after`]), for [`FramePath::towing`].
+    from_point: Option<(Vec3<T>, PointKinematics<T>)>,
+}
+
+/// The times of a [`FramePath`] as bit patterns, for its fraction in integers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Binades<T: Real> {
+    t0_bits: u64,
+    t1_bits: u64,
+    /// The ulp of t0's binade.
+    ulp0: T,
+    /// The ulp of t1's binade (t0's, or twice it).
+    ulp1: T,
+}
+
+/// Where a [`FramePath`] ended: its current frame's sample and towing point
+/// kinematics, for the next frame's path to start from without computing them
+/// again ([`FramePath::after`]; about 700 instructions of soft-float work on the
+/// M4F). Reused only for the very same frame and origin, bit for bit, so a path
+/// built after it has the bits of one built from the frames alone. All zero bits
+/// is "nothing" ([`PathEnd::NONE`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathEnd<T: Real> {
+    /// False: nothing kept.
+    kept: bool,
+    frame: AircraftStateFrame,
+    origin: [f64; 3],
+    sample: Sample<T>,
+    /// False: no towing point kept.
+    towing_kept: bool,
+    towing_point: Vec3<T>,
+    towing_end: PointKinematics<T>,
+}
+
+impl<T: Real> PathEnd<T> {
+    /// Nothing kept (all zero bits).
+    pub const NONE: Self = {
+        let z = Vec3::new(T::ZERO, T::ZERO, T::ZERO);
+        PathEnd {
+            kept: false,
+            frame: AircraftStateFrame {
+                seq: 0,
+                time_s: 0.0,
+                position_ned_m: [0.0; 3],
+                velocity_ned_mps: [0.0; 3],
+                acceleration_ned_mps2: [0.0; 3],
+                attitude_wxyz: [0.0; 4],
+                body_rate_radps: [0.0; 3],
+                body_angular_acceleration_radps2: [0.0; 3],
+            },
+            origin: [0.0; 3],
+            sample: Sample {
+                position: z,
+                velocity: z,
+                acceleration: z,
+                attitude: [T::ZERO; 4],
+                rate: z,
+                angular_acceleration: z,
+            },
+            towing_kept: false,
+            towing_point: z,
+            towing_end: PointKinematics {
+                position: z,
+                velocity: z,
+                acceleration: z,
+            },
+        }
+    };
+
+    /// True when this is the end at `frame` with `origin`, bit for bit.
+    fn is_at(&self, frame: &AircraftStateFrame, origin: &[f64; 3]) -> bool {
+        fn same64(a: &[f64], b: &[f64]) -> bool {
+            a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        }
+        fn same32(a: &[f32], b: &[f32]) -> bool {
+            a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        }
+        let k = &self.frame;
+        self.kept
+            && same64(&[k.time_s], &[frame.time_s])
+            && same64(&k.position_ned_m, &frame.position_ned_m)
+            && same64(&self.origin, origin)
+            && same32(&k.velocity_ned_mps, &frame.velocity_ned_mps)
+            && same32(&k.acceleration_ned_mps2, &frame.acceleration_ned_mps2)
+            && same32(&k.attitude_wxyz, &frame.attitude_wxyz)
+            && same32(&k.body_rate_radps, &frame.body_rate_radps)
+            && same32(
+                &k.body_angular_acceleration_radps2,
+                &frame.body_angular_acceleration_radps2,
+            )
+    }
+}
+
+/// The kinematics of one body-fixed point (the connection point) at both
+/// frames of a [`FramePath`], for [`FlightPath::point_at`] to interpolate
+/// directly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Towing<T: Real> {
+    /// The point, aircraft body frame (FRD), m.
+    point: Vec3<T>,
+    /// Its kinematics at the previous frame (`from`'s state).
+    from: PointKinematics<T>,
+    /// Its kinematics at the current frame (`to`'s state).
+    to: PointKinematics<T>,
+    /// Its offsets from the aircraft's reference point at the previous frame:
+    /// R0 r in position, R0 (w0 x r) in velocity.
+    offset0: (Vec3<T>, Vec3<T>),
+    /// How those offsets change to the current frame's.
+    offset_change: (Vec3<T>, Vec3<T>),
 }
 
 impl<T: Real> FramePath<T> {
@@ -127,7 +245,25 @@ impl<T: Real> FramePath<T> {
         current: &AircraftStateFrame,
         origin: [f64; 3],
     ) -> Self {
-        let from = Sample::of(previous, &origin);
+        Self::after(&PathEnd::NONE, previous, current, origin)
+    }
+
+    /// [`FramePath::new`], starting from `end` where it is the end at `previous`
+    /// with `origin` (the path of the frame before ended there): the same bits,
+    /// without computing the previous frame's sample and towing point again.
+    pub fn after(
+        end: &PathEnd<T>,
+        previous: &AircraftStateFrame,
+        current: &AircraftStateFrame,
+        origin: [f64; 3],
+    ) -> Self {
+        let reuse = end.is_at(previous, &origin);
+        let from = if reuse {
+            end.sample
+        } else {
+            Sample::of(previous, &origin)
+        };
+        let from_point = (reuse && end.towing_kept).then_some((end.towing_point, end.towing_end));
         let to = Sample::of(current, &origin);
         // Shortest arc: q and -q are the same attitude.
         let dot = (0..4).fold(T::zero(), |sum, i| sum + from.attitude[i] * to.attitude[i]);
@@ -148,8 +284,22 @@ impl<T: Real> FramePath<T> {
         } else {
             (0, T::zero(), T::zero())
         };
+        let (t0_bits, t1_bits) = (previous.time_s.to_bits(), current.time_s.to_bits());
+        let (e0, e1) = (t0_bits >> 52, t1_bits >> 52);
+        // 2^-60 s <= t0 < t1 < 2^61 s, positive (sign bit clear, so the exponent
+        // field is the top 12 bits), t1 in t0's binade or the next: the ulps
+        // there are normal in f32.
+        let ulp = |e: u64| T::lit(f64::from_bits((e - 52) << 52));
+        let binades = (t1_bits > t0_bits && (1023 - 60..=1023 + 60).contains(&e0) && e1 - e0 <= 1)
+            .then(|| Binades {
+                t0_bits,
+                t1_bits,
+                ulp0: ulp(e0),
+                ulp1: ulp(e1),
+            });
         FramePath {
             t0: previous.time_s,
+            binades,
             span_bits,
             inverse_span,
             span,
@@ -157,7 +307,85 @@ impl<T: Real> FramePath<T> {
             to,
             to_attitude_near,
             delta,
+            towing: None,
+            from_point,
         }
+    }
+
+    /// Where this path ends: at `current` (the frame it was built to) with
+    /// `origin`, for [`FramePath::after`].
+    pub fn end(&self, current: &AircraftStateFrame, origin: [f64; 3]) -> PathEnd<T> {
+        let mut end = PathEnd {
+            kept: true,
+            frame: *current,
+            origin,
+            sample: self.to,
+            ..PathEnd::NONE
+        };
+        if let Some(towing) = &self.towing {
+            end.towing_kept = true;
+            end.towing_point = towing.point;
+            end.towing_end = towing.to;
+        }
+        end
+    }
+
+    /// The same path, with the kinematics of the body-fixed point `point` (FRD, m;
+    /// the connection point) interpolated directly between the two frames by
+    /// [`FlightPath::point_at`], as the aircraft's own position and velocity are
+    /// (cubic Hermite through both frames' point positions and velocities) and its
+    /// acceleration (linear in s), rather than derived from the interpolated
+    /// aircraft state (position, nlerp attitude, rates and accelerations, then
+    /// p + R r, v + R (w x r), a + R (dw x r + w x (w x r))). At both frames the
+    /// point's kinematics are those [`AircraftState::point`] gives for the frame's
+    /// state, bit for bit (so consecutive frames still meet with the same bits);
+    /// between them the two interpolations differ by the path's own
+    /// interpolation error, and this one costs a third as much on the Cortex-M4F.
+    /// Frames whose states fail [`AircraftState::validate`] keep the default
+    /// (which reports the failure); so does any other point.
+    pub fn towing(mut self, point: Vec3<T>) -> Self {
+        let same_point = |p: &Vec3<T>| {
+            p.x.same_bits(point.x) && p.y.same_bits(point.y) && p.z.same_bits(point.z)
+        };
+        // The previous frame's, from the path that ended there (checked there).
+        let from = match self.from_point {
+            Some((p, kinematics)) if same_point(&p) => Some(kinematics),
+            _ => None,
+        };
+        let from = match from {
+            Some(kinematics) => kinematics,
+            None => {
+                let state = self.from.state();
+                if state.validate().is_err() {
+                    self.towing = None;
+                    return self;
+                }
+                state.point(&point)
+            }
+        };
+        let to = self.to.state();
+        if to.validate().is_err() {
+            self.towing = None;
+            return self;
+        }
+        let to = to.point(&point);
+        // The point's offsets from the aircraft's reference point at both frames.
+        let offset0 = (
+            from.position - self.from.position,
+            from.velocity - self.from.velocity,
+        );
+        let offset1 = (
+            to.position - self.to.position,
+            to.velocity - self.to.velocity,
+        );
+        self.towing = Some(Towing {
+            point,
+            from,
+            to,
+            offset0,
+            offset_change: (offset1.0 - offset0.0, offset1.1 - offset0.1),
+        });
+        self
     }
 
     /// The constant path at one frame (its state at every time).
@@ -184,8 +412,45 @@ pub fn steady_flight<T: Real>(aircraft: &AircraftState<T>) -> AircraftState<T> {
     }
 }
 
-impl<T: Real> FlightPath<T> for FramePath<T> {
-    fn state_at(&self, t: f64) -> AircraftState<T> {
+/// Where a time lies on a [`FramePath`].
+enum Fraction<T> {
+    /// At or before the previous frame.
+    Before,
+    /// At or after the current frame.
+    After,
+    /// s = (t - t0)/h in (0, 1].
+    Inside(T),
+}
+
+impl<T: Real> FramePath<T> {
+    /// Where `t` lies.
+    #[inline(always)]
+    fn fraction(&self, t: f64) -> Fraction<T> {
+        // In integers, without the soft-float subtraction and narrowing (about 150
+        // instructions on the M4F, 9 samples a frame), for a positive t: positive
+        // doubles order as their bit patterns. Between t0 and t1, t lies in t0's
+        // binade, where t - t0 is exactly n ulps (n the difference of the bit
+        // patterns) and T::lit(t - t0) is n in T times the ulp (the same bits as
+        // the subtraction below), or in t1's, where t1 - t is exactly n ulps of
+        // that binade and s = 1 - (t1 - t)/h.
+        if let Some(b) = &self.binades {
+            let tb = t.to_bits();
+            if tb >> 63 == 0 {
+                if tb <= b.t0_bits {
+                    return Fraction::Before;
+                }
+                if tb >= b.t1_bits {
+                    return Fraction::After;
+                }
+                let s = if tb >> 52 == b.t0_bits >> 52 {
+                    T::from_count(tb - b.t0_bits) * b.ulp0 * self.inverse_span
+                } else {
+                    T::one() - T::from_count(b.t1_bits - tb) * b.ulp1 * self.inverse_span
+                };
+                let s = if s < T::one() { s } else { T::one() };
+                return Fraction::Inside(if s > T::zero() { s } else { T::zero() });
+            }
+        }
         // t - t0 against 0 and against t1 - t0 (the same f64 difference at t = t1),
         // compared as bit patterns: for non-negative doubles their order is that of
         // the integers (on the M4F a soft-float compare costs about 30 instructions).
@@ -195,13 +460,26 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
         // an integer, without it it lies above every span (a positive double, at most
         // +inf, whose bits are below every NaN's).
         if bits >= self.span_bits {
-            return self.to.state();
+            return Fraction::After;
         }
         if bits <= 0 {
-            return self.from.state();
+            return Fraction::Before;
         }
         let s = T::lit(elapsed) * self.inverse_span;
-        let s = if s < T::one() { s } else { T::one() };
+        Fraction::Inside(if s < T::one() { s } else { T::one() })
+    }
+
+    /// The cubic Hermite at `s` through `p0` with velocity `v0` and `p0 + delta`
+    /// with velocity `v1`: position and velocity.
+    #[inline(always)]
+    fn hermite(
+        &self,
+        s: T,
+        p0: &Vec3<T>,
+        v0: &Vec3<T>,
+        v1: &Vec3<T>,
+        delta: &Vec3<T>,
+    ) -> (Vec3<T>, Vec3<T>) {
         let step = self.span;
         let lit = T::lit;
         // Hermite basis (h01 = 1 - h00, so p = p0 + h01 (p1 - p0) + ...) and its
@@ -213,10 +491,65 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
         let d10 = lit(3.0) * s2 - lit(4.0) * s + T::one();
         let d01 = lit(6.0) * (s - s2);
         let d11 = lit(3.0) * s2 - lit(2.0) * s;
-        let (a, b) = (&self.from, &self.to);
-        let (delta, v0, v1) = (self.delta, a.velocity, b.velocity);
-        let position = a.position + delta * h01 + (v0 * h10 + v1 * h11) * step;
+        let position = p0 + delta * h01 + (v0 * h10 + v1 * h11) * step;
         let velocity = delta * (d01 * self.inverse_span) + v0 * d10 + v1 * d11;
+        (position, velocity)
+    }
+}
+
+impl<T: Real> FlightPath<T> for FramePath<T> {
+    /// With [`FramePath::towing`] at `r` (the same bits): the point's kinematics
+    /// interpolated directly; otherwise the default.
+    #[inline(always)]
+    fn point_at(&self, t: f64, r: &Vec3<T>) -> Result<PointKinematics<T>, InputError> {
+        let towing = match &self.towing {
+            Some(towing)
+                if towing.point.x.same_bits(r.x)
+                    && towing.point.y.same_bits(r.y)
+                    && towing.point.z.same_bits(r.z) =>
+            {
+                towing
+            }
+            _ => {
+                let aircraft = self.state_at(t);
+                aircraft.validate()?;
+                return Ok(aircraft.point(r));
+            }
+        };
+        let s = match self.fraction(t) {
+            Fraction::Before => return Ok(towing.from),
+            Fraction::After => return Ok(towing.to),
+            Fraction::Inside(s) => s,
+        };
+        // The aircraft's own Hermite, plus the point's offsets interpolated
+        // linearly (not a Hermite through the point's positions: an attitude that
+        // steps between two frames, as a scenario's bank at its start, would
+        // turn the step of R r into a velocity of |r| x angle / h, hundreds of
+        // m/s over a 10 ms frame).
+        let (from, to) = (&self.from, &self.to);
+        let (aircraft_position, aircraft_velocity) =
+            self.hermite(s, &from.position, &from.velocity, &to.velocity, &self.delta);
+        let ((p0, v0), (dp, dv)) = (&towing.offset0, &towing.offset_change);
+        let position = aircraft_position + (p0 + dp * s);
+        let velocity = aircraft_velocity + (v0 + dv * s);
+        let (a, b) = (&towing.from, &towing.to);
+        let acceleration = a.acceleration + (b.acceleration - a.acceleration) * s;
+        Ok(PointKinematics {
+            position,
+            velocity,
+            acceleration,
+        })
+    }
+
+    fn state_at(&self, t: f64) -> AircraftState<T> {
+        let s = match self.fraction(t) {
+            Fraction::Before => return self.from.state(),
+            Fraction::After => return self.to.state(),
+            Fraction::Inside(s) => s,
+        };
+        let (a, b) = (&self.from, &self.to);
+        let (position, velocity) =
+            self.hermite(s, &a.position, &a.velocity, &b.velocity, &self.delta);
         let lerp = |x: &Vec3<T>, y: &Vec3<T>| -> Vec3<T> { x + (y - x) * s };
         let attitude = normalised([0, 1, 2, 3].map(|i| {
             let qa = a.attitude[i];
@@ -282,6 +615,61 @@ mod tests {
             assert_eq!(s.position.z, -9000.0);
         }
         assert_eq!(path.state_at(1.01).position.x, x(1.01));
+    }
+
+    /// The fraction as computed before the same-binade shortcut: t - t0 in f64,
+    /// classified on its bits, narrowed.
+    fn fraction_by_subtraction<T: Real>(path: &FramePath<T>, t: f64) -> Option<u64> {
+        let elapsed = t - path.t0;
+        let bits = elapsed.to_bits() as i64;
+        if bits >= path.span_bits {
+            return None;
+        }
+        if bits <= 0 {
+            return Some(u64::MAX);
+        }
+        let s = T::lit(elapsed) * path.inverse_span;
+        Some(if s < T::one() { s } else { T::one() }.to_f64().to_bits())
+    }
+
+    fn same_fraction<T: Real>() {
+        for t0 in [0.01f64, 1.0, 1.99, 2.37, 999.99, 1023.995, 12345.678] {
+            // Frames across a power of two (1.99 to 2.0, 1023.995 to 1024.005):
+            // from t1's side, within a few ulps of the subtraction.
+            let crossing = (t0.to_bits() >> 52) != ((t0 + 0.01f64).to_bits() >> 52);
+            let (f0, f1) = (frame(t0, 0.0, 240.0), frame(t0 + 0.01, 2.4, 240.0));
+            let path = FramePath::<T>::new(&f0, &f1, [0.0; 3]);
+            let t1 = f1.time_s;
+            let mut times: Vec<f64> = (0..=2000).map(|k| t0 + 0.01 * k as f64 / 1999.0).collect();
+            for d in -4i64..=4 {
+                times.push(f64::from_bits((t1.to_bits() as i64 + d) as u64));
+                times.push(f64::from_bits((t0.to_bits() as i64 + d) as u64));
+            }
+            for t in times {
+                let got = match path.fraction(t) {
+                    Fraction::After => None,
+                    Fraction::Before => Some(u64::MAX),
+                    Fraction::Inside(s) => Some(s.to_f64().to_bits()),
+                };
+                let expected = fraction_by_subtraction(&path, t);
+                match (got, expected) {
+                    (Some(g), Some(e)) if crossing && g != u64::MAX && e != u64::MAX => {
+                        let (g, e) = (f64::from_bits(g), f64::from_bits(e));
+                        assert!(
+                            (g - e).abs() <= 4.0 * T::eps().to_f64(),
+                            "t0 {t0}, t {t}: {g} {e}"
+                        );
+                    }
+                    _ => assert_eq!(got, expected, "t0 {t0}, t {t}"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_same_binade_fraction_is_the_subtraction() {
+        same_fraction::<f32>();
+        same_fraction::<f64>();
     }
 
     #[test]

@@ -207,7 +207,9 @@ pub fn frame_reference(
                 .configure(&params)
                 .map_err(|e| fail("configure", &e))?;
             let origin = FramePath::<f64>::run_origin(first);
-            let start = FramePath::<f64>::single(first, origin);
+            // The controller's path: the connection point interpolated directly.
+            let point = solver.model().params().connection_point;
+            let start = FramePath::<f64>::single(first, origin).towing(point);
             solver
                 .trim(&steady_flight(&start.state_at(first.time_s)), first.time_s)
                 .map_err(|e| fail("trim", &e))?;
@@ -219,7 +221,7 @@ pub fn frame_reference(
             ];
             for pair in frames.windows(2) {
                 let (from, to) = (&pair[0], &pair[1]);
-                let path = FramePath::<f64>::new(from, to, origin);
+                let path = FramePath::<f64>::new(from, to, origin).towing(point);
                 let span = to.time_s - from.time_s;
                 let steps = (span / max_step_s - 1e-9).ceil().max(1.0);
                 let h = span / steps;

@@ -19,14 +19,13 @@ use decoy_hil::step_cost::{StepCost, measure};
 /// The benchmark issue's target for one RK4 step, M4 f32.
 const RK4_STEP_TARGET: u32 = 40_000;
 /// Issue 14's target for one RK4-equivalent step (f32, M4): met by the embedded
-/// model (measured 24,840; it was 38,640 with 16 graded segments before issue 14,
-/// 31,200 after its step work: the issue's 16 graded segments still take about
-/// 30,900, firmware/README.md).
+/// model (measured 22,400; it was 38,640 with 16 graded segments before issue 14,
+/// 31,200 after its first step work, firmware/README.md).
 const ISSUE_14_STEP_TARGET: u32 = 25_000;
 /// A guard just above the measurement of a step evaluating all four stages, so that
-/// a regression fails: measured 24,840 on the M4 and 24,875 on the STM32F405 (its
+/// a regression fails: measured 22,400 on the M4 and 22,422 on the STM32F405 (its
 /// finer clock); lower it as the solver gets faster.
-const RK4_STEP_GUARD: u32 = 24_900;
+const RK4_STEP_GUARD: u32 = 22_500;
 
 #[test]
 fn an_rk4_step_on_the_m4_is_within_the_target() {
@@ -74,8 +73,8 @@ fn check_f32_step_cost(board: Board) {
         "the first step does not reuse the output evaluation: {cost:?}"
     );
     // The turn's steps take data-dependent branches (table intervals, the
-    // renormalisation's window): measured 24,600 to 24,840 on the M4, six
-    // 40-instruction ticks, and 24,630 to 24,875 on the STM32F405 (its finer clock).
+    // renormalisation's window): measured 22,320 to 22,400 on the M4, two
+    // 40-instruction ticks, and 22,339 to 22,422 on the STM32F405 (its finer clock).
     assert!(
         cost.four_stages - cost.four_stages_min <= 440,
         "the steady turn's steps differ by more than 440 instructions: {frames:#?}"

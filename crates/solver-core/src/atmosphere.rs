@@ -308,8 +308,10 @@ impl<T: Real> DensityExpansion<T> {
 /// rho + dh (rho' + dh rho''/2), clamped at zero.
 #[inline(always)]
 fn quadratic_density<T: Real>(air: &AirProperties<T>, dh: T) -> T {
-    let half = T::lit(0.5);
-    let rho = air.density + dh * (air.density_slope + half * dh * air.density_curvature);
+    // dh (rho''/2) rather than (dh/2) rho'': the same bits (halving is exact), and
+    // rho''/2 is invariant in the solver's segment loop.
+    let half_curvature = T::lit(0.5) * air.density_curvature;
+    let rho = air.density + dh * (air.density_slope + dh * half_curvature);
     if rho > T::zero() { rho } else { T::zero() }
 }
 

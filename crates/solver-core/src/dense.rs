@@ -25,12 +25,11 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::atmosphere::AirColumn;
 use crate::dynamics::{Workspace, prepare_keeping_loads};
-use crate::error::SolveError;
+use crate::error::{InputError, SolveError};
 use crate::model::Model;
 use crate::motion::{FlightPath, PointKinematics};
 use crate::rk4::DerivativeSource;
 use crate::scalar::{Real, Vec3};
-use crate::solver::connection_and_air;
 use crate::state::{Derivative, State};
 
 /// Result of a dense evaluation.
@@ -264,7 +263,11 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
     }
 
     fn inputs_at(&mut self, time: f64) -> Result<Self::Inputs, SolveError> {
-        Ok(connection_and_air(self.model, &self.path.state_at(time))?)
+        let params = self.model.params();
+        let connection = self.path.point_at(time, &params.connection_point)?;
+        let air = AirColumn::about(&params.environment.atmosphere, -connection.position.z)
+            .map_err(InputError::from)?;
+        Ok((connection, air))
     }
 
     fn evaluate(

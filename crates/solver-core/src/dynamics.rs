@@ -260,7 +260,7 @@ pub fn decoy_aero<T: Real>(
     let cos_a = vhat.x.clamp(-T::one(), T::one());
     let perp = x - vhat * cos_a;
     let sin_a = norm(&perp);
-    let alpha = sin_a.atan2(cos_a);
+    let alpha = sin_a.upper_atan2(cos_a);
     let c = decoy.aero.at(alpha);
     let qs = q * derived.reference_area;
     let qsl = qs * decoy.length;
@@ -387,7 +387,7 @@ pub(crate) fn joint_kinematics<T: Real, const N: usize>(
         joint.position = p;
         joint.velocity = v;
     }
-    if model.decoy().is_some() {
+    if model.has_decoy() {
         ws.decoy.cg_position = p - ws.decoy.tow_from_cg;
     }
 }
@@ -698,7 +698,7 @@ impl<T: Real> Sym3<T> {
 #[inline]
 fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
     let n = model.segment_count();
-    if model.decoy().is_some() { n } else { n - 1 }
+    if model.has_decoy() { n } else { n - 1 }
 }
 
 /// Pass 2: the tension recurrence as a block LDLᵀ two-sweep elimination.
@@ -1001,7 +1001,7 @@ fn finish_tensions<T: Real, const N: usize>(
     probe: T,
 ) -> Result<(), SolveError> {
     let n = model.segment_count();
-    if model.decoy().is_none() {
+    if !model.has_decoy() {
         ws.joint_force[n - 1] = Vec3::zeros();
     }
     if probe.finite() {

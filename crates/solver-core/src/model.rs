@@ -146,6 +146,9 @@ pub struct Model<T: Real, const N: usize> {
     rate_gains: [T; N],
     masses: [T; N],
     decoy: Option<DecoyDerived<T>>,
+    /// `decoy.is_some()`, kept apart: one load where the evaluation only asks
+    /// whether there is a decoy (several times per evaluation).
+    has_decoy: bool,
 }
 
 fn positive<T: Real>(field: &'static str, v: T) -> Result<(), ConfigError> {
@@ -374,6 +377,7 @@ impl<T: Real, const N: usize> Model<T, N> {
             normal_drag_factors: [z; N],
             tangential_drag_factors: [z; N],
             decoy: None,
+            has_decoy: false,
         }
     };
 
@@ -433,6 +437,7 @@ impl<T: Real, const N: usize> Model<T, N> {
             self.normal_drag_factors[i] = area_per_mass * cable.cd_normal;
             self.tangential_drag_factors[i] = area_per_mass * T::pi() * cable.cf_tangential;
         });
+        self.has_decoy = decoy.is_some();
         self.decoy = decoy;
         Ok(())
     }
@@ -470,6 +475,11 @@ impl<T: Real, const N: usize> Model<T, N> {
             &self.normal_drag_factors[..self.segment_count],
             &self.tangential_drag_factors[..self.segment_count],
         )
+    }
+    /// True with a decoy at the cable's end (`decoy().is_some()`, one load).
+    #[inline(always)]
+    pub fn has_decoy(&self) -> bool {
+        self.has_decoy
     }
     /// Decoy parameters, or `None` for a free end.
     pub fn decoy(&self) -> Option<(&DecoyParams<T>, &DecoyDerived<T>)> {

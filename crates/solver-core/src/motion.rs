@@ -125,6 +125,20 @@ impl<T: Real> AircraftState<T> {
 pub trait FlightPath<T: Real> {
     /// The aircraft state at time `t`, s (f64 in every precision, see [`crate::State::time`]).
     fn state_at(&self, t: f64) -> AircraftState<T>;
+
+    /// The kinematics of the point fixed in the aircraft body at `r` (FRD, m) at
+    /// time `t`, s: what the solver samples (the connection point). By default the
+    /// aircraft state at `t`, checked ([`AircraftState::validate`]), then
+    /// [`AircraftState::point`]. A path may give the point's kinematics another
+    /// way (the controller's frame path interpolates them between its two frames);
+    /// it must then agree with `state_at` at the times where the point is pinned
+    /// (bit for bit where it says so) and check its own inputs.
+    #[inline(always)]
+    fn point_at(&self, t: f64, r: &Vec3<T>) -> Result<PointKinematics<T>, InputError> {
+        let aircraft = self.state_at(t);
+        aircraft.validate()?;
+        Ok(aircraft.point(r))
+    }
 }
 
 /// A flight path that is one constant state moved along with its velocity and

@@ -91,7 +91,10 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
 
     #[inline(always)]
     fn inputs_at(&mut self, time: f64) -> Result<Self::Inputs, SolveError> {
-        Ok(inputs_at(self.model, self.air, &self.path.state_at(time))?)
+        let connection = self
+            .path
+            .point_at(time, &self.model.params().connection_point)?;
+        Ok(inputs_at(self.model, self.air, connection)?)
     }
 
     #[inline(always)]
@@ -423,7 +426,8 @@ impl<T: Real, const N: usize> Solver<T, N> {
     fn evaluate_here<P: FlightPath<T> + ?Sized>(&mut self, path: &P) -> Result<(), SolveError> {
         self.evaluated = None;
         let (state, slope) = self.rk4.state_and_last_derivative();
-        let (connection, air) = inputs_at(&self.model, &mut self.air, &path.state_at(state.time))?;
+        let connection = path.point_at(state.time, &self.model.params().connection_point)?;
+        let (connection, air) = inputs_at(&self.model, &mut self.air, connection)?;
         dynamics::evaluate(
             &self.model,
             state,
@@ -439,15 +443,16 @@ impl<T: Real, const N: usize> Solver<T, N> {
     }
 }
 
-/// [`connection_and_air`] with the solver's air column cache `air` (the same result).
+/// The inputs of an evaluation from the connection point's kinematics
+/// ([`FlightPath::point_at`]): the air column about its altitude, from the
+/// solver's cache `air` ([`connection_and_air`]'s result for the default
+/// `point_at`).
 #[inline(always)]
 fn inputs_at<T: Real, const N: usize>(
     model: &Model<T, N>,
     air: &mut Option<AirColumn<T>>,
-    aircraft: &AircraftState<T>,
+    connection: PointKinematics<T>,
 ) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
-    aircraft.validate()?;
-    let connection = aircraft.point(&model.params().connection_point);
     let altitude = -connection.position.z;
     let column = match *air {
         Some(column) if column.serves(altitude) => column,
@@ -527,6 +532,11 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         } else {
             self.ws.joint_force[j - 1]
         }
+    }
+    /// The forces T_1 .. T_N ([`Outputs::joint_force`] of joints 1 to N) as one
+    /// slice, for a pass over them without a branch per joint.
+    pub fn downstream_joint_forces(&self) -> &[Vec3<T>] {
+        &self.ws.joint_force[..self.model.segment_count()]
     }
     /// Cable tension at joint `j`, N: the force's component along the cable, positive
     /// when the cable pulls (|T_j| signed by -T_j . e).

@@ -114,16 +114,6 @@ impl<T: Real, const N: usize> Default for Derivative<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> Derivative<T, N> {
-    /// `self = other` over the first `count` segments (entries beyond stay as they are).
-    pub(crate) fn copy_used(&mut self, other: &Self, count: usize) {
-        self.directions[..count].copy_from_slice(&other.directions[..count]);
-        self.rates[..count].copy_from_slice(&other.rates[..count]);
-        self.decoy_attitude = other.decoy_attitude;
-        self.decoy_rate = other.decoy_rate;
-    }
-}
-
 impl<T: Real, const N: usize> State<T, N> {
     /// The decoy attitude as a unit quaternion.
     pub fn decoy_rotation(&self) -> UnitQuaternion<T> {
