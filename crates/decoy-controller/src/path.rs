@@ -331,10 +331,10 @@ impl<T: Real> FramePath<T> {
     }
 
     /// The same path, with the kinematics of the body-fixed point `point` (FRD, m;
-    /// the connection point) interpolated directly between the two frames by
-    /// [`FlightPath::point_at`], as the aircraft's own position and velocity are
-    /// (cubic Hermite through both frames' point positions and velocities) and its
-    /// acceleration (linear in s), rather than derived from the interpolated
+    /// the connection point) interpolated between the two frames by
+    /// [`FlightPath::point_at`]: the aircraft's own Hermite position and velocity
+    /// plus the point's offsets R r and R (w x r) at both frames, linear in s, and
+    /// its acceleration linear in s, rather than derived from the interpolated
     /// aircraft state (position, nlerp attitude, rates and accelerations, then
     /// p + R r, v + R (w x r), a + R (dw x r + w x (w x r))). At both frames the
     /// point's kinematics are those [`AircraftState::point`] gives for the frame's
