@@ -13,12 +13,22 @@
 //! | stack high-water mark | stack painting (cortex-m-stack, cortex-m-rt's `_stack_end`) |
 //!
 //! Clocks. With feature `qemu` the clock tree is left on the 16 MHz HSI
-//! (`rcc.freeze(Config::hsi())`): QEMU does not model the RCC, so any HSE or PLL
-//! setup waits forever for its ready bits. The HAL then computes USART1's divider for
-//! 16 MHz, which QEMU ignores (it moves bytes as fast as its chardev does), while
-//! QEMU runs SysTick at 168 MHz whatever is configured. Without `qemu` (the real
-//! part) the core runs from the PLL at [`CORE_CLOCK_HZ`] off an [`HSE_HZ`] crystal
-//! (the Netduino Plus 2's); that path cannot run under QEMU and is untested here.
+//! (`rcc.freeze(Config::hsi())`): QEMU does not model the RCC's clocks (7.2 none
+//! of the RCC, 9 and later only its reset and enable registers), so any HSE or
+//! PLL setup waits forever for its ready bits. USART1's divider is then computed
+//! for 16 MHz, which QEMU ignores (it moves bytes as fast as its chardev does),
+//! while QEMU runs SysTick at 168 MHz whatever is configured. Without `qemu` (the
+//! real part) the core runs from the PLL at [`CORE_CLOCK_HZ`] off an [`HSE_HZ`]
+//! crystal (the Netduino Plus 2's); that path cannot run under QEMU and is
+//! untested here.
+//!
+//! The host link under QEMU. Without `qemu` USART1 is the HAL's serial driver.
+//! With `qemu` it is brought up at the register level (module `usart1`), doing what the HAL's `Serial::new` does except the RCC reset pulse of
+//! USART1, which crashes QEMU 10 (a segmentation fault of QEMU itself at boot),
+//! and polled with the same register accesses as the HAL's driver; so the board
+//! runs under QEMU 7.2 and 10 alike, with the same answers and instruction
+//! counts. The clocks, the GPIO and the advisory pin stay on the HAL in both
+//! builds.
 //!
 //! Memory. The real part's map is `memory-stm32f405.x` (flash 1 MiB at 0x0800_0000,
 //! SRAM 128 KiB at 0x2000_0000). The 64 KiB CCM at 0x1000_0000 is not used: QEMU
@@ -40,7 +50,6 @@ use stm32f4xx_hal::gpio::{Output, PA5, PushPull};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config as RccConfig;
-use stm32f4xx_hal::serial::{self, Rx, Tx};
 
 #[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
 compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
@@ -94,14 +103,9 @@ impl Board {
         let gpioa = device.GPIOA.split(&mut rcc);
         let mut advisory = gpioa.pa5.into_push_pull_output();
         advisory.set_low();
-        let config = serial::Config::default().baudrate(BAUD_RATE.bps());
-        let usart = device
-            .USART1
-            .serial::<u8>((gpioa.pa9, gpioa.pa10), config, &mut rcc)
-            .ok()?;
-        let (tx, rx) = usart.split();
+        let port = usart1::Port::new(device.USART1, gpioa.pa9, gpioa.pa10, &mut rcc)?;
         Some(Board {
-            uart: Uart { tx, rx },
+            uart: Uart { port },
             clock: Clock::new(core.SYST),
             advisory,
         })
@@ -121,11 +125,10 @@ fn clock_config() -> RccConfig {
     RccConfig::hse(HSE_HZ.Hz()).sysclk(CORE_CLOCK_HZ.Hz())
 }
 
-/// The host link's UART: USART1 through the HAL's embedded-hal-nb serial traits,
+/// The host link's UART: USART1 polled a byte at a time (`usart1::Port`),
 /// offered as `embedded-io` 0.7 (the HAL implements neither `Read` nor 0.7).
 pub struct Uart {
-    tx: Tx<pac::USART1, u8>,
-    rx: Rx<pac::USART1, u8>,
+    port: usart1::Port,
 }
 
 /// What can go wrong on the UART (the HAL's receive errors).
@@ -156,29 +159,212 @@ impl embedded_io::Error for UartError {
     }
 }
 
-impl From<serial::Error> for UartError {
-    fn from(error: serial::Error) -> Self {
-        match error {
-            serial::Error::Overrun => UartError::RxOverrun,
-            _ => UartError::RxLine,
+/// USART1 on the real part (without feature `qemu`): the HAL's serial driver,
+/// brought up by `Serial::new` (clock enable, the RCC reset pulse, divider, frame
+/// format) and polled through its embedded-hal-nb traits.
+#[cfg(not(feature = "qemu"))]
+mod usart1 {
+    use stm32f4xx_hal::gpio::{PA9, PA10};
+    use stm32f4xx_hal::pac;
+    use stm32f4xx_hal::prelude::*;
+    use stm32f4xx_hal::rcc::Rcc;
+    use stm32f4xx_hal::serial::{self, Rx, RxISR, Tx, TxISR};
+
+    use super::{BAUD_RATE, UartError};
+
+    impl From<serial::Error> for UartError {
+        fn from(error: serial::Error) -> Self {
+            match error {
+                serial::Error::Overrun => UartError::RxOverrun,
+                _ => UartError::RxLine,
+            }
+        }
+    }
+
+    /// USART1's two halves from the HAL.
+    pub(super) struct Port {
+        tx: Tx<pac::USART1, u8>,
+        rx: Rx<pac::USART1, u8>,
+    }
+
+    impl Port {
+        /// USART1 on PA9 (TX) and PA10 (RX) at [`BAUD_RATE`], 8N1; `None` if the
+        /// HAL rejects the configuration for the bus clock.
+        pub(super) fn new(usart: pac::USART1, tx: PA9, rx: PA10, rcc: &mut Rcc) -> Option<Self> {
+            let config = serial::Config::default().baudrate(BAUD_RATE.bps());
+            let (tx, rx) = usart.serial::<u8>((tx, rx), config, rcc).ok()?.split();
+            Some(Port { tx, rx })
+        }
+
+        /// Reads one byte if one is waiting (the HAL clears an error flag by reading it).
+        pub(super) fn try_read_byte(&mut self) -> Result<Option<u8>, UartError> {
+            match embedded_hal_nb::serial::Read::read(&mut self.rx) {
+                Ok(byte) => Ok(Some(byte)),
+                Err(nb::Error::WouldBlock) => Ok(None),
+                Err(nb::Error::Other(e)) => Err(e.into()),
+            }
+        }
+
+        /// Writes one byte if the transmit register has room.
+        pub(super) fn try_write_byte(&mut self, byte: u8) -> bool {
+            // The HAL's transmit path has no error other than "would block".
+            embedded_hal_nb::serial::Write::write(&mut self.tx, byte).is_ok()
+        }
+
+        /// Whether the last byte has left the shift register.
+        pub(super) fn transmission_complete(&mut self) -> bool {
+            embedded_hal_nb::serial::Write::flush(&mut self.tx).is_ok()
+        }
+
+        /// Whether a received byte is waiting.
+        pub(super) fn rx_not_empty(&self) -> bool {
+            self.rx.is_rx_not_empty()
+        }
+
+        /// Whether the transmit register has room.
+        pub(super) fn tx_empty(&self) -> bool {
+            self.tx.is_tx_empty()
         }
     }
 }
 
-impl Uart {
-    /// Reads one byte if one is waiting (the HAL clears an error flag by reading it).
-    fn try_read_byte(&mut self) -> Result<Option<u8>, UartError> {
-        match embedded_hal_nb::serial::Read::read(&mut self.rx) {
-            Ok(byte) => Ok(Some(byte)),
-            Err(nb::Error::WouldBlock) => Ok(None),
-            Err(nb::Error::Other(e)) => Err(e.into()),
+/// USART1 under QEMU (feature `qemu`): brought up at the register level without
+/// the RCC reset pulse of the HAL's `Serial::new`, then polled with the same
+/// register accesses as the HAL's driver.
+///
+/// Why. `Serial::new` (stm32f4xx-hal 0.23, `src/serial.rs`, `_new`) enables
+/// USART1's clock and then resets it: it sets and clears bit 4 (USART1RST) of
+/// RCC_APB2RSTR. QEMU 7.2 has no RCC model and ignores both writes. QEMU 9 added
+/// one for the STM32F4 (`hw/misc/stm32_rcc.c`: "only reset and enable registers
+/// are implemented") that raises the peripheral's reset line on the falling edge
+/// of a reset bit; on `netduinoplus2` the edge of USART1's bit makes QEMU 10.0.2
+/// itself die of a segmentation fault at boot (`qemu_set_irq` from
+/// `memory_region_dispatch_write`; GPIOA's reset, AHB1RSTR bit 0, does not). The
+/// HAL has no constructor without the pulse (`Tx::new` and `Rx::new` are private
+/// to the crate), and after a reset of the chip USART1's registers hold their
+/// reset values anyway.
+///
+/// What. Everything `Serial::new` does but the pulse, in its order: USART1's
+/// clock enabled through the HAL's `rcc::Enable` (the same write); BRR from the
+/// bus clock with 16x oversampling, rounded as the HAL's `calculate_brr`
+/// rounds; CR2 and CR3 to their reset values; CR1 with UE, TE and RE (8 data
+/// bits, no parity); CR2 with one stop bit; then PA9 and PA10 to alternate
+/// function 7 through the HAL's GPIO. The byte access repeats the HAL's
+/// (`src/serial/uart_impls.rs`: `read_u16`, `write_u16`, `flush` and the status
+/// flags): the same reads and writes of SR and DR in the same order, so the
+/// link behaves as the hardware build's, and the answers and instruction counts
+/// are those of the HAL build under QEMU 7.2 (checked bit for bit: a `decoy hil`
+/// run's time series, counts included, is byte-identical).
+#[cfg(feature = "qemu")]
+mod usart1 {
+    use stm32f4xx_hal::gpio::{Alternate, PA9, PA10};
+    use stm32f4xx_hal::pac;
+    use stm32f4xx_hal::rcc::{self, Rcc};
+
+    use super::{BAUD_RATE, UartError};
+
+    /// USART1's alternate function on PA9 and PA10.
+    const USART1_AF: u8 = 7;
+
+    /// USART1 and its pins, configured.
+    pub(super) struct Port {
+        usart: pac::USART1,
+        _tx: PA9<Alternate<USART1_AF>>,
+        _rx: PA10<Alternate<USART1_AF>>,
+    }
+
+    /// The BRR value for `baud` from the bus clock `pclk_hz` with 16x oversampling
+    /// (OVER8 = 0), rounded to the nearest as the HAL's `calculate_brr` does;
+    /// `None` where 16x oversampling cannot reach the rate (the HAL would fall
+    /// back to 8x, which no clock of this firmware needs).
+    const fn divider(pclk_hz: u32, baud: u32) -> Option<u16> {
+        if baud == 0 || pclk_hz / 16 < baud {
+            return None;
+        }
+        let div = (pclk_hz + baud / 2) / baud;
+        if div > u16::MAX as u32 {
+            None
+        } else {
+            Some(div as u16)
         }
     }
 
-    /// Writes one byte if the transmit register has room.
-    fn try_write_byte(&mut self, byte: u8) -> bool {
-        // The HAL's transmit path has no error other than "would block".
-        embedded_hal_nb::serial::Write::write(&mut self.tx, byte).is_ok()
+    impl Port {
+        /// USART1 on PA9 (TX) and PA10 (RX) at [`BAUD_RATE`], 8N1, without the
+        /// RCC reset pulse; `None` if the bus clock cannot give the rate.
+        pub(super) fn new(usart: pac::USART1, tx: PA9, rx: PA10, rcc: &mut Rcc) -> Option<Self> {
+            let pclk_hz = <pac::USART1 as rcc::BusClock>::clock(&rcc.clocks).raw();
+            let div = divider(pclk_hz, BAUD_RATE)?;
+            <pac::USART1 as rcc::Enable>::enable(rcc);
+            usart.brr().write(|w| {
+                w.div_mantissa().set(div >> 4);
+                w.div_fraction().set((div & 0xF) as u8)
+            });
+            usart.cr2().reset();
+            usart.cr3().reset();
+            usart.cr1().write(|w| {
+                w.ue().set_bit();
+                w.over8().clear_bit();
+                w.te().set_bit();
+                w.re().set_bit();
+                w.m().clear_bit();
+                w.pce().clear_bit();
+                w.ps().clear_bit()
+            });
+            usart.cr2().write(|w| w.stop().stop1());
+            Some(Port {
+                usart,
+                _tx: tx.into_alternate::<USART1_AF>(),
+                _rx: rx.into_alternate::<USART1_AF>(),
+            })
+        }
+
+        /// Reads one byte if one is waiting. A parity, framing, noise or overrun
+        /// flag is cleared by reading the data register and reported, in the HAL's
+        /// order of precedence (parity, framing, noise, then overrun).
+        pub(super) fn try_read_byte(&mut self) -> Result<Option<u8>, UartError> {
+            let sr = self.usart.sr().read();
+            let line_error = sr.pe().bit_is_set() || sr.fe().bit_is_set() || sr.nf().bit_is_set();
+            if line_error || sr.ore().bit_is_set() {
+                self.usart.dr().read();
+                return Err(if line_error {
+                    UartError::RxLine
+                } else {
+                    UartError::RxOverrun
+                });
+            }
+            if sr.rxne().bit_is_set() {
+                // Eight data bits: the ninth bit of DR is zero.
+                Ok(Some(self.usart.dr().read().dr().bits() as u8))
+            } else {
+                Ok(None)
+            }
+        }
+
+        /// Writes one byte if the transmit register has room.
+        pub(super) fn try_write_byte(&mut self, byte: u8) -> bool {
+            if self.usart.sr().read().txe().bit_is_set() {
+                self.usart.dr().write(|w| w.dr().set(u16::from(byte)));
+                true
+            } else {
+                false
+            }
+        }
+
+        /// Whether the last byte has left the shift register.
+        pub(super) fn transmission_complete(&mut self) -> bool {
+            self.usart.sr().read().tc().bit_is_set()
+        }
+
+        /// Whether a received byte is waiting.
+        pub(super) fn rx_not_empty(&self) -> bool {
+            self.usart.sr().read().rxne().bit_is_set()
+        }
+
+        /// Whether the transmit register has room.
+        pub(super) fn tx_empty(&self) -> bool {
+            self.usart.sr().read().txe().bit_is_set()
+        }
     }
 }
 
@@ -190,14 +376,13 @@ impl embedded_io::Read for Uart {
     /// Blocks until at least one byte is available, then returns those waiting
     /// (the receive register holds one byte).
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
-        common::read_blocking(buf, || self.try_read_byte())
+        common::read_blocking(buf, || self.port.try_read_byte())
     }
 }
 
 impl embedded_io::ReadReady for Uart {
     fn read_ready(&mut self) -> Result<bool, UartError> {
-        use stm32f4xx_hal::serial::RxISR;
-        Ok(self.rx.is_rx_not_empty())
+        Ok(self.port.rx_not_empty())
     }
 }
 
@@ -206,21 +391,20 @@ impl embedded_io::Write for Uart {
     /// as it takes without waiting again.
     fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
         Ok(common::write_blocking(buf, |byte| {
-            self.try_write_byte(byte)
+            self.port.try_write_byte(byte)
         }))
     }
 
     /// Waits until the last byte has left the shift register.
     fn flush(&mut self) -> Result<(), UartError> {
-        while embedded_hal_nb::serial::Write::flush(&mut self.tx).is_err() {}
+        while !self.port.transmission_complete() {}
         Ok(())
     }
 }
 
 impl embedded_io::WriteReady for Uart {
     fn write_ready(&mut self) -> Result<bool, UartError> {
-        use stm32f4xx_hal::serial::TxISR;
-        Ok(self.tx.is_tx_empty())
+        Ok(self.port.tx_empty())
     }
 }
 
