@@ -20,6 +20,10 @@
 #                      Neither set: UART0 is not connected (the firmware boots,
 #                      logs and idles).
 #   QEMU_TIMEOUT       seconds before the run is stopped (default 120).
+#   DECOY_QEMU         the QEMU binary (a path, or a name on PATH) instead of
+#                      qemu-system-arm from PATH: for example the second version
+#                      `cargo xtask setup` unpacks under target/qemu/ (the same
+#                      variable decoy-hil reads).
 #   DEFMT_RAW=1        write the raw defmt stream to stdout instead of decoding it
 #                      with `defmt-print -e ELF` (install: cargo install defmt-print --locked).
 #
@@ -34,8 +38,13 @@ if [[ $# -lt 1 ]]; then
 fi
 ELF="$1"
 
-if ! command -v qemu-system-arm >/dev/null; then
-    echo "qemu-system-arm not found: run \`cargo xtask setup\`" >&2
+qemu_bin="${DECOY_QEMU:-qemu-system-arm}"
+if ! command -v "$qemu_bin" >/dev/null; then
+    if [[ -n "${DECOY_QEMU:-}" ]]; then
+        echo "DECOY_QEMU=$DECOY_QEMU: no such QEMU binary" >&2
+    else
+        echo "qemu-system-arm not found: run \`cargo xtask setup\`" >&2
+    fi
     exit 127
 fi
 
@@ -64,7 +73,7 @@ else
 fi
 
 qemu=(timeout --kill-after=5 "${QEMU_TIMEOUT:-120}"
-    qemu-system-arm "${machine[@]}"
+    "$qemu_bin" "${machine[@]}"
     -display none -monitor none
     -semihosting-config enable=on,target=native
     -icount shift=0,align=off,sleep=off

@@ -273,13 +273,18 @@ pub struct SessionLog {
 
 impl Session {
     /// Boots `elf` on `board` with its UART on a fresh TCP port, accepts the
-    /// connection and reads the boot [`decoy_link::Hello`].
+    /// connection and reads the boot [`decoy_link::Hello`]; QEMU is the
+    /// [`crate::qemu::default_program`] (`$DECOY_QEMU`, else `qemu-system-arm`).
     pub fn start(elf: &Path, board: Board) -> Result<Self, LinkError> {
+        Self::start_with(elf, Qemu::new().board(board))
+    }
+
+    /// [`Session::start`] with the launcher `qemu`: its binary and board (the
+    /// session sets the UART and the time limit).
+    pub fn start_with(elf: &Path, qemu: Qemu) -> Result<Self, LinkError> {
+        let board = qemu.get_board();
         let listener = SerialListener::bind()?;
-        let qemu = Qemu::new()
-            .board(board)
-            .serial(listener.qemu_serial())
-            .timeout(SESSION_TIMEOUT);
+        let qemu = qemu.serial(listener.qemu_serial()).timeout(SESSION_TIMEOUT);
         let mut child = qemu.spawn(elf).map_err(LinkError::Qemu)?;
         let stream = match listener.accept(CONNECT_TIMEOUT, Some(&mut child)) {
             Ok(stream) => stream,

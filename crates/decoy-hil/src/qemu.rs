@@ -4,6 +4,13 @@
 //! firmware that never exits, or a test that panics, leaves no QEMU behind. Its
 //! stdout and stderr are read on threads, so a chatty child cannot block on a full
 //! pipe.
+//!
+//! Which QEMU runs: [`Qemu::new`] takes `$DECOY_QEMU` ([`QEMU_ENV`]: a path, or a
+//! name looked up on `PATH`) if it is set, else `qemu-system-arm` from `PATH`;
+//! [`Qemu::program`] chooses another binary for one launcher. `cargo xtask
+//! setup` unpacks a second QEMU version for comparison under the workspace's
+//! [`COMPARISON_DIR`] (never installed system-wide), which
+//! [`comparison_binaries`] lists; [`version_of`] reads a binary's version.
 
 use std::ffi::{OsStr, OsString};
 use std::fmt;
@@ -15,6 +22,170 @@ use std::time::{Duration, Instant};
 
 /// The QEMU binary for the Cortex-M boards.
 pub const QEMU: &str = "qemu-system-arm";
+
+/// The environment variable naming the QEMU binary to run instead of [`QEMU`]
+/// from `PATH` (a path, or a name looked up on `PATH`); read by [`Qemu::new`]
+/// (so by `decoy hil`, `decoy bridge --backend qemu`, the benches and the HIL
+/// tests) and by `firmware/qemu-run.sh`. Unset or empty: [`QEMU`].
+pub const QEMU_ENV: &str = "DECOY_QEMU";
+
+/// Where `cargo xtask setup` unpacks a second QEMU version for comparison,
+/// relative to the workspace root: `target/qemu/<Debian version>/`, the
+/// package's files as `dpkg-deb -x` lays them out, the binary in
+/// [`COMPARISON_BINARY`] (xtask's `qemu.rs` writes the same layout).
+pub const COMPARISON_DIR: &str = "target/qemu";
+
+/// The binary within one version's directory under [`COMPARISON_DIR`].
+pub const COMPARISON_BINARY: &str = "usr/bin/qemu-system-arm";
+
+/// The file in [`COMPARISON_DIR`] where setup says why it could not provide a
+/// second QEMU version (removed when it could).
+pub const COMPARISON_UNAVAILABLE: &str = "unavailable.txt";
+
+/// The QEMU binary [`Qemu::new`] runs: `$DECOY_QEMU` ([`QEMU_ENV`]) if set and
+/// not empty, else [`QEMU`] (looked up on `PATH`).
+pub fn default_program() -> PathBuf {
+    match std::env::var_os(QEMU_ENV) {
+        Some(program) if !program.is_empty() => PathBuf::from(program),
+        _ => PathBuf::from(QEMU),
+    }
+}
+
+/// The comparison binaries `cargo xtask setup` unpacked under `root` (the
+/// workspace root): every `target/qemu/*/usr/bin/qemu-system-arm` that exists,
+/// sorted by path.
+pub fn comparison_binaries(root: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(root.join(COMPARISON_DIR)) else {
+        return Vec::new();
+    };
+    let mut binaries: Vec<PathBuf> = entries
+        .filter_map(|entry| entry.ok())
+        .map(|entry| entry.path().join(COMPARISON_BINARY))
+        .filter(|binary| binary.is_file())
+        .collect();
+    binaries.sort();
+    binaries
+}
+
+/// Why `cargo xtask setup` could not provide a second QEMU version under `root`,
+/// if it said so ([`COMPARISON_UNAVAILABLE`]).
+pub fn comparison_unavailable(root: &Path) -> Option<String> {
+    std::fs::read_to_string(root.join(COMPARISON_DIR).join(COMPARISON_UNAVAILABLE))
+        .ok()
+        .map(|reason| reason.trim().to_owned())
+}
+
+/// A QEMU binary and the version it reports.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct QemuVersion {
+    /// The binary.
+    pub program: PathBuf,
+    /// The version number, `10.0.2` in "QEMU emulator version 10.0.2 (Debian ...)".
+    pub version: String,
+    /// The first line of `--version`, as printed.
+    pub line: String,
+}
+
+impl QemuVersion {
+    /// The major version (`10` for `10.0.2`), if the number starts with one.
+    pub fn major(&self) -> Option<u32> {
+        self.version.split('.').next()?.parse().ok()
+    }
+}
+
+impl fmt::Display for QemuVersion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "QEMU {} ({})", self.version, self.program.display())
+    }
+}
+
+/// Why a QEMU binary's version could not be read.
+#[derive(Debug)]
+pub enum VersionError {
+    /// The binary could not be run (missing, or it timed out).
+    Run(RunError),
+    /// It ran and failed (a missing library, for example).
+    Failed {
+        /// The binary.
+        program: PathBuf,
+        /// What it printed.
+        output: Captured,
+    },
+    /// Its first line is not "QEMU emulator version X.Y.Z ...".
+    Unrecognised {
+        /// The binary.
+        program: PathBuf,
+        /// The first line it printed.
+        line: String,
+    },
+}
+
+impl fmt::Display for VersionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            VersionError::Run(e) => write!(f, "reading the QEMU version: {e}"),
+            VersionError::Failed { program, output } => write!(
+                f,
+                "`{} --version` failed\n{}",
+                program.display(),
+                output.describe()
+            ),
+            VersionError::Unrecognised { program, line } => write!(
+                f,
+                "`{} --version` printed `{line}`, not \"QEMU emulator version X.Y.Z\"",
+                program.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for VersionError {}
+
+/// Runs `program --version` and reads its version.
+pub fn version_of(program: &Path) -> Result<QemuVersion, VersionError> {
+    let output = run_with_timeout(
+        Command::new(program).arg("--version"),
+        Duration::from_secs(30),
+        QEMU_MISSING_HINT,
+    )
+    .map_err(VersionError::Run)?;
+    if !output.status.success() {
+        return Err(VersionError::Failed {
+            program: program.to_owned(),
+            output,
+        });
+    }
+    let line = output
+        .stdout_text()
+        .lines()
+        .next()
+        .unwrap_or_default()
+        .trim()
+        .to_owned();
+    match parse_version(&line) {
+        Some(version) => Ok(QemuVersion {
+            program: program.to_owned(),
+            version: version.to_owned(),
+            line,
+        }),
+        None => Err(VersionError::Unrecognised {
+            program: program.to_owned(),
+            line,
+        }),
+    }
+}
+
+/// The version number in `--version`'s first line ("QEMU emulator version
+/// 10.0.2 (Debian 1:10.0.2+ds-2+deb13u1~bpo12+1)" gives `10.0.2`).
+fn parse_version(line: &str) -> Option<&str> {
+    let version = line
+        .strip_prefix("QEMU emulator version ")?
+        .split_whitespace()
+        .next()?;
+    version
+        .starts_with(|c: char| c.is_ascii_digit())
+        .then_some(version)
+}
 
 /// Board and CPU: MPS2 AN386, Cortex-M4F (4 MiB flash at 0, 4 MiB RAM at 0x2000_0000).
 pub const BOARD_ARGS: &[&str] = &["-M", "mps2-an386", "-cpu", "cortex-m4"];
@@ -358,8 +529,8 @@ pub fn run_with_timeout(
 }
 
 /// What to tell the user when QEMU is missing.
-pub const QEMU_MISSING_HINT: &str =
-    "QEMU for Arm is not installed; run `cargo xtask setup` (it installs qemu-system-arm)";
+pub const QEMU_MISSING_HINT: &str = "QEMU for Arm is not installed; run `cargo xtask setup` (it installs \
+     qemu-system-arm), or check the binary `$DECOY_QEMU` names";
 
 /// A QEMU invocation on the firmware's board.
 #[derive(Clone, Debug)]
@@ -378,10 +549,11 @@ impl Default for Qemu {
 }
 
 impl Qemu {
-    /// `qemu-system-arm` from `PATH`, 120 s time limit, UART0 unconnected.
+    /// The [`default_program`] (`$DECOY_QEMU`, else `qemu-system-arm` from
+    /// `PATH`) on [`Board::M4`], 120 s time limit, UART0 unconnected.
     pub fn new() -> Self {
         Qemu {
-            program: PathBuf::from(QEMU),
+            program: default_program(),
             board: Board::M4,
             timeout: Duration::from_secs(120),
             serial: OsString::from("none"),
@@ -389,10 +561,27 @@ impl Qemu {
         }
     }
 
+    /// Sets the QEMU binary (a path, or a name looked up on `PATH`; default
+    /// [`default_program`]).
+    pub fn program(mut self, program: impl Into<PathBuf>) -> Self {
+        self.program = program.into();
+        self
+    }
+
+    /// The QEMU binary this launcher runs.
+    pub fn get_program(&self) -> &Path {
+        &self.program
+    }
+
     /// Sets the board (default [`Board::M4`]).
     pub fn board(mut self, board: Board) -> Self {
         self.board = board;
         self
+    }
+
+    /// The board this launcher boots.
+    pub fn get_board(&self) -> Board {
+        self.board
     }
 
     /// Sets the time limit of a run.
@@ -524,6 +713,73 @@ mod tests {
         );
         assert!(line.contains("-serial none"), "{line}");
         assert!(line.ends_with("-kernel fw.elf"), "{line}");
+    }
+
+    #[test]
+    fn the_binary_can_be_chosen() {
+        let qemu = Qemu::new()
+            .program("/opt/qemu-7.2/bin/qemu-system-arm")
+            .board(Board::Stm32f405);
+        assert_eq!(
+            qemu.get_program(),
+            Path::new("/opt/qemu-7.2/bin/qemu-system-arm")
+        );
+        assert_eq!(qemu.get_board(), Board::Stm32f405);
+        let cmd = qemu.command(Path::new("fw.elf"));
+        assert_eq!(cmd.get_program(), "/opt/qemu-7.2/bin/qemu-system-arm");
+        assert_eq!(cmd.get_args().next().unwrap(), "-M");
+    }
+
+    #[test]
+    fn version_lines() {
+        assert_eq!(
+            parse_version("QEMU emulator version 10.0.2 (Debian 1:10.0.2+ds-2+deb13u1~bpo12+1)"),
+            Some("10.0.2")
+        );
+        assert_eq!(
+            parse_version("QEMU emulator version 7.2.22 (Debian 1:7.2+dfsg-7+deb12u18+b3)"),
+            Some("7.2.22")
+        );
+        assert_eq!(parse_version("QEMU emulator version 9.1.0"), Some("9.1.0"));
+        assert_eq!(parse_version("qemu-img version 10.0.2"), None);
+        assert_eq!(parse_version("QEMU emulator version (none)"), None);
+        let v = QemuVersion {
+            program: PathBuf::from("qemu-system-arm"),
+            version: "10.0.2".into(),
+            line: String::new(),
+        };
+        assert_eq!(v.major(), Some(10));
+    }
+
+    #[test]
+    fn a_binary_that_is_not_qemu_is_named() {
+        let err = version_of(Path::new("/bin/true")).unwrap_err();
+        assert!(matches!(err, VersionError::Unrecognised { .. }), "{err}");
+        let err = version_of(Path::new("definitely-not-installed-qemu")).unwrap_err();
+        assert!(err.to_string().contains("DECOY_QEMU"), "{err}");
+    }
+
+    #[test]
+    fn comparison_copies_are_found_where_setup_puts_them() {
+        let root = std::env::temp_dir().join(format!("decoy-hil-qemu-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        assert!(comparison_binaries(&root).is_empty());
+        assert_eq!(comparison_unavailable(&root), None);
+        let version = root.join(COMPARISON_DIR).join("7.2+dfsg-7+deb12u18+b3");
+        std::fs::create_dir_all(version.join("usr/bin")).unwrap();
+        std::fs::create_dir_all(root.join(COMPARISON_DIR).join("empty")).unwrap();
+        std::fs::write(version.join(COMPARISON_BINARY), b"").unwrap();
+        std::fs::write(
+            root.join(COMPARISON_DIR).join(COMPARISON_UNAVAILABLE),
+            "no apt-get\n",
+        )
+        .unwrap();
+        assert_eq!(
+            comparison_binaries(&root),
+            [version.join(COMPARISON_BINARY)]
+        );
+        assert_eq!(comparison_unavailable(&root).as_deref(), Some("no apt-get"));
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

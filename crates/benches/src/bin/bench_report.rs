@@ -301,6 +301,9 @@ fn machine() -> Machine {
         os,
         rustc: first_line("rustc", &["--version"]),
         valgrind: first_line("valgrind", &["--version"]),
-        qemu: first_line(decoy_hil::qemu::QEMU, &["--version"]),
+        qemu: first_line(
+            &decoy_hil::qemu::default_program().to_string_lossy(),
+            &["--version"],
+        ),
     }
 }
