@@ -9,9 +9,11 @@
 //! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
 //!   [`bench_report`]).
 
+mod apt;
 mod layering;
 mod process;
 mod python;
+mod qemu;
 mod setup;
 
 use std::path::{Path, PathBuf};

@@ -7,13 +7,21 @@
 //! `target/xtask-toolchain` (`rustup` or `debian`) for later tools.
 //!
 //! `XTASK_TOOLCHAIN=debian` forces the Debian fallback (to exercise it in CI).
+//!
+//! Packages are installed through `apt.rs`, which never removes one: every
+//! install is simulated first and run with `--no-remove`. QEMU (`qemu.rs`):
+//! the system's `qemu-system-arm`, of the installed QEMU packages' version when
+//! Debian's candidate would remove one of them, and a second QEMU version for
+//! comparison, unpacked privately under `target/qemu/`.
 
 use std::fs;
 use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
+use crate::apt::Apt;
 use crate::process::{self, Result};
+use crate::qemu;
 
 /// The bare-metal target of the firmware and of the solver's no_std build.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
@@ -22,9 +30,6 @@ pub const TARGET: &str = "thumbv7em-none-eabihf";
 const RUSTUP_TIMEOUT: Duration = Duration::from_secs(90);
 /// Attempts of `rustup target add` before falling back (one once stalled > 60 s).
 const RUSTUP_ATTEMPTS: u32 = 2;
-
-/// Debian package and the binary it provides: QEMU for the Cortex-M boards.
-const QEMU: (&str, &str) = ("qemu-system-arm", "qemu-system-arm");
 
 /// Debian packages of the fallback cross toolchain.
 const DEBIAN_TOOLCHAIN_PACKAGES: &[&str] = &[
@@ -103,61 +108,6 @@ struct Report {
     missing: Vec<String>,
 }
 
-/// Runs `apt-get`, with `sudo` when not root, updating the index at most once.
-#[derive(Default)]
-struct Apt {
-    updated: bool,
-}
-
-impl Apt {
-    fn command(args: &[&str]) -> Result<Command> {
-        let manual = format!("apt-get {}", args.join(" "));
-        if process::which("apt-get").is_none() {
-            return Err(format!(
-                "apt-get not found; install by hand the equivalent of: {manual}"
-            ));
-        }
-        let mut cmd = if is_root() {
-            Command::new("apt-get")
-        } else if process::which("sudo").is_some() {
-            let mut cmd = Command::new("sudo");
-            cmd.args(["DEBIAN_FRONTEND=noninteractive", "apt-get"]);
-            cmd
-        } else {
-            return Err(format!(
-                "not root and sudo is not available; as root run: {manual}"
-            ));
-        };
-        cmd.env("DEBIAN_FRONTEND", "noninteractive")
-            .args(["-o", "DPkg::Lock::Timeout=300"])
-            .args(args);
-        Ok(cmd)
-    }
-
-    fn install(&mut self, packages: &[&str]) -> Result<()> {
-        if !self.updated {
-            self.updated = true;
-            // A partly failing index update (one unreachable mirror) should not stop
-            // the install; apt-get install says clearly if a package is unavailable.
-            if let Err(e) = process::run(&mut Self::command(&["update"])?) {
-                println!("warning: {e}; trying the install anyway");
-            }
-        }
-        let mut args = vec!["install", "-y", "--no-install-recommends"];
-        args.extend_from_slice(packages);
-        process::run(&mut Self::command(&args)?)
-    }
-}
-
-fn is_root() -> bool {
-    process::output(Command::new("id").arg("-u")).is_ok_and(|uid| uid.trim() == "0")
-}
-
-fn dpkg_installed(package: &str) -> bool {
-    process::output(Command::new("dpkg-query").args(["-W", "-f=${Status}", package]))
-        .is_ok_and(|status| status.trim_end().ends_with("install ok installed"))
-}
-
 /// First line of `<program> <args>`'s output, if it runs.
 fn version(program: &str, args: &[&str]) -> Option<String> {
     let out = process::output(Command::new(program).args(args)).ok()?;
@@ -184,7 +134,7 @@ pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
         Scope::Full => {
             components(&mut report);
             let toolchain = target(root, &mut report, &mut apt)?;
-            qemu(&mut report, &mut apt)?;
+            qemus(root, &mut report, &mut apt)?;
             defmt_print(&mut report)?;
             cargo_machete(&mut report)?;
             python_env(root, &mut report)?;
@@ -312,7 +262,7 @@ fn debian_toolchain(report: &mut Report, apt: &mut Apt) -> Result<()> {
     let missing: Vec<&str> = DEBIAN_TOOLCHAIN_PACKAGES
         .iter()
         .copied()
-        .filter(|p| !dpkg_installed(p))
+        .filter(|p| !crate::apt::installed(p))
         .collect();
     for p in DEBIAN_TOOLCHAIN_PACKAGES
         .iter()
@@ -326,7 +276,7 @@ fn debian_toolchain(report: &mut Report, apt: &mut Apt) -> Result<()> {
             "missing: Debian packages {}; installing them",
             missing.join(" ")
         );
-        apt.install(&missing)
+        apt.install(None, None, &missing)
             .map_err(|e| format!("cannot install the fallback toolchain: {e}"))?;
         report
             .installed
@@ -368,22 +318,36 @@ fn record(root: &Path, toolchain: Toolchain) -> Result<()> {
         .map_err(|e| format!("cannot write {}: {e}", file.display()))
 }
 
-fn qemu(report: &mut Report, apt: &mut Apt) -> Result<()> {
-    let (package, binary) = QEMU;
-    if process::which(binary).is_some() {
-        let v = version(binary, &["--version"]).unwrap_or_default();
-        println!("found: {binary} ({v})");
-        report.present.push(format!("{package} (apt)"));
-        return Ok(());
+/// The system's QEMU (installed without removing anything when missing) and a
+/// second QEMU version for comparison, unpacked privately under `target/qemu/`
+/// (see `qemu.rs`); a missing second version is reported, not fatal.
+fn qemus(root: &Path, report: &mut Report, apt: &mut Apt) -> Result<()> {
+    let (system, outcome) = qemu::system(apt)?;
+    record_outcome(report, outcome);
+    match qemu::comparison(root, &system, apt) {
+        Ok(outcome) => record_outcome(report, outcome),
+        Err(reason) => {
+            println!(
+                "warning: no second QEMU version for comparison: {reason} (the HIL tests' \
+                 version comparison will skip, saying so)"
+            );
+            report
+                .missing
+                .push(format!("a second QEMU version for comparison ({reason})"));
+        }
     }
-    println!("missing: {binary}; installing Debian package {package}");
-    apt.install(&[package])
-        .map_err(|e| format!("cannot install {package}: {e}"))?;
-    let v = version(binary, &["--version"])
-        .ok_or_else(|| format!("{package} was installed but `{binary} --version` does not run"))?;
-    println!("now present: {binary} ({v})");
-    report.installed.push(format!("{package} (apt)"));
     Ok(())
+}
+
+/// Prints and records what was found or done.
+fn record_outcome(report: &mut Report, outcome: qemu::Outcome) {
+    if outcome.installed {
+        println!("installed: {}", outcome.detail);
+        report.installed.push(outcome.item);
+    } else {
+        println!("found: {}", outcome.detail);
+        report.present.push(outcome.item);
+    }
 }
 
 /// The host decoder of the firmware's defmt log (crate and binary): the HIL tests
