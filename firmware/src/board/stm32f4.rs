@@ -95,7 +95,7 @@ pub struct Board {
 
 impl Board {
     /// Takes the core and device peripherals and sets them up; `None` if already
-    /// taken or if the HAL rejects the USART's configuration.
+    /// taken or if USART1 cannot be set up for the bus clock (`usart1::Port::new`).
     pub fn take() -> Option<Self> {
         let core = cortex_m::Peripherals::take()?;
         let device = pac::Peripherals::take()?;
