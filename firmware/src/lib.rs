@@ -19,5 +19,4 @@ pub type Scalar = f32;
 #[cfg(feature = "f64")]
 pub type Scalar = f64;
 
-/// Segment capacity of the solver (the model uses `solver.segments_embedded`).
-pub const SEGMENT_CAPACITY: usize = 64;
+include!(concat!(env!("OUT_DIR"), "/capacity.rs"));

@@ -23,7 +23,7 @@ use decoy_firmware::advisory::Advisory;
 use decoy_firmware::board::{self, Board};
 use decoy_firmware::{SEGMENT_CAPACITY, Scalar, reference};
 use decoy_link::{DeviceMessage, FrameDecoder};
-use static_cell::{ConstStaticCell, StaticCell};
+use static_cell::ConstStaticCell;
 
 /// Log a line every this many accepted State frames.
 const LOG_EVERY_FRAMES: u32 = 100;
@@ -35,8 +35,8 @@ const LOG_EVERY_FRAMES: u32 = 100;
 type EmbeddedController = Controller<Scalar, SEGMENT_CAPACITY>;
 static CONTROLLER: ConstStaticCell<EmbeddedController> =
     ConstStaticCell::new(EmbeddedController::UNCONFIGURED);
-/// The frame decoder's buffer, in static memory.
-static DECODER: StaticCell<FrameDecoder> = StaticCell::new();
+/// The frame decoder's buffer, in static memory (`.bss`).
+static DECODER: ConstStaticCell<FrameDecoder> = ConstStaticCell::new(FrameDecoder::new());
 
 #[entry]
 fn main() -> ! {
@@ -65,7 +65,10 @@ fn main() -> ! {
             board::fail()
         }
     };
-    let decoder = DECODER.init(FrameDecoder::new());
+    let Some(decoder) = DECODER.try_take() else {
+        defmt::error!("the frame decoder was already taken");
+        board::fail()
+    };
     defmt::info!(
         "decoy controller: board {=str}, f{=usize}, {=usize} segments (capacity {=usize}), controller {=usize} B, stack room {=u32} B, protocol {=u16}",
         board::INFO.name.as_str(),

@@ -327,6 +327,7 @@ def main(argv: list[str] | None = None) -> int:
             "simulated_s": traj[-1].time_s if traj else 0.0,
             "frames_sent": summary["frames_sent"],
             "frames_answered": summary["frames_answered"],
+            "frames_initialising": summary["frames_initialising"],
             "frames_rejected": summary["frames_rejected"],
         },
         "builtin": None if builtin_summary is None else {
@@ -356,7 +357,8 @@ def main(argv: list[str] | None = None) -> int:
             return "-" if v is None else fmt.format(v)
 
         print(f"F-16 {what}")
-        print(f"  frames sent {f['frames_sent']}, answered {f['frames_answered']}, rejected {f['frames_rejected']}")
+        print(f"  frames sent {f['frames_sent']}, answered {f['frames_answered']}, "
+              f"initialising {f['frames_initialising']}, rejected {f['frames_rejected']}")
         print(f"  {'':34} {'F-16':>10} {'built-in':>10}")
         print(f"  {'peak connection tension [N]':34} {show(f['max_tension_connection_N']):>10} "
               f"{show(b.get('max_tension_connection_N')):>10}")

@@ -29,7 +29,7 @@ pub struct FieldLayout {
 pub struct TypeLayout {
     /// The Rust name (`Answer`).
     pub name: &'static str,
-    /// The iceoryx2 type name (`decoy.bridge.v2.Answer`), which a mirror's
+    /// The iceoryx2 type name (`decoy.bridge.v3.Answer`), which a mirror's
     /// `type_name()` must return.
     pub type_name: &'static str,
     /// `size_of`, bytes.
@@ -310,6 +310,7 @@ pub fn layouts() -> LayoutDescription {
         kind::STATUS,
         kind::COMMAND,
         kind::COMMAND_REPLY,
+        kind::INITIALISING,
     ] {
         codes.push(("kind", kind::name(k), u64::from(k)));
     }
@@ -332,6 +333,9 @@ pub fn layouts() -> LayoutDescription {
         ("turn", profile::TURN),
     ] {
         codes.push(("profile", name, u64::from(c)));
+    }
+    for (name, bit) in flag::ALL {
+        codes.push(("flag", name, u64::from(bit)));
     }
     codes.push(("result", "ok", u64::from(result::OK)));
     codes.push(("result", "rejected", u64::from(result::REJECTED)));
@@ -401,11 +405,11 @@ mod tests {
             assert_eq!(next, t.size, "{} has bytes no field describes", t.name);
             assert_eq!(t.size % t.align, 0);
             assert!(
-                t.type_name.starts_with("decoy.bridge.v2."),
+                t.type_name.starts_with("decoy.bridge.v3."),
                 "{}",
                 t.type_name
             );
-            assert_eq!(&t.type_name["decoy.bridge.v2.".len()..], t.name);
+            assert_eq!(&t.type_name["decoy.bridge.v3.".len()..], t.name);
         }
     }
 
@@ -435,9 +439,10 @@ mod tests {
         }
         let codes = |field: &str| d.codes.iter().filter(|c| c.0 == field).count();
         assert_eq!(codes("reason"), reason::ALL.len());
-        assert_eq!(codes("kind"), 6);
+        assert_eq!(codes("kind"), 7);
+        assert_eq!(codes("flag"), flag::ALL.len());
         assert!(d.codes.iter().all(|c| c.1 != "?"));
         let json = serde_json::to_string(&d).unwrap();
-        assert!(json.contains("\"type_name\":\"decoy.bridge.v2.AircraftState\""));
+        assert!(json.contains("\"type_name\":\"decoy.bridge.v3.AircraftState\""));
     }
 }

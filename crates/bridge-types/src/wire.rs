@@ -22,6 +22,11 @@ pub mod kind {
     pub const COMMAND: u16 = 5;
     /// A [`crate::CommandReply`].
     pub const COMMAND_REPLY: u16 = 6;
+    /// An [`crate::Answer`] to a state while the controller initialises (it is
+    /// computing the trim its run will start from, docs/protocol.md §4): the
+    /// output's `time_s`, `flags` (INITIALISING) and `instructions` are set, its
+    /// solution is zero; a later state is answered by an output.
+    pub const INITIALISING: u16 = 7;
 
     /// The name of a kind (`"?"` for an unknown one).
     pub fn name(kind: u16) -> &'static str {
@@ -32,15 +37,49 @@ pub mod kind {
             STATUS => "status",
             COMMAND => "command",
             COMMAND_REPLY => "command_reply",
+            INITIALISING => "initialising",
             _ => "?",
         }
     }
 }
 
+/// The bits of [`crate::Output::flags`]: the link's status flags
+/// (docs/protocol.md, `decoy_link::StatusFlags`) but for its supervision bits
+/// (DEGRADED 2, RECOVERED 64), which never reach a bridge's clients.
+pub mod flag {
+    /// The controller is trimmed (a run is under way).
+    pub const TRIMMED: u16 = 1;
+    /// The connection tension is above the allowable tension.
+    pub const OVER_TENSION: u16 = 4;
+    /// Part of the cable is inside the exhaust plume.
+    pub const CABLE_IN_PLUME: u16 = 8;
+    /// The decoy is closer to the aircraft than its limit.
+    pub const DECOY_NEAR_AIRCRAFT: u16 = 16;
+    /// The controller flies a built-in profile.
+    pub const PROFILE_BUILTIN: u16 = 32;
+    /// The controller is computing its trim: the answer is [`super::kind::INITIALISING`].
+    pub const INITIALISING: u16 = 128;
+    /// The state is outside the operating envelope the configuration declares.
+    pub const OUTSIDE_ENVELOPE: u16 = 256;
+    /// The state took more RK4 steps than the nominal four (beyond the frame budget).
+    pub const STEP_LIMITED: u16 = 512;
+    /// Every flag, with its name.
+    pub const ALL: [(&str, u16); 8] = [
+        ("trimmed", TRIMMED),
+        ("over_tension", OVER_TENSION),
+        ("cable_in_plume", CABLE_IN_PLUME),
+        ("decoy_near_aircraft", DECOY_NEAR_AIRCRAFT),
+        ("profile_builtin", PROFILE_BUILTIN),
+        ("initialising", INITIALISING),
+        ("outside_envelope", OUTSIDE_ENVELOPE),
+        ("step_limited", STEP_LIMITED),
+    ];
+}
+
 /// The head of every sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Header")]
+#[type_name("decoy.bridge.v3.Header")]
 pub struct Header {
     /// [`PROTOCOL_VERSION`] of the sender.
     pub protocol_version: u16,
@@ -70,7 +109,7 @@ impl Header {
 /// these bits. Validation is the controller's (docs/protocol.md §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.AircraftState")]
+#[type_name("decoy.bridge.v3.AircraftState")]
 pub struct AircraftState {
     /// `kind` = [`kind::AIRCRAFT_STATE`]; `seq` = the frame's sequence number.
     pub header: Header,
@@ -95,7 +134,7 @@ pub struct AircraftState {
 /// protocol version), never moved.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Output")]
+#[type_name("decoy.bridge.v3.Output")]
 pub struct Output {
     /// Time of the outputs, s (the state's `time_s`).
     pub time_s: f64,
@@ -117,8 +156,9 @@ pub struct Output {
     pub cable_clearance_exhaust_m: f32,
     /// Decoy CG to the aircraft's collision capsule, m (negative: inside).
     pub decoy_clearance_aircraft_m: f32,
-    /// Status flags (docs/protocol.md: TRIMMED 1, OVER_TENSION 4,
-    /// CABLE_IN_PLUME 8, DECOY_NEAR_AIRCRAFT 16, PROFILE_BUILTIN 32). The link
+    /// Status flags ([`flag`], docs/protocol.md: TRIMMED 1, OVER_TENSION 4,
+    /// CABLE_IN_PLUME 8, DECOY_NEAR_AIRCRAFT 16, PROFILE_BUILTIN 32,
+    /// INITIALISING 128, OUTSIDE_ENVELOPE 256, STEP_LIMITED 512). The link
     /// supervision bits (DEGRADED 2, RECOVERED 64) are never set here: the
     /// bridge reports its clients' silence in [`Status::health`].
     pub flags: u16,
@@ -161,7 +201,7 @@ pub struct Output {
 /// when violated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.MonitorReport")]
+#[type_name("decoy.bridge.v3.MonitorReport")]
 pub struct MonitorReport {
     /// The margin now.
     pub margin: f32,
@@ -187,7 +227,7 @@ pub struct MonitorReport {
 /// Why a state or a command was rejected.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Rejection")]
+#[type_name("decoy.bridge.v3.Rejection")]
 pub struct Rejection {
     /// `header.seq` of the rejected request.
     pub request_seq: u32,
@@ -200,14 +240,15 @@ pub struct Rejection {
 }
 
 /// The answer to one aircraft state: an [`Output`] (`header.kind` =
-/// [`kind::OUTPUT`]) or a [`Rejection`] (`header.kind` = [`kind::REJECTED`]); the
-/// other part is all zero. The lockstep service's response and the outputs
-/// service's sample.
+/// [`kind::OUTPUT`]), a [`Rejection`] (`header.kind` = [`kind::REJECTED`]), or,
+/// while the controller initialises, an [`Output`] with only its time, flags and
+/// instructions set (`header.kind` = [`kind::INITIALISING`]); the other part is
+/// all zero. The lockstep service's response and the outputs service's sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Answer")]
+#[type_name("decoy.bridge.v3.Answer")]
 pub struct Answer {
-    /// `kind` = [`kind::OUTPUT`] or [`kind::REJECTED`]; `seq` = the bridge's
+    /// `kind` = [`kind::OUTPUT`], [`kind::REJECTED`] or [`kind::INITIALISING`]; `seq` = the bridge's
     /// answer number (+1 per answer on the service, wrapping; a gap on the
     /// outputs service is a lost sample).
     pub header: Header,
@@ -220,7 +261,7 @@ pub struct Answer {
 /// The counters of a bridge since it started (u64, never reset).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, serde::Serialize)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Counters")]
+#[type_name("decoy.bridge.v3.Counters")]
 pub struct Counters {
     /// States answered by an output.
     pub accepted: u64,
@@ -269,7 +310,7 @@ pub struct Counters {
 /// command reply.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Status")]
+#[type_name("decoy.bridge.v3.Status")]
 pub struct Status {
     /// `kind` = [`kind::STATUS`]; `seq` = the bridge's status number.
     pub header: Header,
@@ -311,7 +352,7 @@ pub struct Status {
 /// A command (request of the commands service).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.Command")]
+#[type_name("decoy.bridge.v3.Command")]
 pub struct Command {
     /// `kind` = [`kind::COMMAND`].
     pub header: Header,
@@ -332,7 +373,7 @@ pub struct Command {
 /// The reply to a [`Command`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]
-#[type_name("decoy.bridge.v2.CommandReply")]
+#[type_name("decoy.bridge.v3.CommandReply")]
 pub struct CommandReply {
     /// `kind` = [`kind::COMMAND_REPLY`]; `seq` = the bridge's reply number.
     pub header: Header,

@@ -166,6 +166,7 @@ pub fn bridge_command(
         }),
         segments: args.segments,
         grading: args.grading,
+        trim_at_once: false,
     };
     if kind == BackendKind::Qemu {
         eprintln!("decoy bridge: building and booting the firmware under QEMU ...");
@@ -316,9 +317,10 @@ fn feed_text(run: &FeedRun) -> String {
     );
     let _ = writeln!(
         s,
-        "  {} frames sent, {} answered, {} rejected, {} lost; {:.0} frames/s (client on CPUs {})",
+        "  {} frames sent, {} answered, {} initialising, {} rejected, {} lost; {:.0} frames/s (client on CPUs {})",
         f.frames_sent,
         f.frames_answered,
+        f.frames_initialising,
         f.frames_rejected,
         f.frames_lost,
         f.frames_per_s,

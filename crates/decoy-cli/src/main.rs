@@ -628,13 +628,16 @@ fn hil_text(config: &SystemConfig, run: &HilRun) -> String {
     let _ = writeln!(s, "  firmware {} ({})", h.elf, h.firmware_source);
     let _ = writeln!(
         s,
-        "  {} frames sent, {} answered with an output, {:.0} round trips/s over the UART",
-        h.frames_sent, h.frames_answered, h.link_frames_per_s
+        "  {} frames sent, {} answered with an output, {} by the initialisation's Status, {:.0} round trips/s over the UART",
+        h.frames_sent, h.frames_answered, h.frames_initialising, h.link_frames_per_s
     );
     let _ = writeln!(
         s,
-        "Instructions per 10 ms control step  max {}, mean {:.0}",
-        h.instructions_per_step_max, h.instructions_per_step_mean
+        "Instructions per 10 ms control step  max {}, mean {:.0}; the trim over {} frame(s), at most {} in one",
+        h.instructions_per_step_max,
+        h.instructions_per_step_mean,
+        h.trim_frames,
+        h.trim_instructions_max
     );
     let _ = writeln!(
         s,

@@ -461,10 +461,10 @@ fn the_layout_json_describes_every_type() {
         .unwrap();
     assert!(out.status.success());
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["protocol_version"], 2);
+    assert_eq!(v["protocol_version"], 3);
     let types = v["types"].as_array().unwrap();
     let answer = types.iter().find(|t| t["name"] == "Answer").unwrap();
-    assert_eq!(answer["type_name"], "decoy.bridge.v2.Answer");
+    assert_eq!(answer["type_name"], "decoy.bridge.v3.Answer");
     assert_eq!(answer["size"], 240);
     assert_eq!(answer["fields"][2]["name"], "output");
     assert_eq!(answer["fields"][2]["offset"], 24);
@@ -472,6 +472,6 @@ fn the_layout_json_describes_every_type() {
     let text = Command::new(DECOY).arg("bridge-layout").output().unwrap();
     assert!(
         String::from_utf8_lossy(&text.stdout)
-            .contains("AircraftState (decoy.bridge.v2.AircraftState): size 104, align 8")
+            .contains("AircraftState (decoy.bridge.v3.AircraftState): size 104, align 8")
     );
 }

@@ -315,6 +315,94 @@ pub struct ExhaustSection {
     pub hysteresis_m: f64,
 }
 
+/// `[envelope]`: the operating envelope the controller guarantees (frame cost,
+/// accuracy), within the wider physical bounds that reject a frame
+/// (docs/protocol.md §4). Optional in a file: without it, the reference values
+/// ([`EnvelopeSection::default`], `config/reference-system.toml`'s).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvelopeSection {
+    /// Altitude of the aircraft reference point, m: [low, high].
+    pub altitude_m: [f64; 2],
+    /// Mach number: [low, high].
+    pub mach: [f64; 2],
+    /// Normal load factor, g: [low, high].
+    pub load_factor: [f64; 2],
+    /// Largest |body rate|, rad/s.
+    pub max_body_rate_radps: f64,
+    /// Largest |acceleration along the velocity|, m/s^2.
+    pub max_along_path_acceleration_mps2: f64,
+}
+
+impl Default for EnvelopeSection {
+    /// The reference values.
+    fn default() -> Self {
+        let e = decoy_controller::EnvelopeParams::REFERENCE;
+        EnvelopeSection {
+            altitude_m: e.altitude_m,
+            mach: e.mach,
+            load_factor: e.load_factor,
+            max_body_rate_radps: e.max_body_rate_radps,
+            max_along_path_acceleration_mps2: e.max_along_path_acceleration_mps2,
+        }
+    }
+}
+
+impl EnvelopeSection {
+    /// The plain values.
+    pub fn params(&self) -> decoy_controller::EnvelopeParams {
+        decoy_controller::EnvelopeParams {
+            altitude_m: self.altitude_m,
+            mach: self.mach,
+            load_factor: self.load_factor,
+            max_body_rate_radps: self.max_body_rate_radps,
+            max_along_path_acceleration_mps2: self.max_along_path_acceleration_mps2,
+        }
+    }
+
+    /// Each range ordered and inside the physical bounds a frame is rejected
+    /// beyond (docs/protocol.md §4): the envelope says what the controller
+    /// guarantees within what it accepts.
+    fn validate(&self, c: &Checker<'_>) -> Result<(), ConfigError> {
+        use decoy_controller::validate::{
+            MAX_ACCELERATION_MPS2, MAX_ALTITUDE_M, MAX_BODY_RATE_RADPS, MAX_MACH, MIN_ALTITUDE_M,
+        };
+        let g_limit = f64::from(MAX_ACCELERATION_MPS2) / 9.80665;
+        let ranges = [
+            (
+                "envelope.altitude_m",
+                self.altitude_m,
+                MIN_ALTITUDE_M,
+                MAX_ALTITUDE_M,
+            ),
+            ("envelope.mach", self.mach, 0.0, MAX_MACH),
+            ("envelope.load_factor", self.load_factor, -g_limit, g_limit),
+        ];
+        for (field, [low, high], min, max) in ranges {
+            c.range(&format!("{field}[0]"), low, min, max)?;
+            c.range(&format!("{field}[1]"), high, min, max)?;
+            if low > high {
+                return Err(c.invalid(
+                    field,
+                    format!("the low end {low} is above the high end {high}"),
+                ));
+            }
+        }
+        c.range(
+            "envelope.max_body_rate_radps",
+            self.max_body_rate_radps,
+            0.0,
+            f64::from(MAX_BODY_RATE_RADPS),
+        )?;
+        c.range(
+            "envelope.max_along_path_acceleration_mps2",
+            self.max_along_path_acceleration_mps2,
+            0.0,
+            f64::from(MAX_ACCELERATION_MPS2),
+        )
+    }
+}
+
 impl Default for ManagementSection {
     /// The reference values (`config/reference-system.toml` states them and why).
     fn default() -> Self {
@@ -524,6 +612,10 @@ pub struct SystemConfig {
     /// Decoy management: monitors and look-ahead (optional: the reference values).
     #[serde(default)]
     pub management: ManagementSection,
+    /// The operating envelope the controller guarantees (optional: the
+    /// reference values).
+    #[serde(default)]
+    pub envelope: EnvelopeSection,
     /// The decoy aerodynamic table read from `decoy.aero_table`.
     #[serde(skip)]
     pub aero_rows: Vec<AeroRow>,
@@ -670,6 +762,7 @@ impl SystemConfig {
         )?;
         c.positive("solver.time_step_host", s.time_step_host)?;
         self.management.validate(&c)?;
+        self.envelope.validate(&c)?;
         Ok(())
     }
 
@@ -732,6 +825,7 @@ impl SystemConfig {
             segments_embedded: s.segments_embedded,
             grading_ratio_embedded: s.grading_ratio_embedded,
             management: self.management.params(),
+            envelope: self.envelope.params(),
         })
     }
 

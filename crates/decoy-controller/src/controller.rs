@@ -4,10 +4,12 @@
 
 use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 use solver_core::{
-    AircraftState, Atmosphere, ConfigError, FlightPath, Model, ModelParams, Real, SolveError,
-    Solver, State, Vec3,
+    AircraftState, Atmosphere, ConfigError, Model, ModelParams, Real, SolveError, Solver, State,
+    TrimTask, Vec3,
 };
 
+use crate::builtin::BuiltinPath;
+use crate::envelope::OperatingEnvelope;
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
 use crate::lookahead::Lookahead;
 use crate::monitor::{ManagementConfig, Measures, Monitors};
@@ -35,7 +37,7 @@ pub const MAX_STEP_S: f64 = 0.0025;
 /// ends swings at sqrt(12) c/l, and RK4 is stable to about 2.8 rad per step.
 pub const WAVE_STEP_FACTOR: f64 = 0.8;
 /// Most RK4 steps one frame may take (a floor of 0.5 ms on a 10 ms frame).
-pub const MAX_STEPS_PER_FRAME: f64 = 20.0;
+pub const MAX_STEPS_PER_FRAME: u32 = 20;
 /// The longest accepted interval between two State frames, s.
 pub const MAX_TIME_JUMP_S: f64 = 0.1;
 /// Rounding allowance of the time-jump check, s: an interval of exactly
@@ -57,6 +59,33 @@ pub const PREDICTION_CAPACITY: usize = 12;
 
 /// Altitude of the built-in profiles, m.
 const PROFILE_ALTITUDE_M: f64 = 9000.0;
+
+/// Work units of the trim one State frame carries on while the controller
+/// initialises ([`solver_core::TrimTask`]; a decoy moment is 8 units, a segment's
+/// residual 1). A frame of the trim costs about 27,000 instructions on the
+/// Cortex-M4F (validation, the output evaluation of the frame that completes
+/// it) plus about 105 a unit: 480 units keep every frame of the trim near
+/// 78,000, under the frame budget of 90,000 with margin for the unit's spread
+/// (firmware/README.md, "The trim"). The f32 trim takes 260 to 750 units over
+/// the envelope (one or two frames). The f32 controllers' slice.
+pub const TRIM_SLICE_UNITS: u32 = 480;
+
+/// [`TRIM_SLICE_UNITS`] for an f64 controller (the Cortex-M7's double-precision
+/// FPU, about three times the M4F's instructions a unit): 320 units keep every
+/// frame of its trim within the M7's frame bound (firmware/README.md, "The
+/// trim"); the f64 trim takes 670 to 1,630 units over the envelope (three to
+/// six frames).
+pub const TRIM_SLICE_UNITS_F64: u32 = 320;
+
+/// The trim's slice of a controller in `T`: [`TRIM_SLICE_UNITS`] in f32,
+/// [`TRIM_SLICE_UNITS_F64`] in f64.
+pub fn trim_slice_units<T: Real>() -> u32 {
+    if core::mem::size_of::<T>() == 8 {
+        TRIM_SLICE_UNITS_F64
+    } else {
+        TRIM_SLICE_UNITS
+    }
+}
 
 /// A source of instruction (or tick) counts for [`OutputFrame::instructions`].
 pub trait InstructionCounter {
@@ -99,6 +128,14 @@ pub struct ControllerConfig<T: Real> {
     pub allowable_tension_n: T,
     /// The monitors' thresholds and the look-ahead's horizon and slice.
     pub management: ManagementConfig<T>,
+    /// The operating envelope the controller guarantees (frames outside it are
+    /// flagged [`StatusFlags::OUTSIDE_ENVELOPE`]).
+    pub envelope: OperatingEnvelope<T>,
+    /// Work units of the trim each State frame carries on while the controller
+    /// initialises: [`trim_slice_units`] onboard (the frame budget); a host
+    /// reference that must start its run at the first frame, whatever its
+    /// precision, takes `u32::MAX` (the whole trim in the first frame).
+    pub trim_units_per_frame: u32,
 }
 
 /// Why a controller could not be built.
@@ -126,9 +163,9 @@ impl core::fmt::Display for ControllerError {
 
 impl core::error::Error for ControllerError {}
 
-/// A run after a State frame: the run, the RK4 steps taken, and the streamed
-/// path they followed (None for a built-in profile).
-type Advanced = (Run, u16);
+/// A run after a State frame: its origin and start time, the RK4 steps taken,
+/// and whether the wave-speed limit asked for more than the nominal steps.
+type Advanced = ([f64; 3], f64, u16, bool);
 
 /// What the controller integrates after a trim.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,6 +176,52 @@ struct Run {
     start_time_s: f64,
     /// Origin of the solver's positions, NED, m (horizontal position at the trim).
     origin: [f64; 3],
+}
+
+/// A trim in progress: the controller answers each State frame with a Status
+/// (INITIALISING) until it is complete, then the run starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Initialising<T: Real, const N: usize> {
+    /// A trim is in progress.
+    active: bool,
+    /// The search.
+    task: TrimTask<T, N>,
+    /// The flown frame the trim is for (streamed: the first frame of the
+    /// initialisation; built-in: the profile at 0).
+    target: AircraftStateFrame,
+    /// The last accepted State frame (the time rules of docs/protocol.md §4).
+    last: AircraftStateFrame,
+}
+
+impl<T: Real, const N: usize> Initialising<T, N> {
+    /// No trim in progress (all zero bits).
+    const NONE: Self = Initialising {
+        active: false,
+        task: TrimTask::ZERO,
+        target: ZERO_FRAME,
+        last: ZERO_FRAME,
+    };
+}
+
+/// A State frame of zero bits (a placeholder never flown).
+const ZERO_FRAME: AircraftStateFrame = AircraftStateFrame {
+    seq: 0,
+    time_s: 0.0,
+    position_ned_m: [0.0; 3],
+    velocity_ned_mps: [0.0; 3],
+    acceleration_ned_mps2: [0.0; 3],
+    attitude_wxyz: [0.0; 4],
+    body_rate_radps: [0.0; 3],
+    body_angular_acceleration_radps2: [0.0; 3],
+};
+
+/// What a State frame's solution gives: an Output with its measures, the
+/// aircraft and where the management's count starts; or an answer as it is (a
+/// rejection, or the Status of a frame of the initialisation).
+#[allow(clippy::large_enum_variant)]
+enum Solved<T: Real> {
+    Output(OutputFrame, Measures<T>, AircraftState<T>, u32),
+    Answer(DeviceMessage),
 }
 
 /// Everything that decides the controller's next answers except the counters:
@@ -176,11 +259,19 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     last_management: Management,
     geometry: Geometry<T>,
     allowable_tension_n: T,
+    envelope: OperatingEnvelope<T>,
+    /// [`ControllerConfig::trim_units_per_frame`].
+    trim_units_per_frame: u32,
     profile: Profile,
     /// The flight path of the selected built-in profile (None: streamed), made
     /// when the profile is selected.
     builtin: Option<BuiltinPath>,
     run: Option<Run>,
+    /// The trim in progress before a run starts.
+    init: Initialising<T, N>,
+    /// The last frame's flight path, built in place every frame (about 110 words:
+    /// not moved).
+    path: FramePath<T>,
     /// Where the last streamed frame's path ended, for the next one to start
     /// from (a cache: the paths have the same bits without it).
     path_end: PathEnd<T>,
@@ -188,6 +279,8 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     degraded: bool,
     recovered_pending: bool,
     hazard_flags: u16,
+    /// The last accepted State frame was outside the operating envelope.
+    outside_envelope: bool,
     /// max_i c_i / l_i (1/s) at the last accepted frame's outputs: the stepping
     /// rule's input, kept here rather than read from the solver's workspace, which
     /// a rejected frame's attempts overwrite.
@@ -224,6 +317,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         last_management: Management::ZERO,
         geometry: Geometry::ZERO,
         allowable_tension_n: T::ZERO,
+        envelope: OperatingEnvelope::ZERO,
+        trim_units_per_frame: 0,
         profile: Profile::Streamed,
         // `Some` of a zero path rather than `None`, whose niche is nonzero bits: the
         // constant must be all zero bits to lie in `.bss` (checked by the HIL
@@ -237,11 +332,14 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             acceleration: 0.0,
         })),
         run: None,
+        init: Initialising::NONE,
+        path: FramePath::ZERO,
         path_end: PathEnd::NONE,
         counters: Counters::ZERO,
         degraded: false,
         recovered_pending: false,
         hazard_flags: 0,
+        outside_envelope: false,
         wave_rate: T::ZERO,
         activity: false,
         last_activity_ms: None,
@@ -291,14 +389,19 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.reset_management();
         self.geometry = config.geometry;
         self.allowable_tension_n = allowable_tension_n;
+        self.envelope = config.envelope;
+        self.trim_units_per_frame = config.trim_units_per_frame;
         self.profile = Profile::Streamed;
         self.builtin = None;
         self.run = None;
+        self.init = Initialising::NONE;
+        self.path = FramePath::ZERO;
         self.path_end = PathEnd::NONE;
         self.counters = Counters::ZERO;
         self.degraded = false;
         self.recovered_pending = false;
         self.hazard_flags = 0;
+        self.outside_envelope = false;
         self.wave_rate = T::zero();
         self.activity = false;
         self.last_activity_ms = None;
@@ -384,6 +487,12 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         if self.run.is_some() {
             flags |= StatusFlags::TRIMMED;
         }
+        if self.init.active {
+            flags |= StatusFlags::INITIALISING;
+        }
+        if self.outside_envelope {
+            flags |= StatusFlags::OUTSIDE_ENVELOPE;
+        }
         if self.degraded {
             flags |= StatusFlags::DEGRADED;
         }
@@ -395,17 +504,33 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
 
     /// The Status frame now.
     pub fn status(&self) -> DeviceMessage {
+        self.status_of(0)
+    }
+
+    /// The Status frame now, answering a State frame that took `instructions`
+    /// (0 for a command).
+    fn status_of(&self, instructions: u32) -> DeviceMessage {
         DeviceMessage::Status(StatusFrame {
+            instructions,
             protocol_version: PROTOCOL_VERSION,
             flags: self.flags(),
             segments: self.segments(),
-            time_s: self.run.map_or(0.0, |r| r.last.time_s),
+            time_s: match (&self.run, self.init.active) {
+                (Some(run), _) => run.last.time_s,
+                (None, true) => self.init.last.time_s,
+                (None, false) => 0.0,
+            },
             counters: self.counters,
         })
     }
 
     fn segments(&self) -> u16 {
-        self.solver.model().segment_count() as u16
+        let model = self.solver.model();
+        if model.is_configured() {
+            model.segment_count() as u16
+        } else {
+            0
+        }
     }
 
     /// Answers one decoded host message. `counter` measures the instructions a
@@ -439,6 +564,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.slice_due = false;
         let start = counter.now();
         let steps = self.lookahead.advance(&self.geometry, &self.management);
+        // The air columns next to the frame's, for the next frames (counted with
+        // the slice: not part of a frame's own instructions).
+        self.solver.prefetch_air();
         self.slice_steps = steps;
         self.slice_instructions = counter.elapsed(start);
         steps
@@ -515,6 +643,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         match command {
             Command::ResetToTrim => {
                 self.run = None;
+                self.init = Initialising::NONE;
                 self.reset_management();
             }
             Command::SelectProfile(profile) => {
@@ -530,6 +659,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 self.profile = profile;
                 self.builtin = self.builtin_path();
                 self.run = None;
+                self.init = Initialising::NONE;
                 self.reset_management();
             }
             Command::GetStatus => {}
@@ -556,14 +686,14 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         counter: &mut impl InstructionCounter,
     ) -> DeviceMessage {
         match self.solve(frame, counter) {
-            Ok((mut output, measures, aircraft, start)) => {
+            Solved::Output(mut output, measures, aircraft, start) => {
                 self.manage(&mut output, &measures, &aircraft, frame.time_s);
                 output.management_instructions = counter
                     .elapsed(start)
                     .wrapping_add(core::mem::take(&mut self.slice_instructions));
                 DeviceMessage::Output(output)
             }
-            Err(answer) => answer,
+            Solved::Answer(answer) => answer,
         }
     }
 
@@ -592,95 +722,138 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         output.prediction_steps = core::mem::take(&mut self.slice_steps) as u16;
         output.management = self.management_report(now);
         self.last_management = output.management;
-        self.slice_due = self.lookahead.available();
+        // The slice runs after the answer (the look-ahead's steps, if it has any
+        // to fly, and the air columns' prefetch).
+        self.slice_due = true;
     }
 
     /// A State frame's real-time solution: the accepted Output (its management
     /// still to fill), its measures, the aircraft at its time and the counter's
-    /// reading where the management starts; or the rejection.
+    /// reading where the management starts; or the answer as it is: a rejection,
+    /// or, while the controller initialises, its Status.
     #[inline(never)]
-    #[allow(clippy::type_complexity, clippy::result_large_err)]
     fn solve(
         &mut self,
         frame: &AircraftStateFrame,
         counter: &mut impl InstructionCounter,
-    ) -> Result<(OutputFrame, Measures<T>, AircraftState<T>, u32), DeviceMessage> {
+    ) -> Solved<T> {
         let start = counter.now();
         let seq = Some(frame.seq);
         let environment = &self.solver.model().params().environment;
         let checked = match self.profile {
             Profile::Streamed => {
-                validate_streamed(frame, &environment.atmosphere, &environment.wind)
+                validate_streamed(frame, &environment.atmosphere, &environment.wind).map(Some)
             }
-            _ if is_finite(frame) => Ok(()),
+            _ if is_finite(frame) => Ok(None),
             _ => Err(RejectReason::NonFinite),
         };
-        if let Err(reason) = checked {
-            return Err(self.reject(seq, reason));
-        }
-        if let Some(run) = &self.run {
-            let dt = frame.time_s - run.last.time_s;
-            if !(dt > 0.0) {
-                return Err(self.reject(seq, RejectReason::TimeNotIncreasing));
+        let mach = match checked {
+            Ok(mach) => mach,
+            Err(reason) => return Solved::Answer(self.reject(seq, reason)),
+        };
+        // The time rules, from the last accepted State frame of the run or of the
+        // initialisation. On their bits (positive doubles order as their bit
+        // patterns; a soft-float compare costs about 30 instructions on the M4F).
+        let last_time = match (&self.run, self.init.active) {
+            (Some(run), _) => Some(run.last.time_s),
+            (None, true) => Some(self.init.last.time_s),
+            (None, false) => None,
+        };
+        let mut interval = 0.0;
+        if let Some(t0) = last_time {
+            interval = frame.time_s - t0;
+            if !(interval > 0.0) {
+                return Solved::Answer(self.reject(seq, RejectReason::TimeNotIncreasing));
             }
-            if dt > MAX_TIME_JUMP_S + TIME_TOLERANCE_S {
-                return Err(self.reject(seq, RejectReason::TimeJump));
+            if interval.to_bits() > MAX_INTERVAL_BITS {
+                return Solved::Answer(self.reject(seq, RejectReason::TimeJump));
             }
         }
         // The used part only (the rest of `saved` stays zero, as the solver's).
         let mut saved = State::ZERO;
         saved.copy_used(self.solver.state(), self.solver.model().segment_count());
+        // Without a run, the initialisation's too (a run's frames leave it alone).
+        let saved_init = self.run.is_none().then_some(self.init);
         let integration = counter.now();
-        // A streamed run's path, built in place by `start_run` or `advance`.
-        let mut path = None;
+        // The frame the solver flies: the frame itself, or the built-in profile's.
+        let generated;
+        let flown = match (&self.builtin, &self.run) {
+            (Some(path), Some(run)) => {
+                generated =
+                    path.frame::<T>(frame.seq, frame.time_s, frame.time_s - run.start_time_s);
+                &generated
+            }
+            (Some(path), None) => {
+                generated = path.frame::<T>(frame.seq, frame.time_s, 0.0);
+                &generated
+            }
+            (None, _) => frame,
+        };
+        let inside = self.inside_envelope(flown, mach);
         let result = match self.run {
-            None => self.start_run(frame, &mut path),
-            Some(run) => self.advance(&run, frame, &saved, &mut path),
+            None => self.initialise(frame, flown),
+            Some(run) => self.advance(&run, flown, interval, &saved).map(Some),
         };
         let step_instructions = counter.elapsed(integration);
-        match result {
-            Ok((run, steps)) => match self.output(frame, steps, path.as_ref()) {
-                Ok((mut output, aircraft)) => {
-                    let solution_instructions = counter.elapsed(start);
-                    // Decoy management, after the real-time solution is complete
-                    // (counted apart): the measures of the output evaluation,
-                    // the monitors, then one slice of the look-ahead.
-                    let management = counter.now();
-                    let measures = Measures::of(
-                        &self.solver.last_outputs(),
-                        &aircraft,
-                        &self.geometry,
-                        &self.management,
-                    );
-                    if !measures.is_finite(&self.management) {
-                        self.restore(&saved);
-                        return Err(self.reject(seq, RejectReason::SolverFailure));
-                    }
-                    self.run = Some(run);
-                    self.wave_rate = self.last_wave_rate();
-                    self.accepted();
-                    self.hazard_flags = output.flags
-                        & (StatusFlags::OVER_TENSION
-                            | StatusFlags::CABLE_IN_PLUME
-                            | StatusFlags::DECOY_NEAR_AIRCRAFT);
-                    if self.recovered_pending {
-                        self.recovered_pending = false;
-                        output.flags |= StatusFlags::RECOVERED;
-                    }
-                    output.instructions = solution_instructions;
-                    output.step_instructions = step_instructions;
-                    Ok((output, measures, aircraft, management))
-                }
-                Err(_) => {
-                    self.restore(&saved);
-                    Err(self.reject(seq, RejectReason::SolverFailure))
-                }
-            },
-            Err(reason) => {
-                self.restore(&saved);
-                Err(self.reject(seq, reason))
+        let (origin, start_time_s, steps, limited) = match result {
+            Ok(Some(advanced)) => advanced,
+            Ok(None) => {
+                // A frame of the initialisation: accepted, answered by the Status.
+                self.accepted();
+                self.outside_envelope = !inside;
+                return Solved::Answer(self.status_of(step_instructions));
             }
+            Err(reason) => {
+                self.roll_back(&saved, saved_init);
+                return Solved::Answer(self.reject(seq, reason));
+            }
+        };
+        let mut output = OUTPUT_ZERO;
+        let Ok(aircraft) = self.output(frame, steps, &mut output) else {
+            self.roll_back(&saved, saved_init);
+            return Solved::Answer(self.reject(seq, RejectReason::SolverFailure));
+        };
+        if limited {
+            output.flags |= StatusFlags::STEP_LIMITED;
         }
+        if !inside {
+            output.flags |= StatusFlags::OUTSIDE_ENVELOPE;
+        }
+        let solution_instructions = counter.elapsed(start);
+        // Decoy management, after the real-time solution is complete (counted
+        // apart): the measures of the output evaluation, the monitors, then one
+        // slice of the look-ahead.
+        let management = counter.now();
+        let measures = Measures::of(
+            &self.solver.last_outputs(),
+            &aircraft,
+            &self.geometry,
+            &self.management,
+        );
+        if !measures.is_finite(&self.management) {
+            self.roll_back(&saved, saved_init);
+            return Solved::Answer(self.reject(seq, RejectReason::SolverFailure));
+        }
+        self.run = Some(Run {
+            last: *flown,
+            start_time_s,
+            origin,
+        });
+        self.path.end_into(&mut self.path_end, flown, origin);
+        self.wave_rate = self.last_wave_rate();
+        self.accepted();
+        self.hazard_flags = output.flags
+            & (StatusFlags::OVER_TENSION
+                | StatusFlags::CABLE_IN_PLUME
+                | StatusFlags::DECOY_NEAR_AIRCRAFT);
+        self.outside_envelope = !inside;
+        if self.recovered_pending {
+            self.recovered_pending = false;
+            output.flags |= StatusFlags::RECOVERED;
+        }
+        output.instructions = solution_instructions;
+        output.step_instructions = step_instructions;
+        Solved::Output(output, measures, aircraft, management)
     }
 
     /// The model's connection point (aircraft body frame), whose kinematics the
@@ -692,6 +865,15 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     fn restore(&mut self, saved: &State<T, N>) {
         // `saved` was the solver's own state, so it is finite and accepted.
         let _ = self.solver.set_state(*saved);
+    }
+
+    /// Undoes a rejected frame: the solver's state, and the initialisation when
+    /// there was no run.
+    fn roll_back(&mut self, saved: &State<T, N>, init: Option<Initialising<T, N>>) {
+        self.restore(saved);
+        if let Some(init) = init {
+            self.init = init;
+        }
     }
 
     /// The built-in profile's flight path, if one is selected.
@@ -743,103 +925,135 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         })
     }
 
-    /// Trims at the frame (streamed) or at the profile's start (built-in).
-    ///
-    /// Returns the new run, 0 steps and (streamed) the constant path at the frame.
-    fn start_run(
-        &mut self,
-        frame: &AircraftStateFrame,
-        streamed: &mut Option<FramePath<T>>,
-    ) -> Result<Advanced, RejectReason> {
-        // Unconfigured (`Controller::UNCONFIGURED`): no model to trim.
-        if self.solver.model().segment_count() == 0 {
-            return Err(RejectReason::NotTrimmed);
-        }
-        let run = Run {
-            last: *frame,
-            start_time_s: frame.time_s,
-            origin: FramePath::<T>::run_origin(frame),
+    /// True when the flown frame is inside the operating envelope; `mach` its
+    /// Mach number when validation computed it (streamed), else computed here.
+    fn inside_envelope(&self, flown: &AircraftStateFrame, mach: Option<T>) -> bool {
+        let env = &self.solver.model().params().environment;
+        let mach = match mach {
+            Some(mach) => Some(mach),
+            None => crate::validate::mach_of(flown, &env.atmosphere, &env.wind),
         };
-        let (aircraft, time): (AircraftState<T>, f64) = match self.builtin {
-            Some(path) => (path.state_at(0.0), 0.0),
-            None => {
-                let path = streamed.insert(
-                    FramePath::<T>::single(frame, run.origin).towing(self.connection_point()),
-                );
-                self.path_end = path.end(frame, run.origin);
-                (path.state_at(frame.time_s), frame.time_s)
-            }
-        };
-        // In place (the caller restores its saved state on error).
-        self.solver
-            .trim(&steady_flight(&aircraft), time)
-            .map_err(|_| RejectReason::NotTrimmed)?;
-        Ok((run, 0))
+        mach.is_some_and(|mach| self.envelope.contains(flown, mach, env.gravity))
     }
 
-    /// Integrates from the run's last frame to `frame`.
-    ///
-    /// Returns the run, the RK4 steps taken and (streamed) the path integrated
-    /// along, on which the outputs are evaluated.
+    /// A State frame with no run: starts the trim at it if none is in progress
+    /// (streamed: at its steady state; built-in: at the profile's start; `flown`
+    /// is the frame the solver flies), then carries the trim on by
+    /// [`TRIM_SLICE_UNITS`]. `Ok(None)` while it is not complete; once it is, the
+    /// run starts at this frame: the run's origin and start time, 0 steps, and
+    /// the controller's path the constant path at `flown`. A streamed trim is for
+    /// the first frame of the initialisation and is turned, when it completes, to
+    /// this frame's heading (of the velocity through the air): the
+    /// initialisation takes a few frames, and a heading is the one change a trim
+    /// in still air follows exactly.
+    fn initialise(
+        &mut self,
+        frame: &AircraftStateFrame,
+        flown: &AircraftStateFrame,
+    ) -> Result<Option<Advanced>, RejectReason> {
+        // Unconfigured (`Controller::UNCONFIGURED`): no model to trim.
+        if !self.solver.model().is_configured() {
+            return Err(RejectReason::NotTrimmed);
+        }
+        if !self.init.active {
+            let origin = FramePath::<T>::run_origin(flown);
+            let aircraft = FramePath::<T>::single(flown, origin).end_state();
+            let task = self
+                .solver
+                .start_trim(&steady_flight(&aircraft))
+                .map_err(|_| RejectReason::NotTrimmed)?;
+            self.init = Initialising {
+                active: true,
+                task,
+                target: *flown,
+                last: *frame,
+            };
+        }
+        let done = self
+            .solver
+            .advance_trim(&mut self.init.task, self.trim_units_per_frame, frame.time_s)
+            .map_err(|_| RejectReason::NotTrimmed)?;
+        self.init.last = *frame;
+        if !done {
+            return Ok(None);
+        }
+        if self.builtin.is_none() {
+            let from = self.init.target.velocity_ned_mps;
+            self.turn_to_heading(&from, &flown.velocity_ned_mps);
+        }
+        self.init = Initialising::NONE;
+        let origin = FramePath::<T>::run_origin(flown);
+        let point = self.connection_point();
+        self.path.set_after(&PathEnd::NONE, flown, flown, origin);
+        self.path.set_towing(point);
+        self.solver
+            .outputs(&self.path)
+            .map_err(|_| RejectReason::SolverFailure)?;
+        Ok(Some((origin, frame.time_s, 0, false)))
+    }
+
+    /// Turns the solver's state about the vertical from the heading of the air
+    /// velocity `from` to that of `to` (NED, m/s over the ground; the wind
+    /// subtracted). Nothing when either has no horizontal airspeed or they are
+    /// the same.
+    fn turn_to_heading(&mut self, from: &[f32; 3], to: &[f32; 3]) {
+        let wind = self.solver.model().params().environment.wind;
+        let air = |v: &[f32; 3]| {
+            (
+                T::lit(f64::from(v[0])) - wind.x,
+                T::lit(f64::from(v[1])) - wind.y,
+            )
+        };
+        let ((x0, y0), (x1, y1)) = (air(from), air(to));
+        let (dot, cross) = (x0 * x1 + y0 * y1, x0 * y1 - y0 * x1);
+        let length = (dot * dot + cross * cross).square_root();
+        if !(length > T::zero()) || (cross == T::zero() && dot > T::zero()) {
+            return;
+        }
+        self.solver
+            .turn_about_vertical(dot / length, cross / length);
+    }
+
+    /// Integrates from the run's last frame to `flown` (the frame the solver
+    /// flies), `interval` seconds later, along the controller's path, built in
+    /// place. Returns the run's origin and start time (unchanged), the RK4 steps
+    /// taken and whether the wave-speed limit asked for more than the nominal
+    /// steps.
     fn advance(
         &mut self,
         run: &Run,
-        frame: &AircraftStateFrame,
+        flown: &AircraftStateFrame,
+        interval: f64,
         saved: &State<T, N>,
-        streamed: &mut Option<FramePath<T>>,
     ) -> Result<Advanced, RejectReason> {
-        let dt = frame.time_s - run.last.time_s;
-        let steps = self.step_count(dt);
-        let next = Run {
-            last: *frame,
-            ..*run
-        };
-        let failure = |_: SolveError| RejectReason::SolverFailure;
-        let steps = match self.builtin {
-            Some(path) => {
-                let (t0, t1) = (
-                    run.last.time_s - run.start_time_s,
-                    frame.time_s - run.start_time_s,
-                );
-                self.integrate_checked(saved, &path, t0, t1, steps)
-                    .map_err(failure)?
-            }
-            None => {
-                // Built in the caller's slot, where the outputs read it (not moved).
-                let point = self.connection_point();
-                let path = streamed.insert(
-                    FramePath::<T>::after(&self.path_end, &run.last, frame, run.origin)
-                        .towing(point),
-                );
-                self.path_end = path.end(frame, run.origin);
-                self.integrate_checked(saved, path, run.last.time_s, frame.time_s, steps)
-                    .map_err(failure)?
-            }
-        };
-        Ok((next, steps as u16))
+        let nominal = nominal_steps(interval);
+        let steps = self.step_count(interval, nominal);
+        let point = self.connection_point();
+        self.path
+            .set_after(&self.path_end, &run.last, flown, run.origin);
+        self.path.set_towing(point);
+        let steps =
+            Self::integrate_checked(&mut self.solver, &self.path, saved, flown.time_s, steps)
+                .map_err(|_: SolveError| RejectReason::SolverFailure)?;
+        Ok((run.origin, run.start_time_s, steps as u16, steps > nominal))
     }
 
-    /// The RK4 steps for a frame `dt` seconds after the last one: enough for steps of
-    /// at most [`MAX_STEP_S`] and, with the tensions of the last evaluation (the
-    /// previous frame's outputs), at most [`WAVE_STEP_FACTOR`] l_i / c_i on every
-    /// segment; at most [`MAX_STEPS_PER_FRAME`]. In steady flight the first limit
-    /// decides (four steps per 10 ms frame for the reference system); a snatch load
-    /// (the cable jerked taut after a pull-up) raises the tension, and with it the
-    /// wave speed, tenfold for a moment, and the step shrinks with it.
-    fn step_count(&self, dt: f64) -> f64 {
-        // dt / MAX_STEP_S as dt times its reciprocal (400 for 2.5 ms), a soft-float
-        // multiply rather than a divide on the M4F (the quotient and the product
-        // differ by at most an ulp, far inside the 1e-9 allowance); the floor of
-        // one step by comparison.
-        let periods = libm::ceil(dt * (1.0 / MAX_STEP_S) - 1e-9);
-        let by_period = if periods > 1.0 { periods } else { 1.0 };
-        let by_wave = wave_steps(dt, self.wave_rate);
-        let steps = if by_wave > by_period {
-            by_wave
+    /// The RK4 steps for a frame `interval` seconds after the last one, whose
+    /// [`nominal_steps`] are `nominal`: those and, with the tensions of the last
+    /// evaluation (the previous frame's outputs), at most [`WAVE_STEP_FACTOR`]
+    /// l_i / c_i on every segment; at most [`MAX_STEPS_PER_FRAME`]. In steady
+    /// flight the first limit decides (four steps per 10 ms frame for the
+    /// reference system); a snatch load (the cable jerked taut after a pull-up)
+    /// raises the tension, and with it the wave speed, tenfold for a moment, and
+    /// the step shrinks with it.
+    fn step_count(&self, interval: f64, nominal: u32) -> u32 {
+        let by_wave = wave_steps(interval, self.wave_rate);
+        let steps = if by_wave > nominal { by_wave } else { nominal };
+        if steps < MAX_STEPS_PER_FRAME {
+            steps
         } else {
-            by_period
-        };
-        steps.min(MAX_STEPS_PER_FRAME)
+            MAX_STEPS_PER_FRAME
+        }
     }
 
     /// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
@@ -848,48 +1062,38 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         crate::lookahead::wave_rate_of(&self.solver)
     }
 
-    /// [`Controller::integrate`] with `steps` steps, again with more when a step
-    /// fails or when the tensions at the end of the frame ask for more steps than
-    /// were taken (they rose within the frame), doubling each time up to
-    /// [`MAX_STEPS_PER_FRAME`]; each attempt starts from the frame's initial state.
-    /// Returns the steps of the attempt that stood. Deterministic: the same state
-    /// and frames take the same attempts.
-    fn integrate_checked<P: FlightPath<T>>(
-        &mut self,
+    /// `steps` RK4 steps over `path` ending exactly at `t1` and the output
+    /// evaluation there ([`Solver::outputs`]), again with more steps when a step
+    /// or the evaluation fails or when the tensions at the end of the frame ask
+    /// for more steps than were taken (they rose within the frame), doubling each
+    /// time up to [`MAX_STEPS_PER_FRAME`]; each attempt starts from the frame's
+    /// initial state `start`. Returns the steps of the attempt that stood.
+    /// Deterministic: the same state and frames take the same attempts.
+    fn integrate_checked(
+        solver: &mut Solver<T, N>,
+        path: &FramePath<T>,
         start: &State<T, N>,
-        path: &P,
-        t0: f64,
         t1: f64,
-        mut steps: f64,
-    ) -> Result<f64, SolveError> {
+        mut steps: u32,
+    ) -> Result<u32, SolveError> {
         loop {
-            let attempt = self.integrate(path, t0, t1, steps);
+            // The steps, then the output evaluation at the frame's end, whose
+            // tensions decide whether the frame asks for more steps.
+            let attempt = solver
+                .steps_on(path, steps, t1)
+                .and_then(|()| solver.outputs(path).map(drop));
             let wanted = match attempt {
-                Ok(()) => wave_steps(t1 - t0, self.last_wave_rate()),
-                Err(_) => 2.0 * steps,
+                Ok(()) => wave_steps(path.span_s(), crate::lookahead::wave_rate_of(solver)),
+                Err(_) => 2 * steps,
             };
             if wanted <= steps || steps >= MAX_STEPS_PER_FRAME {
                 return attempt.map(|()| steps);
             }
             // `start` was the solver's own state: finite and accepted.
-            let _ = self.solver.set_state(*start);
-            let doubled = 2.0 * steps;
+            let _ = solver.set_state(*start);
+            let doubled = 2 * steps;
             steps = (if wanted > doubled { wanted } else { doubled }).min(MAX_STEPS_PER_FRAME);
         }
-    }
-
-    /// `steps` RK4 steps of (t1 - t0) / steps, ending exactly at t1.
-    fn integrate<P: FlightPath<T>>(
-        &mut self,
-        path: &P,
-        t0: f64,
-        t1: f64,
-        steps: f64,
-    ) -> Result<(), SolveError> {
-        let h = (t1 - t0) / steps;
-        self.solver.steps(path, h, steps as u32)?;
-        self.solver.set_time(t1);
-        Ok(())
     }
 
     /// The management report at frame time `now`: the monitors, and the last
@@ -918,23 +1122,20 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         report
     }
 
-    /// The Output frame at the solver's current state and the aircraft's state.
-    ///
-    /// `streamed` is the path of a streamed run (None: the built-in profile's).
+    /// The Output frame at the solver's current state on the controller's path
+    /// (the frame's), from its output evaluation, written into `output`; returns
+    /// the aircraft's state there.
     fn output(
         &mut self,
         frame: &AircraftStateFrame,
         steps: u16,
-        streamed: Option<&FramePath<T>>,
-    ) -> Result<(OutputFrame, AircraftState<T>), SolveError> {
-        let t = self.solver.state().time;
-        let builtin = self.builtin;
-        let (aircraft, out) = match (&builtin, streamed) {
-            (Some(path), _) => (path.state_at(t), self.solver.outputs(path)?),
-            (None, Some(path)) => (path.state_at(t), self.solver.outputs(path)?),
-            (None, None) => return Err(SolveError::NonFinite { joint: 0 }),
-        };
-        let geometry = self.geometry;
+        output: &mut OutputFrame,
+    ) -> Result<AircraftState<T>, SolveError> {
+        // The output evaluation at the frame's end, made with the frame's
+        // integration (`integrate_checked`) or trim (`initialise`).
+        let aircraft = self.path.end_state();
+        let out = self.solver.last_outputs();
+        let geometry = &self.geometry;
         let fp = FlightPathFrame::of(&aircraft);
         let n = out.segment_count();
         let (cable_clearance, _) = cable_plume_clearance(
@@ -967,7 +1168,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         };
         let connection_tension = out.connection_tension();
         let mut flags = StatusFlags::TRIMMED;
-        if builtin.is_some() {
+        if self.builtin.is_some() {
             flags |= StatusFlags::PROFILE_BUILTIN;
         }
         if connection_tension > self.allowable_tension_n {
@@ -979,41 +1180,98 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         if decoy_clearance < T::lit(DECOY_NEAR_AIRCRAFT_M) {
             flags |= StatusFlags::DECOY_NEAR_AIRCRAFT;
         }
-        let output = OutputFrame {
-            seq: frame.seq,
-            time_s: frame.time_s,
-            connection_tension_n: narrow(connection_tension),
-            tow_tension_n: narrow(out.tow_tension()),
-            decoy_position_fp_m: position,
-            decoy_euler_rel_rad: euler,
-            angle_of_attack_rad: aoa,
-            cable_clearance_exhaust_m: narrow(cable_clearance),
-            decoy_clearance_aircraft_m: narrow(decoy_clearance),
-            flags,
-            instructions: 0,
-            step_instructions: 0,
-            steps,
-            management_instructions: 0,
-            prediction_steps: 0,
-            management: Management::default(),
-        };
+        output.seq = frame.seq;
+        output.time_s = frame.time_s;
+        output.connection_tension_n = narrow(connection_tension);
+        output.tow_tension_n = narrow(out.tow_tension());
+        output.decoy_position_fp_m = position;
+        output.decoy_euler_rel_rad = euler;
+        output.angle_of_attack_rad = aoa;
+        output.cable_clearance_exhaust_m = narrow(cable_clearance);
+        output.decoy_clearance_aircraft_m = narrow(decoy_clearance);
+        output.flags = flags;
+        output.steps = steps;
         // Never a non-finite value in an accepted frame, whatever the precision
         // (narrowing an f64 beyond f32's range included): the frame is rejected as
         // a solver failure and the state rolled back.
-        if !output_is_finite(&output, has_decoy) {
+        if !output_is_finite(output, has_decoy) {
             return Err(SolveError::NonFinite { joint: 0 });
         }
-        Ok((output, aircraft))
+        Ok(aircraft)
     }
 }
 
+/// An Output of zero values, filled by [`Controller::output`].
+const OUTPUT_ZERO: OutputFrame = OutputFrame {
+    seq: 0,
+    time_s: 0.0,
+    connection_tension_n: 0.0,
+    tow_tension_n: 0.0,
+    decoy_position_fp_m: [0.0; 3],
+    decoy_euler_rel_rad: [0.0; 3],
+    angle_of_attack_rad: 0.0,
+    cable_clearance_exhaust_m: 0.0,
+    decoy_clearance_aircraft_m: 0.0,
+    flags: 0,
+    instructions: 0,
+    step_instructions: 0,
+    steps: 0,
+    management_instructions: 0,
+    prediction_steps: 0,
+    management: Management::ZERO,
+};
+
+/// The bits of the longest accepted interval between two State frames,
+/// [`MAX_TIME_JUMP_S`] plus [`TIME_TOLERANCE_S`] (positive doubles order as their
+/// bit patterns).
+const MAX_INTERVAL_BITS: u64 = (MAX_TIME_JUMP_S + TIME_TOLERANCE_S).to_bits();
+
+/// The bits of the frame intervals at which the nominal step count goes up: an
+/// interval of up to `STEP_THRESHOLDS[k]` seconds takes k + 1 steps, n steps for
+/// an interval dt the smallest n with dt <= (n + 1e-9) [`MAX_STEP_S`]
+/// (ceil(dt / MAX_STEP_S - 1e-9), formed without f64 arithmetic).
+const STEP_THRESHOLDS: [u64; 64] = {
+    let mut bits = [u64::MAX; 64];
+    let mut k = 0;
+    while k < 64 {
+        bits[k] = ((k as f64 + 1.0 + 1e-9) * MAX_STEP_S).to_bits();
+        k += 1;
+    }
+    bits
+};
+
+/// The nominal RK4 steps of a frame `interval` seconds after the last one
+/// (positive, at most [`MAX_TIME_JUMP_S`] plus the tolerance): the smallest n
+/// with interval <= (n + 1e-9) [`MAX_STEP_S`], at least 1 (four for a 10 ms
+/// frame). A binary search of six comparisons over [`STEP_THRESHOLDS`]: the
+/// same cost for every interval.
+fn nominal_steps(interval: f64) -> u32 {
+    let bits = interval.to_bits();
+    let (mut lo, mut width) = (0usize, 64usize);
+    while width > 1 {
+        width /= 2;
+        if STEP_THRESHOLDS[lo + width - 1] < bits {
+            lo += width;
+        }
+    }
+    lo as u32 + 1
+}
+
 /// The steps of `dt` the wave-speed limit asks for at the wave-speed rate `rate`
-/// (max_i c_i / l_i, 1/s): ceil(dt rate / [`WAVE_STEP_FACTOR`]); 0 if not finite.
-fn wave_steps<T: Real>(dt: f64, rate: T) -> f64 {
+/// (max_i c_i / l_i, 1/s): ceil(dt rate / [`WAVE_STEP_FACTOR`]); 0 if not finite
+/// (saturating at [`MAX_STEPS_PER_FRAME`] + 1).
+fn wave_steps<T: Real>(dt: f64, rate: T) -> u32 {
     // In T (f64 is emulated on the M4F); an exact integer here is a tie of no
     // consequence either way.
     let steps = (T::lit(dt) * rate * T::lit(1.0 / WAVE_STEP_FACTOR)).ceil();
-    if steps.finite() { steps.to_f64() } else { 0.0 }
+    if !steps.finite() {
+        return 0;
+    }
+    if steps > T::from_count(u64::from(MAX_STEPS_PER_FRAME)) {
+        MAX_STEPS_PER_FRAME + 1
+    } else {
+        steps.truncated_index() as u32
+    }
 }
 
 /// True when every value of an Output frame is finite (the decoy's position,
@@ -1031,22 +1289,4 @@ fn output_is_finite(o: &OutputFrame, has_decoy: bool) -> bool {
         .chain(&o.decoy_euler_rel_rad)
         .chain([&o.angle_of_attack_rad, &o.decoy_clearance_aircraft_m]);
     always.iter().all(|v| v.is_finite()) && (!has_decoy || decoy.into_iter().all(|v| v.is_finite()))
-}
-
-/// A built-in profile's flight path.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum BuiltinPath {
-    Level(LevelAcceleration),
-    PullUp(PullUp),
-    Turn(LevelTurn),
-}
-
-impl<T: Real> FlightPath<T> for BuiltinPath {
-    fn state_at(&self, t: f64) -> AircraftState<T> {
-        match self {
-            BuiltinPath::Level(p) => p.state_at(t),
-            BuiltinPath::PullUp(p) => p.state_at(t),
-            BuiltinPath::Turn(p) => p.state_at(t),
-        }
-    }
 }

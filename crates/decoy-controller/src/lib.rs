@@ -9,7 +9,9 @@
 //!   [`ControllerConfig`]. The host fills it from `decoy-config`; the firmware's
 //!   build script does the same at build time and writes it as a constant.
 //! - [`validate`]: the checks a State frame passes before it reaches the solver,
-//!   including the physical envelope of every input.
+//!   including the physical bounds of every input.
+//! - [`envelope`]: the operating envelope the controller guarantees (frames
+//!   outside it are answered and flagged).
 //! - [`path`]: [`FramePath`], the flight path between two State frames.
 //! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
 //!   and the aircraft (the host's `decoy simulate` uses the same code).
@@ -30,7 +32,9 @@
 // `!(x > 0)` is deliberate: it is true for NaN, which must fail the check.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod builtin;
 pub mod controller;
+pub mod envelope;
 pub mod geometry;
 pub mod lookahead;
 pub mod monitor;
@@ -43,7 +47,9 @@ pub use controller::{
     CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,
     DECOY_NEAR_AIRCRAFT_M, InstructionCounter, MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S,
     MAX_TIME_JUMP_S, NoCounter, PREDICTION_CAPACITY, SILENCE_MS, TIME_TOLERANCE_S,
+    TRIM_SLICE_UNITS, TRIM_SLICE_UNITS_F64, trim_slice_units,
 };
+pub use envelope::{EnvelopeParams, OperatingEnvelope};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
 pub use lookahead::{HeldManoeuvre, Lookahead, Prediction};
 pub use monitor::{ManagementConfig, ManagementParams, Measures, Monitors, Thresholds};

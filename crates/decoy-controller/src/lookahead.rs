@@ -42,12 +42,13 @@
 
 use nalgebra::{Quaternion, UnitQuaternion};
 use solver_core::{
-    AircraftState, FlightPath, Model, ModelParams, Real, SegmentLayout, Solver, State, Vec3,
+    AircraftState, FlightPath, Model, ModelParams, Outputs, Real, SegmentLayout, Solver, State,
+    Vec3,
 };
 
 use crate::controller::WAVE_STEP_FACTOR;
 use crate::geometry::Geometry;
-use crate::monitor::{ManagementConfig, Measures};
+use crate::monitor::{ManagementConfig, Measures, tension_margin_of};
 
 /// The shortest look-ahead step, s: a step that fails at this length ends the
 /// prediction at the time reached.
@@ -386,23 +387,31 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
             let measure = running.accepted % 3 == 2 || remaining - h <= 1e-9;
             let stepped = solver.step(&running.path, h).and_then(|()| {
                 let out = solver.outputs(&running.path)?;
-                let measures = measure.then(|| {
+                // The full measures on every third step; the tensions on every
+                // step (a snatch's dip or peak lasts a few steps).
+                let measures = if measure {
                     let aircraft = running.path.state_at(out.time());
-                    Measures::of(&out, &aircraft, geometry, config)
-                });
-                Ok((measures, wave_rate_of(solver)))
+                    Some(Measures::of(&out, &aircraft, geometry, config))
+                } else {
+                    None
+                };
+                let tensions = tension_extremes(&out);
+                Ok((measures, tensions, wave_rate_of(solver)))
             });
             match stepped {
                 // The tensions at the step's end ask for a shorter step than
                 // taken (they rose within it, a snatch): again from the step's
                 // start with what they ask (as the controller's own rule does).
-                Ok((_, rate)) if h > MIN_STEP_S && T::lit(h) * rate > T::lit(WAVE_STEP_FACTOR) => {
+                Ok((_, _, rate))
+                    if h > MIN_STEP_S && T::lit(h) * rate > T::lit(WAVE_STEP_FACTOR) =>
+                {
                     let _ = solver.set_state(before);
                     running.wave_rate = rate;
                 }
-                Ok((m, rate)) => {
-                    if let Some(m) = m {
-                        running.take(&m, config);
+                Ok((m, tensions, rate)) => {
+                    match m {
+                        Some(m) => running.take(&m, config),
+                        None => running.take_tensions(tensions, solver.state().time, config),
                     }
                     running.accepted += 1;
                     running.wave_rate = rate;
@@ -435,7 +444,26 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
     }
 }
 
+/// The lowest and highest joint tensions of `out`, N.
+fn tension_extremes<T: Real, const N: usize>(out: &Outputs<'_, T, N>) -> [T; 2] {
+    let first = out.tension(0);
+    (1..=out.segment_count()).fold([first, first], |[lo, hi], j| {
+        let t = out.tension(j);
+        [lo.min(t), hi.max(t)]
+    })
+}
+
 impl<T: Real> Running<T> {
+    /// Takes the tension margin of a predicted state whose other measures are
+    /// not taken: its lowest and highest joint `tensions` at `time`.
+    fn take_tensions(&mut self, tensions: [T; 2], time: f64, config: &ManagementConfig<T>) {
+        let (margin, _) = tension_margin_of(tensions, config);
+        self.worst[2] = self.worst[2].min(margin);
+        if margin < T::zero() && self.violation_at[2].is_none() {
+            self.violation_at[2] = Some(time);
+        }
+    }
+
     /// Takes one predicted state's measures.
     fn take(&mut self, m: &Measures<T>, config: &ManagementConfig<T>) {
         let mut margins = m.instant_margins(config);

@@ -43,13 +43,15 @@
 //!   is negative;
 //! - **exhaust**, m: the cable's clearance to the plume minus the required one.
 //!
-//! The window is a `heapless::HistoryBuf` (fixed capacity, no heap). Generic over
-//! the solver's scalar; the same code runs on the host and the target.
+//! The window is a fixed ring of samples ([`SampleRing`], no heap; not
+//! `heapless::HistoryBuf`, whose write keeps a bounds check the optimiser cannot
+//! remove: the frame path must have no reachable panic, firmware/README.md "No
+//! panic in flight"). Generic over the solver's scalar; the same code runs on
+//! the host and the target.
 
 use core::marker::PhantomData;
 use decoy_link::{Management, MonitorLevel, MonitorReport};
 
-use heapless::HistoryBuf;
 use solver_core::{AircraftState, Outputs, Real, Vec3};
 
 use crate::geometry::{Geometry, cable_plume_clearance};
@@ -398,27 +400,7 @@ impl<T: Real> Measures<T> {
     /// slack, the one at the higher level; ties: the smaller margin relative to
     /// its caution threshold).
     pub fn tension_margin(&self, config: &ManagementConfig<T>) -> (T, LevelThresholds<T>) {
-        let over = (
-            config.allowable_tension - self.tension_max,
-            config.thresholds[2],
-        );
-        let slack = (
-            self.tension_min - config.slack_tension,
-            config.slack_thresholds,
-        );
-        let (lo, ls) = (over.1.level_of(over.0), slack.1.level_of(slack.0));
-        let relative = |(m, t): (T, LevelThresholds<T>)| {
-            if t.caution > T::zero() {
-                m / t.caution
-            } else {
-                m
-            }
-        };
-        if ls > lo || (ls == lo && relative(slack) < relative(over)) {
-            slack
-        } else {
-            over
-        }
+        tension_margin_of([self.tension_min, self.tension_max], config)
     }
 
     /// The collision, tension and exhaust margins (m, N, m) and the angle-of-attack
@@ -431,6 +413,29 @@ impl<T: Real> Measures<T> {
             tension,
             self.exhaust_clearance - config.exhaust_min_clearance,
         ]
+    }
+}
+
+/// The tension margin, N, of the lowest and highest joint `tensions` (N), and
+/// the thresholds of its side (as [`Measures::tension_margin`]).
+pub fn tension_margin_of<T: Real>(
+    tensions: [T; 2],
+    config: &ManagementConfig<T>,
+) -> (T, LevelThresholds<T>) {
+    let over = (config.allowable_tension - tensions[1], config.thresholds[2]);
+    let slack = (tensions[0] - config.slack_tension, config.slack_thresholds);
+    let (lo, ls) = (over.1.level_of(over.0), slack.1.level_of(slack.0));
+    let relative = |(m, t): (T, LevelThresholds<T>)| {
+        if t.caution > T::zero() {
+            m / t.caution
+        } else {
+            m
+        }
+    };
+    if ls > lo || (ls == lo && relative(slack) < relative(over)) {
+        slack
+    } else {
+        over
     }
 }
 
@@ -500,12 +505,74 @@ impl<T: Real> Monitor<T> {
     }
 }
 
+/// The last [`POSTURE_WINDOW_CAPACITY`] samples, the oldest overwritten. Every
+/// index is reduced below the capacity where it is formed, so no access can
+/// panic (nor keep a bounds check).
+#[derive(Clone, Copy, Debug)]
+struct SampleRing {
+    samples: [[f32; 2]; POSTURE_WINDOW_CAPACITY],
+    /// Where the next sample goes (below the capacity).
+    next: usize,
+    /// Samples held (at most the capacity).
+    len: usize,
+}
+
+impl SampleRing {
+    const EMPTY: Self = SampleRing {
+        samples: [[0.0; 2]; POSTURE_WINDOW_CAPACITY],
+        next: 0,
+        len: 0,
+    };
+
+    fn len(&self) -> usize {
+        self.len.min(POSTURE_WINDOW_CAPACITY)
+    }
+
+    fn clear(&mut self) {
+        self.next = 0;
+        self.len = 0;
+    }
+
+    fn write(&mut self, sample: [f32; 2]) {
+        let at = self.next % POSTURE_WINDOW_CAPACITY;
+        self.samples[at] = sample;
+        self.next = (at + 1) % POSTURE_WINDOW_CAPACITY;
+        self.len = (self.len + 1).min(POSTURE_WINDOW_CAPACITY);
+    }
+
+    /// The samples, oldest first.
+    fn oldest_ordered(&self) -> impl Iterator<Item = [f32; 2]> + '_ {
+        let len = self.len();
+        let start = (self.next % POSTURE_WINDOW_CAPACITY + POSTURE_WINDOW_CAPACITY - len)
+            % POSTURE_WINDOW_CAPACITY;
+        (0..len).map(move |k| {
+            let at = start + k;
+            let at = if at >= POSTURE_WINDOW_CAPACITY {
+                at - POSTURE_WINDOW_CAPACITY
+            } else {
+                at
+            };
+            self.samples[at.min(POSTURE_WINDOW_CAPACITY - 1)]
+        })
+    }
+}
+
 /// The posture window: relative pitch and yaw sampled every [`POSTURE_SAMPLE_S`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct PostureWindow<T: Real> {
-    samples: HistoryBuf<[f32; 2], POSTURE_WINDOW_CAPACITY>,
+    samples: SampleRing,
     last_time: Option<f64>,
     precision: PhantomData<T>,
+}
+
+impl<T: Real> Default for PostureWindow<T> {
+    fn default() -> Self {
+        PostureWindow {
+            samples: SampleRing::EMPTY,
+            last_time: None,
+            precision: PhantomData,
+        }
+    }
 }
 
 impl<T: Real> PartialEq for PostureWindow<T> {
@@ -633,7 +700,7 @@ impl<T: Real> Monitors<T> {
         Monitors {
             monitors: [m; 4],
             window: PostureWindow {
-                samples: HistoryBuf::new(),
+                samples: SampleRing::EMPTY,
                 last_time: None,
                 precision: PhantomData,
             },

@@ -20,6 +20,7 @@ use solver_core::{
 };
 
 use crate::controller::ControllerConfig;
+use crate::envelope::{EnvelopeParams, OperatingEnvelope};
 use crate::geometry::{Envelope, ExhaustPlume, Geometry};
 use crate::monitor::{ManagementConfig, ManagementParams, usable_angle_of_attack};
 
@@ -99,6 +100,8 @@ pub struct SystemParams {
     pub grading_ratio_embedded: f64,
     /// `[management]`: the monitors' thresholds, the look-ahead's horizon and slice.
     pub management: ManagementParams,
+    /// `[envelope]`: the operating envelope the controller guarantees.
+    pub envelope: EnvelopeParams,
 }
 
 /// A configuration triple as a solver vector in `T`.
@@ -228,6 +231,8 @@ impl SystemParams {
             geometry: self.geometry(),
             allowable_tension_n: T::lit(self.allowable_tension),
             management: self.management(),
+            envelope: OperatingEnvelope::new(&self.envelope, self.gravity),
+            trim_units_per_frame: crate::controller::trim_slice_units::<T>(),
         })
     }
 }

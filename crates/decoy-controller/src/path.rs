@@ -1,7 +1,7 @@
 //! [`FramePath`]: the aircraft's flight path between two State frames, the one
 //! path the controller and the host reference both integrate along.
 
-use solver_core::{AircraftState, FlightPath, InputError, PointKinematics, Real, Vec3};
+use solver_core::{AircraftState, FlightPath, InputError, NodePath, PointKinematics, Real, Vec3};
 
 use decoy_link::AircraftStateFrame;
 
@@ -257,77 +257,125 @@ impl<T: Real> FramePath<T> {
         current: &AircraftStateFrame,
         origin: [f64; 3],
     ) -> Self {
+        let mut path = Self::ZERO;
+        path.set_after(end, previous, current, origin);
+        path
+    }
+
+    /// A constant path at the origin at time 0 (all zero bits), to be set.
+    pub const ZERO: Self = {
+        let z = Vec3::new(T::ZERO, T::ZERO, T::ZERO);
+        let sample = Sample {
+            position: z,
+            velocity: z,
+            acceleration: z,
+            attitude: [T::ZERO; 4],
+            rate: z,
+            angular_acceleration: z,
+        };
+        FramePath {
+            t0: 0.0,
+            binades: None,
+            span_bits: 0,
+            inverse_span: T::ZERO,
+            span: T::ZERO,
+            from: sample,
+            to: sample,
+            to_attitude_near: [T::ZERO; 4],
+            delta: z,
+            towing: None,
+            from_point: None,
+        }
+    };
+
+    /// Makes this [`FramePath::after`]`(end, previous, current, origin)`, in place
+    /// (no path-sized value moved: about 110 words).
+    pub fn set_after(
+        &mut self,
+        end: &PathEnd<T>,
+        previous: &AircraftStateFrame,
+        current: &AircraftStateFrame,
+        origin: [f64; 3],
+    ) {
         let reuse = end.is_at(previous, &origin);
-        let from = if reuse {
+        self.from = if reuse {
             end.sample
         } else {
             Sample::of(previous, &origin)
         };
-        let from_point = (reuse && end.towing_kept).then_some((end.towing_point, end.towing_end));
-        let to = Sample::of(current, &origin);
+        self.from_point = (reuse && end.towing_kept).then_some((end.towing_point, end.towing_end));
+        self.to = Sample::of(current, &origin);
         // Shortest arc: q and -q are the same attitude.
+        let (from, to) = (&self.from, &self.to);
         let dot = (0..4).fold(T::zero(), |sum, i| sum + from.attitude[i] * to.attitude[i]);
-        let to_attitude_near = if dot < T::zero() {
+        self.to_attitude_near = if dot < T::zero() {
             to.attitude.map(|c: T| -c)
         } else {
             to.attitude
         };
         let (p0, p1) = (previous.position_ned_m, current.position_ned_m);
-        let delta = Vec3::new(
+        self.delta = Vec3::new(
             T::lit(p1[0] - p0[0]),
             T::lit(p1[1] - p0[1]),
             T::lit(p1[2] - p0[2]),
         );
+        let (t0_bits, t1_bits) = (previous.time_s.to_bits(), current.time_s.to_bits());
+        // t1 > t0 >= 0 on their bits (positive doubles order as their bit patterns;
+        // a soft-float compare costs about 30 instructions on the M4F); a span
+        // that is not positive makes a constant path.
+        let positive = t1_bits > t0_bits && t0_bits >> 63 == 0 && t1_bits < f64::INFINITY.to_bits();
         let span = current.time_s - previous.time_s;
-        let (span_bits, inverse_span, span) = if span > 0.0 {
-            (span.to_bits() as i64, T::lit(1.0 / span), T::lit(span))
+        (self.span_bits, self.inverse_span, self.span) = if positive {
+            // 1/h in T (one division in T, not a soft-float one in f64).
+            let h = T::lit(span);
+            (span.to_bits() as i64, T::one() / h, h)
         } else {
             (0, T::zero(), T::zero())
         };
-        let (t0_bits, t1_bits) = (previous.time_s.to_bits(), current.time_s.to_bits());
         let (e0, e1) = (t0_bits >> 52, t1_bits >> 52);
         // 2^-60 s <= t0 < t1 < 2^61 s, positive (sign bit clear, so the exponent
         // field is the top 12 bits), t1 in t0's binade or the next: the ulps
         // there are normal in f32.
         let ulp = |e: u64| T::lit(f64::from_bits((e - 52) << 52));
-        let binades = (t1_bits > t0_bits && (1023 - 60..=1023 + 60).contains(&e0) && e1 - e0 <= 1)
+        self.binades = (t1_bits > t0_bits && (1023 - 60..=1023 + 60).contains(&e0) && e1 - e0 <= 1)
             .then(|| Binades {
                 t0_bits,
                 t1_bits,
                 ulp0: ulp(e0),
                 ulp1: ulp(e1),
             });
-        FramePath {
-            t0: previous.time_s,
-            binades,
-            span_bits,
-            inverse_span,
-            span,
-            from,
-            to,
-            to_attitude_near,
-            delta,
-            towing: None,
-            from_point,
-        }
+        self.t0 = previous.time_s;
+        self.towing = None;
+    }
+
+    /// The aircraft's state at the current frame (t1): the path's end, as
+    /// [`FlightPath::state_at`] gives it there.
+    pub fn end_state(&self) -> AircraftState<T> {
+        self.to.state()
     }
 
     /// Where this path ends: at `current` (the frame it was built to) with
     /// `origin`, for [`FramePath::after`].
     pub fn end(&self, current: &AircraftStateFrame, origin: [f64; 3]) -> PathEnd<T> {
-        let mut end = PathEnd {
-            kept: true,
-            frame: *current,
-            origin,
-            sample: self.to,
-            ..PathEnd::NONE
-        };
-        if let Some(towing) = &self.towing {
-            end.towing_kept = true;
-            end.towing_point = towing.point;
-            end.towing_end = towing.to;
-        }
+        let mut end = PathEnd::NONE;
+        self.end_into(&mut end, current, origin);
         end
+    }
+
+    /// [`FramePath::end`] written into `end` (no path-end-sized value moved).
+    pub fn end_into(&self, end: &mut PathEnd<T>, current: &AircraftStateFrame, origin: [f64; 3]) {
+        end.kept = true;
+        end.frame = *current;
+        end.origin = origin;
+        end.sample = self.to;
+        match &self.towing {
+            Some(towing) => {
+                end.towing_kept = true;
+                end.towing_point = towing.point;
+                end.towing_end = towing.to;
+            }
+            None => end.towing_kept = false,
+        }
     }
 
     /// The same path, with the kinematics of the body-fixed point `point` (FRD, m;
@@ -344,6 +392,12 @@ impl<T: Real> FramePath<T> {
     /// Frames whose states fail [`AircraftState::validate`] keep the default
     /// (which reports the failure); so does any other point.
     pub fn towing(mut self, point: Vec3<T>) -> Self {
+        self.set_towing(point);
+        self
+    }
+
+    /// [`FramePath::towing`] in place (no path-sized value moved).
+    pub fn set_towing(&mut self, point: Vec3<T>) {
         let same_point = |p: &Vec3<T>| {
             p.x.same_bits(point.x) && p.y.same_bits(point.y) && p.z.same_bits(point.z)
         };
@@ -358,7 +412,7 @@ impl<T: Real> FramePath<T> {
                 let state = self.from.state();
                 if state.validate().is_err() {
                     self.towing = None;
-                    return self;
+                    return;
                 }
                 state.point(&point)
             }
@@ -366,7 +420,7 @@ impl<T: Real> FramePath<T> {
         let to = self.to.state();
         if to.validate().is_err() {
             self.towing = None;
-            return self;
+            return;
         }
         let to = to.point(&point);
         // The point's offsets from the aircraft's reference point at both frames.
@@ -385,7 +439,15 @@ impl<T: Real> FramePath<T> {
             offset0,
             offset_change: (offset1.0 - offset0.0, offset1.1 - offset0.1),
         });
-        self
+    }
+
+    /// The path's span t1 - t0, s, in f64 (0 for a constant path).
+    pub fn span_s(&self) -> f64 {
+        if self.span_bits > 0 {
+            f64::from_bits(self.span_bits as u64)
+        } else {
+            0.0
+        }
     }
 
     /// The constant path at one frame (its state at every time).
@@ -497,35 +559,29 @@ impl<T: Real> FramePath<T> {
     }
 }
 
-impl<T: Real> FlightPath<T> for FramePath<T> {
-    /// With [`FramePath::towing`] at `r` (the same bits): the point's kinematics
-    /// interpolated directly; otherwise the default.
+impl<T: Real> FramePath<T> {
+    /// The towing point's interpolation if it is set for `r` (the same bits).
     #[inline(always)]
-    fn point_at(&self, t: f64, r: &Vec3<T>) -> Result<PointKinematics<T>, InputError> {
-        let towing = match &self.towing {
+    fn towing_for(&self, r: &Vec3<T>) -> Option<&Towing<T>> {
+        match &self.towing {
             Some(towing)
                 if towing.point.x.same_bits(r.x)
                     && towing.point.y.same_bits(r.y)
                     && towing.point.z.same_bits(r.z) =>
             {
-                towing
+                Some(towing)
             }
-            _ => {
-                let aircraft = self.state_at(t);
-                aircraft.validate()?;
-                return Ok(aircraft.point(r));
-            }
-        };
-        let s = match self.fraction(t) {
-            Fraction::Before => return Ok(towing.from),
-            Fraction::After => return Ok(towing.to),
-            Fraction::Inside(s) => s,
-        };
-        // The aircraft's own Hermite, plus the point's offsets interpolated
-        // linearly (not a Hermite through the point's positions: an attitude that
-        // steps between two frames, as a scenario's bank at its start, would
-        // turn the step of R r into a velocity of |r| x angle / h, hundreds of
-        // m/s over a 10 ms frame).
+            _ => None,
+        }
+    }
+
+    /// The towing point's kinematics at `s` in (0, 1): the aircraft's own Hermite,
+    /// plus the point's offsets interpolated linearly (not a Hermite through the
+    /// point's positions: an attitude that steps between two frames, as a
+    /// scenario's bank at its start, would turn the step of R r into a velocity
+    /// of |r| x angle / h, hundreds of m/s over a 10 ms frame).
+    #[inline(always)]
+    fn towing_inside(&self, towing: &Towing<T>, s: T) -> PointKinematics<T> {
         let (from, to) = (&self.from, &self.to);
         let (aircraft_position, aircraft_velocity) =
             self.hermite(s, &from.position, &from.velocity, &to.velocity, &self.delta);
@@ -534,19 +590,15 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
         let velocity = aircraft_velocity + (v0 + dv * s);
         let (a, b) = (&towing.from, &towing.to);
         let acceleration = a.acceleration + (b.acceleration - a.acceleration) * s;
-        Ok(PointKinematics {
+        PointKinematics {
             position,
             velocity,
             acceleration,
-        })
+        }
     }
 
-    fn state_at(&self, t: f64) -> AircraftState<T> {
-        let s = match self.fraction(t) {
-            Fraction::Before => return self.from.state(),
-            Fraction::After => return self.to.state(),
-            Fraction::Inside(s) => s,
-        };
+    /// The aircraft state at `s` in (0, 1).
+    fn state_inside(&self, s: T) -> AircraftState<T> {
         let (a, b) = (&self.from, &self.to);
         let (position, velocity) =
             self.hermite(s, &a.position, &a.velocity, &b.velocity, &self.delta);
@@ -563,6 +615,82 @@ impl<T: Real> FlightPath<T> for FramePath<T> {
             angular_rate: lerp(&a.rate, &b.rate),
             angular_acceleration: lerp(&a.angular_acceleration, &b.angular_acceleration),
         }
+    }
+
+    /// The kinematics of `r` by the default rule (the state, validated, then the
+    /// point), at `fraction`.
+    fn default_point(
+        &self,
+        fraction: Fraction<T>,
+        r: &Vec3<T>,
+    ) -> Result<PointKinematics<T>, InputError> {
+        let aircraft = match fraction {
+            Fraction::Before => self.from.state(),
+            Fraction::After => self.to.state(),
+            Fraction::Inside(s) => self.state_inside(s),
+        };
+        aircraft.validate()?;
+        Ok(aircraft.point(r))
+    }
+}
+
+impl<T: Real> FlightPath<T> for FramePath<T> {
+    /// With [`FramePath::towing`] at `r` (the same bits): the point's kinematics
+    /// interpolated directly; otherwise the default.
+    #[inline(always)]
+    fn point_at(&self, t: f64, r: &Vec3<T>) -> Result<PointKinematics<T>, InputError> {
+        let fraction = self.fraction(t);
+        let Some(towing) = self.towing_for(r) else {
+            return self.default_point(fraction, r);
+        };
+        Ok(match fraction {
+            Fraction::Before => towing.from,
+            Fraction::After => towing.to,
+            Fraction::Inside(s) => self.towing_inside(towing, s),
+        })
+    }
+
+    fn state_at(&self, t: f64) -> AircraftState<T> {
+        match self.fraction(t) {
+            Fraction::Before => self.from.state(),
+            Fraction::After => self.to.state(),
+            Fraction::Inside(s) => self.state_inside(s),
+        }
+    }
+}
+
+/// The frame path sampled at the nodes of its steps (the controller's way,
+/// `Solver::steps_on`): node k of n at s = k / n exactly where n is a power of
+/// two (four steps a frame: eighths), the previous frame's kinematics at node 0
+/// and the current frame's at node n, bit for bit as [`FlightPath::point_at`]
+/// gives them at t0 and t1.
+impl<T: Real> NodePath<T> for FramePath<T> {
+    fn span(&self) -> T {
+        self.span
+    }
+
+    #[inline(always)]
+    fn node_point(
+        &self,
+        k: u32,
+        nodes: u32,
+        r: &Vec3<T>,
+    ) -> Result<PointKinematics<T>, InputError> {
+        let fraction = if k == 0 || !(self.span > T::zero()) {
+            Fraction::Before
+        } else if k >= nodes {
+            Fraction::After
+        } else {
+            Fraction::Inside(T::from_count(u64::from(k)) / T::from_count(u64::from(nodes)))
+        };
+        let Some(towing) = self.towing_for(r) else {
+            return self.default_point(fraction, r);
+        };
+        Ok(match fraction {
+            Fraction::Before => towing.from,
+            Fraction::After => towing.to,
+            Fraction::Inside(s) => self.towing_inside(towing, s),
+        })
     }
 }
 

@@ -43,7 +43,17 @@ pub fn send<W: Write>(link: &mut W, message: &DeviceMessage) -> Result<(), Error
     let mut wire = [0u8; MAX_WIRE_BYTES];
     // Every DeviceMessage fits a frame (decoy-link's tests encode the largest).
     let length = encode(message, &mut wire).map_err(|_| ErrorKind::InvalidData)?;
-    link.write_all(&wire[..length]).map_err(|e| e.kind())
+    let mut rest = wire.get(..length).ok_or(ErrorKind::InvalidData)?;
+    // `Write::write_all` panics on a write of 0 bytes: here that is an error,
+    // and no slice can panic (firmware/README.md, "No panic in flight").
+    while !rest.is_empty() {
+        match link.write(rest) {
+            Ok(0) => return Err(ErrorKind::WriteZero),
+            Ok(n) => rest = rest.get(n..).unwrap_or(&[]),
+            Err(e) => return Err(e.kind()),
+        }
+    }
+    Ok(())
 }
 
 /// One turn of the loop: at most one byte from `link` through `decoder` into

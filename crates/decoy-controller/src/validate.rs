@@ -52,23 +52,24 @@ fn within(v: &[f32; 3], limit: f32) -> bool {
 /// [`MAX_BODY_RATE_RADPS`], |angular acceleration| <=
 /// [`MAX_ANGULAR_ACCELERATION_RADPS2`] ([`RejectReason::OutOfRange`]).
 /// The speed of sound comes from `atmosphere` in the solver's precision.
+/// Returns the Mach number.
 pub fn validate_streamed<T: Real>(
     frame: &AircraftStateFrame,
     atmosphere: &Atmosphere<T>,
     wind: &Vec3<T>,
-) -> Result<(), RejectReason> {
+) -> Result<T, RejectReason> {
     if !is_finite(frame) {
         return Err(RejectReason::NonFinite);
     }
     // In f32, the frame's own precision: f64 is software-emulated on the
     // Cortex-M4F, and the tolerances are far above f32 rounding.
     let norm2: f32 = frame.attitude_wxyz.iter().map(|&c| c * c).sum();
-    let norm = libm::sqrtf(norm2);
+    let norm = <f32 as Real>::square_root(norm2);
     let tolerance = QUATERNION_NORM_TOLERANCE as f32;
     if !((1.0 - tolerance)..=(1.0 + tolerance)).contains(&norm) {
         return Err(RejectReason::BadQuaternion);
     }
-    let envelope = [
+    let bounds = [
         (&frame.acceleration_ned_mps2, MAX_ACCELERATION_MPS2),
         (&frame.body_rate_radps, MAX_BODY_RATE_RADPS),
         (
@@ -76,29 +77,38 @@ pub fn validate_streamed<T: Real>(
             MAX_ANGULAR_ACCELERATION_RADPS2,
         ),
     ];
-    if !envelope.iter().all(|(v, limit)| within(v, *limit)) {
+    if !bounds.iter().all(|(v, limit)| within(v, *limit)) {
         return Err(RejectReason::OutOfRange);
     }
     let altitude = -frame.position_ned_m[2];
     if !(MIN_ALTITUDE_M..=MAX_ALTITUDE_M).contains(&altitude) {
         return Err(RejectReason::OutOfRange);
     }
-    let air = atmosphere
-        .at(T::lit(altitude))
-        .map_err(|_| RejectReason::OutOfRange)?;
+    let mach = mach_of(frame, atmosphere, wind).ok_or(RejectReason::OutOfRange)?;
+    if !(mach > T::zero() && mach <= T::lit(MAX_MACH)) {
+        return Err(RejectReason::OutOfRange);
+    }
+    Ok(mach)
+}
+
+/// The Mach number |v - wind| / a(altitude) of a finite frame whose altitude is
+/// inside the atmosphere (`None` otherwise, or without a speed of sound). The
+/// speed of sound alone: no `pow`, the same cost at every altitude.
+pub fn mach_of<T: Real>(
+    frame: &AircraftStateFrame,
+    atmosphere: &Atmosphere<T>,
+    wind: &Vec3<T>,
+) -> Option<T> {
+    let altitude = -frame.position_ned_m[2];
+    let speed_of_sound = atmosphere.speed_of_sound(T::lit(altitude)).ok()?;
     let v = frame.velocity_ned_mps;
     let relative = [0, 1, 2].map(|i| T::lit(f64::from(v[i])) - wind[i]);
     let airspeed = relative
         .iter()
         .fold(T::zero(), |sum, c| sum + *c * *c)
         .square_root();
-    let speed_of_sound = air.speed_of_sound;
     if !(speed_of_sound > T::zero()) {
-        return Err(RejectReason::OutOfRange);
+        return None;
     }
-    let mach = airspeed / speed_of_sound;
-    if !(mach > T::zero() && mach <= T::lit(MAX_MACH)) {
-        return Err(RejectReason::OutOfRange);
-    }
-    Ok(())
+    Some(airspeed / speed_of_sound)
 }

@@ -27,7 +27,9 @@ fn controller<T: Real>(system: &SystemParams) -> Controller<T, CAPACITY> {
     Controller::new(system.controller_config(system.embedded_layout()).unwrap()).unwrap()
 }
 
-/// The Outputs of a built-in profile flown for `seconds` in 10 ms frames.
+/// The Outputs of a built-in profile flown for `seconds` in 10 ms frames (from
+/// the trim's completion: the frames before it are answered by the
+/// initialisation's Status).
 fn fly_profile<T: Real>(system: &SystemParams, profile: Profile, seconds: f64) -> Vec<OutputFrame> {
     let mut c = controller::<T>(system);
     c.handle(
@@ -36,15 +38,18 @@ fn fly_profile<T: Real>(system: &SystemParams, profile: Profile, seconds: f64) -
     );
     let frames = (seconds / 0.01).round() as u32;
     (0..=frames)
-        .map(|k| {
+        .filter_map(|k| {
             let t = 0.01 * f64::from(k);
             let f = AircraftState::<f64>::level(9000.0, 200.0);
-            common::output(c.handle(HostMessage::State(state_frame(k, t, &f)), &mut NoCounter))
+            common::output_or_initialising(
+                c.handle(HostMessage::State(state_frame(k, t, &f)), &mut NoCounter),
+            )
         })
         .collect()
 }
 
-/// The Outputs of streamed frames along `path` for `seconds`.
+/// The Outputs of streamed frames along `path` for `seconds` (from the trim's
+/// completion).
 fn fly_path<T: Real, P: FlightPath<f64>>(
     system: &SystemParams,
     path: &P,
@@ -53,15 +58,12 @@ fn fly_path<T: Real, P: FlightPath<f64>>(
     let mut c = controller::<T>(system);
     let frames = (seconds / 0.01).round() as u32;
     (0..=frames)
-        .map(|k| {
+        .filter_map(|k| {
             let t = 0.01 * f64::from(k);
-            match c.handle(
+            common::output_or_initialising(c.handle(
                 HostMessage::State(state_frame(k, t, &path.state_at(t))),
                 &mut NoCounter,
-            ) {
-                DeviceMessage::Output(o) => o,
-                other => panic!("t = {t}: {other:?}"),
-            }
+            ))
         })
         .collect()
 }

@@ -93,6 +93,14 @@ pub struct HilSummary {
     pub frames_sent: usize,
     /// Of those, answered by an Output frame.
     pub frames_answered: usize,
+    /// Of those, answered by the initialisation's Status (the frames of the
+    /// trim before the one that completes it; docs/protocol.md §4).
+    pub frames_initialising: usize,
+    /// Frames of the initialisation (those and the Output completing the trim)
+    /// and the most instructions one of them took.
+    pub trim_frames: usize,
+    /// See [`HilSummary::trim_frames`].
+    pub trim_instructions_max: u32,
     /// Largest difference of either tension from the host's f64 solution, N.
     #[serde(rename = "max_tension_diff_vs_host_N")]
     pub max_tension_diff_vs_host_n: f64,
@@ -314,7 +322,7 @@ pub fn run_hil(
     let answers: Vec<DeviceMessage> = exchanges.into_iter().map(|(_, a)| a).collect();
 
     let host64 = {
-        let mut c = flight::host_controller::<f64>(&config).map_err(HilError::Host)?;
+        let mut c = flight::accuracy_controller(&config).map_err(HilError::Host)?;
         flight::replay(&mut c, &sent)
     };
     // The firmware's precision with the target's maths: bit for bit.
@@ -378,6 +386,9 @@ pub fn run_hil(
             .iter()
             .filter(|a| matches!(a, DeviceMessage::Output(_)))
             .count(),
+        frames_initialising: stats.trim_frames.saturating_sub(1),
+        trim_frames: stats.trim_frames,
+        trim_instructions_max: stats.trim_max,
         max_tension_diff_vs_host_n: vs64.max_tension_diff_n,
         max_tension_diff_vs_host_same_precision_n: vs_same.max_tension_diff_n,
         frames_identical_to_host_same_precision: vs_same.identical,

@@ -88,20 +88,33 @@ pub fn encode<M: Serialize>(message: &M, out: &mut [u8]) -> Result<usize, Encode
     let length = postcard::to_slice(message, &mut payload[..MAX_PAYLOAD_BYTES])
         .map_err(|_| EncodeError::TooLong)?
         .len();
-    let crc = crc32(&payload[..length]).to_le_bytes();
-    payload[length..length + CRC_BYTES].copy_from_slice(&crc);
-    let raw = &payload[..length + CRC_BYTES];
+    // Every slice taken with `get`: no index can panic (the frame path's
+    // answers are encoded here; firmware/README.md, "No panic in flight").
+    let body = payload.get(..length).ok_or(EncodeError::TooLong)?;
+    let crc = crc32(body).to_le_bytes();
+    payload
+        .get_mut(length..length + CRC_BYTES)
+        .ok_or(EncodeError::TooLong)?
+        .copy_from_slice(&crc);
+    let raw = payload
+        .get(..length + CRC_BYTES)
+        .ok_or(EncodeError::TooLong)?;
     let encoded_max = cobs::max_encoding_length(raw.len());
     if encoded_max > MAX_FRAME_BYTES {
         return Err(EncodeError::TooLong);
     }
-    if out.len() < encoded_max + 2 {
-        return Err(EncodeError::BufferTooSmall);
-    }
-    out[0] = 0;
-    let encoded = cobs::try_encode(raw, &mut out[1..1 + encoded_max])
-        .map_err(|_| EncodeError::BufferTooSmall)?;
-    out[1 + encoded] = 0;
+    let frame = out
+        .get_mut(..encoded_max + 2)
+        .ok_or(EncodeError::BufferTooSmall)?;
+    let (start, rest) = frame.split_first_mut().ok_or(EncodeError::BufferTooSmall)?;
+    *start = 0;
+    let encoded = cobs::try_encode(
+        raw,
+        rest.get_mut(..encoded_max)
+            .ok_or(EncodeError::BufferTooSmall)?,
+    )
+    .map_err(|_| EncodeError::BufferTooSmall)?;
+    *rest.get_mut(encoded).ok_or(EncodeError::BufferTooSmall)? = 0;
     Ok(encoded + 2)
 }
 
@@ -171,7 +184,11 @@ impl<const CAP: usize> Decoder<CAP> {
         if length == 0 {
             return None;
         }
-        Some(decode_chunk(&mut self.buffer[..length]))
+        // length <= CAP by the push above; `get_mut` makes it no panic.
+        Some(match self.buffer.get_mut(..length) {
+            Some(chunk) => decode_chunk(chunk),
+            None => Err(FrameError::Oversize),
+        })
     }
 
     /// Feeds `bytes`, calling `on_frame` for every frame they close.

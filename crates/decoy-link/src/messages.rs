@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 4;
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -366,12 +366,17 @@ pub struct StatusFrame {
     pub time_s: f64,
     /// Every counter.
     pub counters: Counters,
+    /// For the Status answering a State frame while the controller initialises
+    /// ([`StatusFlags::INITIALISING`]): the instructions it spent on that frame
+    /// (as [`OutputFrame::instructions`]); 0 otherwise.
+    pub instructions: u32,
 }
 
 /// Counters since boot (wrapping at 2^32).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Counters {
-    /// Accepted frames (State frames answered by an Output, and commands).
+    /// Accepted frames (State frames answered by an Output or, while the
+    /// controller initialises, by a Status; and commands).
     pub frames_ok: u32,
     /// [`RejectReason::Oversize`] rejections.
     pub oversize: u32,
@@ -488,8 +493,12 @@ impl BoardName {
 
     /// The name.
     pub fn as_str(&self) -> &str {
-        // Only ASCII is ever stored (`new` and deserialisation check it).
-        core::str::from_utf8(&self.bytes[..usize::from(self.len)]).unwrap_or("")
+        // Only ASCII is ever stored (`new` and deserialisation check it), at
+        // most the capacity (`get`: no panic either way).
+        self.bytes
+            .get(..usize::from(self.len))
+            .and_then(|b| core::str::from_utf8(b).ok())
+            .unwrap_or("")
     }
 }
 
@@ -577,6 +586,17 @@ impl StatusFlags {
     pub const PROFILE_BUILTIN: u16 = 32;
     /// The first answer after a silence.
     pub const RECOVERED: u16 = 64;
+    /// The controller is computing the trim its run will start from (a Status
+    /// answers each State frame meanwhile; docs/protocol.md §4).
+    pub const INITIALISING: u16 = 128;
+    /// The aircraft state of this frame is outside the operating envelope the
+    /// configuration declares (`[envelope]`): the frame is answered as usual, but
+    /// the frame-cost bound and the accuracy are guaranteed only inside it.
+    pub const OUTSIDE_ENVELOPE: u16 = 256;
+    /// This frame took more RK4 steps than the nominal four (the wave-speed
+    /// limit of docs/protocol.md §5 at a tension beyond the envelope's): its
+    /// cost exceeds the frame budget.
+    pub const STEP_LIMITED: u16 = 512;
 
     /// True when every bit of `bits` is set.
     pub fn contains(self, bits: u16) -> bool {

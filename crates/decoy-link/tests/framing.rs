@@ -183,6 +183,7 @@ fn device_message(r: &mut Rng) -> DeviceMessage {
             segments: r.u16(),
             time_s: r.f64(),
             counters: counters(r),
+            instructions: r.u32(),
         }),
         3 => DeviceMessage::Pong {
             nonce: r.u32(),
@@ -421,7 +422,7 @@ fn encode_reports_a_short_buffer() {
 }
 
 /// The example of docs/protocol.md and firmware/README.md, byte for byte: the
-/// ping and its answer (protocol version 4).
+/// ping and its answer (protocol version 5).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
@@ -435,6 +436,6 @@ fn the_documented_ping_frame() {
     };
     assert_eq!(
         wire(&pong),
-        [0x00, 0x08, 0x03, 0x07, 0x04, 0x95, 0x35, 0x2b, 0xb5, 0x00]
+        [0x00, 0x08, 0x03, 0x07, 0x05, 0x03, 0x05, 0x2c, 0xc2, 0x00]
     );
 }

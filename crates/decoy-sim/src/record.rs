@@ -559,21 +559,27 @@ mod tests {
 
             let mut controller: Controller<f64, 16> =
                 Controller::new(config.controller_config(layout).unwrap()).unwrap();
-            let frame = AircraftStateFrame {
-                seq: 1,
-                time_s: 0.0,
-                position_ned_m: [0.0, 0.0, -9000.0],
+            // Steady frames while the controller initialises (its trim, over
+            // a few frames in f64): the first Output is the trim at its frame.
+            let frame = |k: u32| AircraftStateFrame {
+                seq: k,
+                time_s: 0.01 * f64::from(k),
+                position_ned_m: [speed * 0.01 * f64::from(k), 0.0, -9000.0],
                 velocity_ned_mps: [speed as f32, 0.0, 0.0],
                 acceleration_ned_mps2: [0.0; 3],
                 attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
                 body_rate_radps: [0.0; 3],
                 body_angular_acceleration_radps2: [0.0; 3],
             };
-            let DeviceMessage::Output(o) =
-                controller.handle(HostMessage::State(frame), &mut NoCounter)
-            else {
-                panic!("no output at Mach {mach}");
-            };
+            let o = (0..64)
+                .find_map(|k| {
+                    match controller.handle(HostMessage::State(frame(k)), &mut NoCounter) {
+                        DeviceMessage::Output(o) => Some(o),
+                        DeviceMessage::Status(_) => None,
+                        other => panic!("Mach {mach}: {other:?}"),
+                    }
+                })
+                .unwrap_or_else(|| panic!("no output at Mach {mach}"));
             // The frame carries the speed in f32: agreement to that rounding.
             let close = |a: f32, b: f64, tol: f64| {
                 assert!(

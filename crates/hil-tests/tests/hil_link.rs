@@ -10,53 +10,31 @@
 //! controller and so as the M4, within the same instruction budgets. The M7
 //! profile (f64) has its own test.
 //!
-//! What is asserted:
+//! What is asserted here (the scenarios themselves, every shipped manoeuvre at
+//! its full duration with their answers, accuracy and instruction budget, are
+//! flown by `tests/envelope.rs` over the whole operating envelope):
 //!
 //! - **Same answers as the host.** The host replays the very messages sent through
-//!   `decoy_controller::Controller` (same configuration, same `FramePath`, same stepping
-//!   rule) in this process: every build computes the target's maths (libm), so this
-//!   is an ordinary workspace test. In f32 (the firmware's precision) every answer must be equal:
-//!   outputs in every field but `instructions`, bit for bit
-//!   ([`F32_RELATIVE_TOLERANCE`] = 0), rejections and status frames exactly; the M7
-//!   profile (f64) likewise against the f64 reference. Against the host's f64
-//!   solution the connection tension must agree within
-//!   [`F64_CONNECTION_TOLERANCE`] (0.5 %) and the towing-point tension (about a
-//!   fifth of it) within [`F64_TOW_TOLERANCE`] (1.5 %); through the pull-ups'
-//!   snatch load, where f32 and f64 may take different step counts and the
-//!   transient amplifies round-off, within [`SNATCH_TOLERANCES`] (2 % of the run's
-//!   peak connection tension for both).
-//! - **Instruction budget.** The solver's instructions per nominal 10 ms control
-//!   step (four RK4 steps of 2.5 ms; the `step_instructions` field: SysTick under
-//!   `-icount`, exact) at most [`CONTROL_STEP_TARGET`], the firmware issue's target
-//!   (goal [`CONTROL_STEP_GOAL`]); per RK4 step of a nominal control step at most
-//!   [`RK4_STEP_TARGET`], the benchmark issue's target; and the whole nominal frame
-//!   (validation, steps, outputs) within [`FRAME_BUDGET`], a guard just above the
-//!   measurement. The costliest frame over ALL the frames of each scenario,
-//!   where the wave-speed limit takes more steps (docs/protocol.md §5) and the
-//!   snatch loads included, within issue 14's target [`WORST_FRAME_TARGET`] and
-//!   its [`WorstFrame`] guard (every frame of every manoeuvre takes the nominal
-//!   four steps: 98,240 to 99,520 on the M4).
+//!   `decoy_controller::Controller` (same configuration, same `FramePath`, same
+//!   stepping rule) in this process: every build computes the target's maths
+//!   (libm), so every answer must be equal: outputs in every field but the
+//!   instruction counts, bit for bit, rejections and status frames exactly; the
+//!   M7 profile (f64) against the f64 reference, its nominal frames within
+//!   [`FRAME_BUDGET_M7`].
+//! - **Memory.** The RAM peak (static RAM plus the deepest stack, at boot or in
+//!   the link loop) within the board's RAM, the M7 with 8 KiB left, the f32
+//!   boards at most their peak before issue 22; the controller in `.bss`, never
+//!   on the stack.
 //! - **Determinism.** Two runs receive byte-identical streams (the instruction
 //!   counts included, so on the STM32F405 the 168 MHz SysTick's conversion to
 //!   instructions repeats too).
 //! - **Hello.** Each board names itself and its core clock as
 //!   `decoy_hil::qemu::Board::info` says.
-//! - **Advisory line (STM32F405).** The firmware's log shows the line asserted at
-//!   the first Output with a hazard flag and deasserted at the first without,
-//!   exactly at the outputs where the hazard flags change.
 //! - **Robustness.** Corrupted, truncated, garbage, oversize frames; non-finite and
 //!   out-of-range values; a bad quaternion; time going backwards or jumping; link
 //!   silence. Each gets its typed answer with the right counter (the same answers a
 //!   host controller gives to the same bytes), QEMU keeps running, and the next
 //!   valid frame is answered exactly as in an undisturbed run.
-//!
-//! Scenario lengths (test time): steady flight and the recorded flight for 10 s;
-//! the acceleration for 10 s (its whole ramp, Mach
-//! 0.6 to 0.8 from t = 2 s to about 8 s); the pull-ups at 0.05, 0.10 and 0.20
-//! rad/s for 10 s (the rotation from 2 s to 7 s and the snatch load when the cable
-//! is jerked taut at about 8.7 s, where the 16 graded 1.3 model's steps had to
-//! shrink to the wave-speed limit and the 12 graded 1.26 model's need not); the
-//! turns at 0.10 and 0.20 rad/s for 5 s.
 //!
 //! A missing QEMU, target or `defmt-print` fails with a message saying to run
 //! `cargo xtask setup`: nothing is skipped. When a test fails, the firmware's
@@ -80,71 +58,18 @@ use decoy_sim::{RunOptions, Scenario};
 /// Time limit of the firmware build (a cold build takes about a minute).
 const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
 
-/// Largest relative tension difference from the host controller in f32: none, the
-/// same code in the same precision gives the same bits.
-const F32_RELATIVE_TOLERANCE: f64 = 0.0;
-/// Largest relative difference of the connection tension from the host
-/// controller in f64.
-const F64_CONNECTION_TOLERANCE: f64 = 5e-3;
-/// Largest relative difference of the towing-point tension (about 50 N, a fifth of
-/// the connection tension, so f32 round-off weighs more) from the host in f64.
-const F64_TOW_TOLERANCE: f64 = 1.5e-2;
-/// The connection and towing-point tolerances against the host's f64 through a
-/// snatch load, relative to the run's peak connection tension (`true`): the
-/// towing-point tension falls to about 15 N between the jerks, where a 1.7 N
-/// difference (measured at 0.10 rad/s) is 6 % of it but 0.4 % of the peak.
-const SNATCH_TOLERANCES: (f64, f64, bool) = (2e-2, 2e-2, true);
-/// The same for the recorded flight (a pull-up into a climbing turn): measured
-/// 1.27 % of the peak at the connection and 1.29 % at the towing point (6.3 N
-/// and 6.4 N at the cable's jerk at about 5.8 s). Both runs are deterministic,
-/// so these are exact numbers, not a noise band. With the earlier embedded model
-/// (16 graded 1.3, its snatch integrated at the wave-speed stability limit, the
-/// step counts of f32 and f64 parting at the jerk) the bound had to be 22 %.
-const RECORDED_TOLERANCES: (f64, f64, bool) = (2e-2, 2e-2, true);
+/// The M7 profile's (f64 in hardware) bound on a whole nominal frame: the worst
+/// frame measured before issue 22 (160,080), kept (`tests/envelope.rs` holds
+/// every frame of its flights to it).
+const FRAME_BUDGET_M7: u32 = 160_000;
 
-/// Instructions a whole nominal 10 ms frame (four RK4 steps of 2.5 ms, the frame's
-/// validation, flight path and outputs with the clearances) may execute, M4: a
-/// guard just above the measurement (max 99,520, in the pull-up at 0.20 rad/s;
-/// the STM32F405 reads 99,595; the test prints it), so that a regression fails;
-/// lower it as the controller gets faster.
-const FRAME_BUDGET: u32 = 99_900;
-/// The same guard for the M7 profile (f64 in hardware): measured at most 160,080.
-const FRAME_BUDGET_M7: u32 = 160_500;
-/// The firmware issue's target per control step, for the solver's share
-/// (`step_instructions`) of a nominal step; measured 87,600 to 88,840 on the M4.
-const CONTROL_STEP_TARGET: u32 = 100_000;
-/// Most instructions of decoy management (monitors and one look-ahead slice)
-/// per 10 ms frame on the M4 (issue 13: at most 400,000 of prediction per frame).
-const MANAGEMENT_BUDGET: u32 = 400_000;
-/// The benchmark issue's target per RK4 step (f32, M4), for the RK4 steps of a
-/// nominal control step (`step_instructions / 4`; the first stage of a frame
-/// reuses the previous frame's output evaluation, `Solver::step`); measured at
-/// most 22,210. (`tests/step_cost.rs` checks a step that evaluates all four
-/// stages.)
-const RK4_STEP_TARGET: u32 = 40_000;
-/// The issue's goal per control step.
-const CONTROL_STEP_GOAL: u32 = 40_000;
-/// Issue 14's target for every frame of every shipped manoeuvre, the snatch
-/// loads included, asserted on the costliest one of each scenario (met: 99,520
-/// at most on the M4; each scenario is also held to a guard just above its
-/// measurement, [`WorstFrame`]).
-const WORST_FRAME_TARGET: u32 = 100_000;
-
-/// The guard on the costliest frame of a scenario over ALL its frames (M4 and
-/// STM32F405, whole frames: validation, every RK4 step the stepping rule took,
-/// retries included, outputs): about 400 above the measurement when this was
-/// written and never above issue 14's [`WORST_FRAME_TARGET`] (`cargo decoy hil
-/// --scenario NAME --json`, `instructions_per_step_max`, and this test's output,
-/// M4: steady 98,240, acceleration 98,440, pull-ups 99,160, 99,200 and 99,520,
-/// turns 98,840 and 99,000, recorded flight 99,400; the STM32F405 within 100 of
-/// them). Every frame takes the nominal
-/// four RK4 steps: the embedded model's 1.73 m shortest segment keeps the
-/// wave-speed limit above them in every shipped manoeuvre, snatches included,
-/// so the worst frame is the mean frame plus about 1 % (firmware/README.md,
-/// "The worst frame and the accuracy"). Before issue 14's model change the
-/// limit on the 0.46 m segment took up to 14 steps (677,080 at 0.20 rad/s).
-#[derive(Clone, Copy, Debug)]
-struct WorstFrame(u32);
+/// RAM the M7 keeps free at its peak (issue 22: at least 8 KiB).
+const M7_RAM_HEADROOM: u64 = 8 * 1024;
+/// The M4's RAM peak when issue 22 was filed (capacity 64: 34,876 B): never
+/// above it.
+const M4_RAM_PEAK_BEFORE: u64 = 34_876;
+/// The STM32F405's RAM peak when issue 22 was filed: never above it.
+const STM32F405_RAM_PEAK_BEFORE: u64 = 34_904;
 
 /// The boards of the f32 controller, each with the whole f32 suite.
 const F32_BOARDS: [Board; 2] = [Board::M4, Board::Stm32f405];
@@ -233,179 +158,6 @@ fn fly(board: Board, frames: &[AircraftStateFrame]) -> (Vec<Exchange>, Vec<u8>, 
     (flown.exchanges, received, fps, log.log)
 }
 
-/// Flies a scenario and checks it against the host in f32 and f64 and the
-/// instruction budget. `outputs_at_least`: outputs the run must give (the frames
-/// before the step rule diverges).
-fn check_scenario(
-    board: Board,
-    label: &str,
-    frames: &[AircraftStateFrame],
-    outputs_at_least: usize,
-    worst: WorstFrame,
-) {
-    check_scenario_within(
-        board,
-        label,
-        frames,
-        outputs_at_least,
-        (F64_CONNECTION_TOLERANCE, F64_TOW_TOLERANCE, false),
-        worst,
-    );
-}
-
-/// [`check_scenario`] with the (connection, towing-point) tolerances against f64.
-fn check_scenario_within(
-    board: Board,
-    label: &str,
-    frames: &[AircraftStateFrame],
-    outputs_at_least: usize,
-    (connection_tolerance, tow_tolerance, against_peak): (f64, f64, bool),
-    worst: WorstFrame,
-) {
-    let label = &format!("{board}: {label}");
-    let (exchanges, _, fps, log) = fly(board, frames);
-    let sent: Vec<HostMessage> = exchanges.iter().map(|e| e.sent).collect();
-    let answers: Vec<DeviceMessage> = exchanges.iter().map(|e| e.answer).collect();
-    assert!(
-        matches!(answers[0], DeviceMessage::Status(_)),
-        "{label}: ResetToTrim answered by {:?}",
-        answers[0]
-    );
-
-    let host32 = host32().replay(&sent).unwrap_or_else(|e| panic!("{e}"));
-    let (agreement, mismatches) = flight::compare(&answers, &host32);
-    assert!(
-        mismatches.is_empty(),
-        "{label}: {} answers differ from the host controller's (f32); first: {:#?}",
-        mismatches.len(),
-        mismatches[0]
-    );
-    assert!(
-        agreement.outputs >= outputs_at_least,
-        "{label}: {} outputs, expected at least {outputs_at_least}",
-        agreement.outputs
-    );
-    assert!(
-        agreement.max_relative_tension <= F32_RELATIVE_TOLERANCE,
-        "{label}: tensions differ from the host's f32 by up to {:.3e} relative ({} of {} outputs identical)",
-        agreement.max_relative_tension,
-        agreement.identical,
-        agreement.outputs
-    );
-    assert_eq!(
-        agreement.identical, agreement.outputs,
-        "{label}: outputs not bit-identical to the host's f32 ones: {agreement:?}"
-    );
-
-    let mut controller64 =
-        flight::host_controller::<f64>(config()).unwrap_or_else(|e| panic!("{e}"));
-    let host64 = flight::replay(&mut controller64, &sent);
-    let firmware_outputs = flight::outputs(&answers);
-    let host_outputs = flight::outputs(&host64);
-    // Worst relative difference (and its absolute value, seq) of the connection
-    // and of the towing-point tension: relative to the host's value, or with
-    // `against_peak` to the run's peak connection tension.
-    let peak = host_outputs
-        .iter()
-        .map(|h| f64::from(h.connection_tension_n))
-        .fold(0.0, f64::max);
-    let mut worst64 = [(0.0f64, 0.0f64, 0u32); 2];
-    for out in &firmware_outputs {
-        let Some(h) = host_outputs.iter().find(|h| h.seq == out.seq) else {
-            continue;
-        };
-        for (worst, (a, b)) in worst64.iter_mut().zip([
-            (out.connection_tension_n, h.connection_tension_n),
-            (out.tow_tension_n, h.tow_tension_n),
-        ]) {
-            let diff = (f64::from(a) - f64::from(b)).abs();
-            let relative = diff
-                / if against_peak {
-                    peak
-                } else {
-                    f64::from(b).abs()
-                };
-            if relative > worst.0 {
-                *worst = (relative, diff, out.seq);
-            }
-        }
-    }
-    for ((relative, diff, seq), (what, tolerance)) in worst64.iter().zip([
-        ("connection", connection_tolerance),
-        ("towing-point", tow_tolerance),
-    ]) {
-        assert!(
-            *relative <= tolerance,
-            "{label}: the {what} tension differs from the host's f64 by {:.3} % ({diff:.3} N at seq {seq})",
-            relative * 100.0,
-        );
-    }
-    let stats = flight::instruction_stats(&answers);
-    println!(
-        "{label}: {} frames at {fps:.0} frames/s; {} outputs bit-identical to the host f32; \
-         vs host f64: connection tension max {:.3} % ({:.3} N), towing point {:.3} % ({:.3} N); \
-         solver instructions per nominal control step max {} (target {CONTROL_STEP_TARGET}, \
-         goal {CONTROL_STEP_GOAL}), per RK4 step max {}; whole frames max {} (seq {}), mean {:.0}; \
-         {} of {} control steps nominal, at most {} RK4 steps",
-        exchanges.len(),
-        agreement.identical,
-        worst64[0].0 * 100.0,
-        worst64[0].1,
-        worst64[1].0 * 100.0,
-        worst64[1].1,
-        stats.nominal_solver_max,
-        stats.per_rk4_step_max,
-        stats.max,
-        stats.max_seq,
-        stats.mean,
-        stats.nominal_steps,
-        stats.steps,
-        stats.most_rk4_steps,
-    );
-    println!(
-        "{label}: nominal frames max {}",
-        nominal_frame_max(&answers)
-    );
-    check_budget(label, &answers, FRAME_BUDGET);
-    check_worst_frame(label, &answers, worst);
-    if board == Board::Stm32f405 {
-        check_advisory_log(label, &answers, &log);
-    }
-}
-
-/// The advisory line's changes the firmware logged (`advisory line asserted:
-/// seq=N ...` or `deasserted`), as (seq, asserted), must be exactly the outputs at
-/// which the management report's advisory line (a monitor at warning or worse, or
-/// a look-ahead advisory: `Management::advisory_line`) goes from clear to set or
-/// back (the line starts low).
-fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
-    let logged: Vec<(u32, bool)> = log
-        .lines()
-        .filter_map(|line| {
-            let (_, rest) = line.split_once("advisory line ")?;
-            let (level, rest) = rest.split_once(": seq=")?;
-            let seq = rest.split_whitespace().next()?.parse().ok()?;
-            Some((seq, level == "asserted"))
-        })
-        .collect();
-    let mut expected = Vec::new();
-    let mut asserted = false;
-    for out in flight::outputs(answers) {
-        let line = out.management.advisory_line();
-        if line != asserted {
-            expected.push((out.seq, line));
-            asserted = line;
-        }
-    }
-    assert_eq!(
-        logged, expected,
-        "{label}: the advisory line's logged changes (seq, asserted) differ from the management reports' changes"
-    );
-    println!(
-        "{label}: advisory line changes {logged:?} (seq, asserted), as the management reports"
-    );
-}
-
 /// The most instructions a whole nominal frame took.
 fn nominal_frame_max(answers: &[DeviceMessage]) -> u32 {
     flight::outputs(answers)
@@ -414,149 +166,6 @@ fn nominal_frame_max(answers: &[DeviceMessage]) -> u32 {
         .map(|out| out.instructions)
         .max()
         .unwrap_or(0)
-}
-
-/// The instruction budgets of a run (see the module's documentation).
-fn check_budget(label: &str, answers: &[DeviceMessage], frame_budget: u32) {
-    let stats = flight::instruction_stats(answers);
-    assert!(stats.nominal_steps > 0, "{label}: no nominal control step");
-    // Decoy management (the monitors and the look-ahead's slice, after the
-    // solution) within its budget on every frame, whatever the manoeuvre; and it
-    // does run (a slice of look-ahead steps on every frame after the trim).
-    let outputs = flight::outputs(answers);
-    let worst = outputs
-        .iter()
-        .max_by_key(|o| o.management_instructions)
-        .map(|o| (o.management_instructions, o.seq, o.prediction_steps))
-        .unwrap_or_default();
-    println!(
-        "{label}: decoy management at most {} instructions per frame (seq {}, {} look-ahead steps), budget {MANAGEMENT_BUDGET}",
-        worst.0, worst.1, worst.2
-    );
-    assert!(
-        worst.0 <= MANAGEMENT_BUDGET,
-        "{label}: decoy management took {} instructions at seq {}, over {MANAGEMENT_BUDGET}",
-        worst.0,
-        worst.1
-    );
-    assert!(
-        outputs
-            .iter()
-            .skip(1)
-            .all(|o| o.prediction_steps > 0 || o.management_instructions == 0),
-        "{label}: a frame ran no look-ahead step"
-    );
-    assert!(
-        stats.nominal_solver_max <= CONTROL_STEP_TARGET,
-        "{label}: the solver took {} instructions in a nominal control step, over {CONTROL_STEP_TARGET}",
-        stats.nominal_solver_max
-    );
-    for out in flight::outputs(answers) {
-        if out.steps == flight::NOMINAL_RK4_STEPS {
-            let per_step = out.step_instructions / u32::from(out.steps);
-            assert!(
-                per_step <= RK4_STEP_TARGET,
-                "{label}: nominal frame seq {} took {per_step} instructions per RK4 step, over {RK4_STEP_TARGET}",
-                out.seq,
-            );
-            assert!(
-                out.instructions <= frame_budget,
-                "{label}: nominal frame seq {} took {} instructions, over the guard of {frame_budget}",
-                out.seq,
-                out.instructions
-            );
-        }
-    }
-}
-
-/// The costliest frame of a run, over every frame (not only the nominal ones),
-/// against its guard; printed against [`WORST_FRAME_TARGET`].
-fn check_worst_frame(label: &str, answers: &[DeviceMessage], WorstFrame(guard): WorstFrame) {
-    let stats = flight::instruction_stats(answers);
-    let verdict = if stats.max <= WORST_FRAME_TARGET {
-        "met"
-    } else {
-        "NOT met"
-    };
-    println!(
-        "{label}: worst frame over all {} frames {} instructions (seq {}, at most {} RK4 steps), \
-         mean {:.0}; issue 14's target {WORST_FRAME_TARGET}: {verdict}",
-        stats.steps, stats.max, stats.max_seq, stats.most_rk4_steps, stats.mean
-    );
-    assert!(
-        stats.max <= WORST_FRAME_TARGET,
-        "{label}: frame seq {} took {} instructions, over issue 14's target of {WORST_FRAME_TARGET}",
-        stats.max_seq,
-        stats.max
-    );
-    assert!(
-        stats.max <= guard,
-        "{label}: frame seq {} took {} instructions, over the worst-frame guard of {guard}",
-        stats.max_seq,
-        stats.max
-    );
-}
-
-fn steady_matches_the_host_and_fits_the_budget(board: Board) {
-    let frames = frames("steady", None, 10.0);
-    let count = frames.len();
-    check_scenario(board, "steady (10 s)", &frames, count, WorstFrame(98_700));
-}
-
-fn acceleration_matches_the_host_and_fits_the_budget(board: Board) {
-    check_scenario(
-        board,
-        "acceleration (10 s)",
-        &frames("acceleration", None, 10.0),
-        1001,
-        WorstFrame(98_900),
-    );
-}
-
-fn pull_ups_match_the_host_and_fit_the_budget(board: Board) {
-    for (rate, t_end, worst) in [
-        (0.05, 10.0, 99_600),
-        (0.10, 10.0, 99_700),
-        (0.20, 10.0, 99_900),
-    ] {
-        let frames = frames("pull-up", Some(rate), t_end);
-        let count = frames.len();
-        check_scenario_within(
-            board,
-            &format!("pull-up {rate} rad/s ({t_end} s)"),
-            &frames,
-            count,
-            SNATCH_TOLERANCES,
-            WorstFrame(worst),
-        );
-    }
-}
-
-fn turns_match_the_host_and_fit_the_budget(board: Board) {
-    for (rate, worst) in [(0.10, 99_300), (0.20, 99_500)] {
-        let frames = frames("turn", Some(rate), 5.0);
-        let count = frames.len();
-        check_scenario(
-            board,
-            &format!("turn {rate} rad/s (5 s)"),
-            &frames,
-            count,
-            WorstFrame(worst),
-        );
-    }
-}
-
-fn recorded_flight_matches_the_host_and_fits_the_budget(board: Board) {
-    let frames = frames("recorded", None, 10.0);
-    let count = frames.len();
-    check_scenario_within(
-        board,
-        "recorded flight (10 s)",
-        &frames,
-        count,
-        RECORDED_TOLERANCES,
-        WorstFrame(99_900),
-    );
 }
 
 /// The M7 profile (Cortex-M7, f64 in hardware, `mps2-an500`): the same answers as
@@ -579,12 +188,17 @@ fn m7_profile_matches_the_host_in_f64() {
         .unwrap_or_else(|e| panic!("{e}"));
     let (agreement, mismatches) = flight::compare(&answers, &host);
     assert!(mismatches.is_empty(), "{:#?}", mismatches[0]);
-    assert_eq!(agreement.outputs, messages.len() - 1);
+    let stats = flight::instruction_stats(&answers);
+    // ResetToTrim's Status, the initialisation's (a frame or two in f64), then
+    // an Output for every frame.
+    assert_eq!(
+        agreement.outputs + stats.trim_frames - 1,
+        messages.len() - 1
+    );
     assert_eq!(
         agreement.identical, agreement.outputs,
         "M7 outputs not bit-identical to the host's f64 ones: {agreement:?}"
     );
-    let stats = flight::instruction_stats(&answers);
     println!(
         "M7 (f64) acceleration 3 s: {} outputs bit-identical to the host f64 reference; \
          whole frames max {}, mean {:.0}; nominal frames max {}; solver per nominal control \
@@ -618,7 +232,14 @@ fn ram_peak_fits_the_board(board: Board) {
     let memory = firmware::memory_usage(elf(board)).unwrap_or_else(|e| panic!("{e}"));
     let (exchanges, _, _, log) = fly(board, &frames("acceleration", None, 3.0));
     let answers: Vec<DeviceMessage> = exchanges.iter().map(|e| e.answer).collect();
-    assert_eq!(flight::outputs(&answers).len(), 301, "{board}: outputs");
+    // After ResetToTrim's Status, the 301 frames are answered by the
+    // initialisation's Status (a frame or two in f64) and then by Outputs.
+    let stats = flight::instruction_stats(&answers);
+    assert_eq!(
+        flight::outputs(&answers).len() + stats.trim_frames - 1,
+        301,
+        "{board}: outputs"
+    );
     let marks = firmware::stack_marks(&log).unwrap_or_else(|e| panic!("{board}: {e}"));
     let link = marks.link.unwrap_or_else(|| {
         panic!("{board}: no stack high-water reported in the link loop:\n{log}")
@@ -637,6 +258,20 @@ fn ram_peak_fits_the_board(board: Board) {
         "{board}: RAM peak {peak} B (static {} B + stack {} B) over the board's {budget} B",
         memory.ram(),
         marks.peak()
+    );
+    // Issue 22: the M7 with at least 8 KiB left at its peak; the f32 boards at
+    // most their peak when the issue was filed.
+    let (limit, why) = match board {
+        Board::M7 => (budget - M7_RAM_HEADROOM, "the M7's 8 KiB of headroom"),
+        Board::M4 => (M4_RAM_PEAK_BEFORE, "the M4's peak before issue 22"),
+        Board::Stm32f405 => (
+            STM32F405_RAM_PEAK_BEFORE,
+            "the STM32F405's peak before issue 22",
+        ),
+    };
+    assert!(
+        peak <= limit,
+        "{board}: RAM peak {peak} B over {limit} B ({why})"
     );
     assert!(
         memory.bss >= marks.controller,
@@ -1063,30 +698,10 @@ macro_rules! f32_suite {
             /// The board of this module's tests.
             const BOARD: Board = $board;
 
-            #[test]
-            fn steady_matches_the_host_and_fits_the_budget() {
-                super::steady_matches_the_host_and_fits_the_budget(BOARD);
-            }
 
-            #[test]
-            fn recorded_flight_matches_the_host_and_fits_the_budget() {
-                super::recorded_flight_matches_the_host_and_fits_the_budget(BOARD);
-            }
 
-            #[test]
-            fn acceleration_matches_the_host_and_fits_the_budget() {
-                super::acceleration_matches_the_host_and_fits_the_budget(BOARD);
-            }
 
-            #[test]
-            fn pull_ups_match_the_host_and_fit_the_budget() {
-                super::pull_ups_match_the_host_and_fit_the_budget(BOARD);
-            }
 
-            #[test]
-            fn turns_match_the_host_and_fit_the_budget() {
-                super::turns_match_the_host_and_fit_the_budget(BOARD);
-            }
 
             #[test]
             fn ram_peak_fits_the_board() {

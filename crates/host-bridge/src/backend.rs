@@ -59,6 +59,11 @@ pub struct BackendOptions {
     pub segments: Option<usize>,
     /// Grading ratio (None: the configuration's embedded ratio; 1: uniform).
     pub grading: Option<f64>,
+    /// The host backend completes its trim in the first State frame, whatever
+    /// the work (`ControllerConfig::trim_units_per_frame` unlimited): for an
+    /// accuracy reference that must start its run where an f32 controller does
+    /// (`decoy_hil::flight::accuracy_controller`). False: the onboard slice.
+    pub trim_at_once: bool,
 }
 
 impl Default for BackendOptions {
@@ -69,6 +74,7 @@ impl Default for BackendOptions {
             precision: None,
             segments: None,
             grading: None,
+            trim_at_once: false,
         }
     }
 }
@@ -142,10 +148,14 @@ fn host<T: Real, const N: usize>(
     config: &SystemConfig,
     segments: usize,
     grading: f64,
+    trim_at_once: bool,
 ) -> Result<Box<dyn Backend + Send>, BridgeError> {
-    let controller_config = config
+    let mut controller_config = config
         .controller_config::<T>(layout::<T>(segments, grading))
         .map_err(|e| BridgeError::Usage(format!("the model: {e}")))?;
+    if trim_at_once {
+        controller_config.trim_units_per_frame = u32::MAX;
+    }
     let controller = Controller::<T, N>::new(controller_config)
         .map(Box::new)
         .map_err(|e| BridgeError::Usage(format!("the controller: {e}")))?;
@@ -185,14 +195,15 @@ pub fn host_backend(
             "--grading must be a positive number, got {grading}"
         )));
     }
+    let at_once = options.trim_at_once;
     match (
         options.precision.unwrap_or(Precision::F32),
         segments <= SMALL_CAPACITY,
     ) {
-        (Precision::F32, true) => host::<f32, SMALL_CAPACITY>(config, segments, grading),
-        (Precision::F32, false) => host::<f32, LARGE_CAPACITY>(config, segments, grading),
-        (Precision::F64, true) => host::<f64, SMALL_CAPACITY>(config, segments, grading),
-        (Precision::F64, false) => host::<f64, LARGE_CAPACITY>(config, segments, grading),
+        (Precision::F32, true) => host::<f32, SMALL_CAPACITY>(config, segments, grading, at_once),
+        (Precision::F32, false) => host::<f32, LARGE_CAPACITY>(config, segments, grading, at_once),
+        (Precision::F64, true) => host::<f64, SMALL_CAPACITY>(config, segments, grading, at_once),
+        (Precision::F64, false) => host::<f64, LARGE_CAPACITY>(config, segments, grading, at_once),
     }
 }
 

@@ -268,6 +268,16 @@ impl Engine {
                 convert::output_answer(self.answer_seq, convert::output_from_link(&out))
             }
             Ok(DeviceMessage::Rejected(r)) => self.reject(seq, convert::reason_code(r.reason)),
+            // The controller is initialising (computing its trim): the state is
+            // accepted and answered so.
+            Ok(DeviceMessage::Status(status)) if status.flags & StatusFlags::INITIALISING != 0 => {
+                self.trimmed = false;
+                self.controller_flags = status.flags & !convert::LINK_SUPERVISION_FLAGS;
+                self.last_time_s = status.time_s;
+                self.last_input = Some(Instant::now());
+                self.answer_seq = self.answer_seq.wrapping_add(1);
+                convert::initialising_answer(self.answer_seq, seq, &status)
+            }
             Ok(other) => {
                 eprintln!(
                     "bridge {}: unexpected answer to a state: {other:?}",

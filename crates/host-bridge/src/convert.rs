@@ -44,6 +44,19 @@ pub fn from_link_frame(frame: &AircraftStateFrame) -> AircraftState {
 /// never reach the bridge's clients (docs/bridge.md, the lockstep rule).
 pub const LINK_SUPERVISION_FLAGS: u16 = StatusFlags::DEGRADED | StatusFlags::RECOVERED;
 
+// The wire's flag bits are the link's (bridge-types does not depend on the link).
+const _: () = {
+    use bridge_types::flag;
+    assert!(flag::TRIMMED == StatusFlags::TRIMMED);
+    assert!(flag::OVER_TENSION == StatusFlags::OVER_TENSION);
+    assert!(flag::CABLE_IN_PLUME == StatusFlags::CABLE_IN_PLUME);
+    assert!(flag::DECOY_NEAR_AIRCRAFT == StatusFlags::DECOY_NEAR_AIRCRAFT);
+    assert!(flag::PROFILE_BUILTIN == StatusFlags::PROFILE_BUILTIN);
+    assert!(flag::INITIALISING == StatusFlags::INITIALISING);
+    assert!(flag::OUTSIDE_ENVELOPE == StatusFlags::OUTSIDE_ENVELOPE);
+    assert!(flag::STEP_LIMITED == StatusFlags::STEP_LIMITED);
+};
+
 /// The wire output of a link output frame (the supervision bits cleared).
 pub fn output_from_link(out: &OutputFrame) -> Output {
     Output {
@@ -162,6 +175,23 @@ pub fn output_answer(seq: u32, output: Output) -> Answer {
         header: Header::new(kind::OUTPUT, seq),
         rejection: Rejection::default(),
         output,
+    }
+}
+
+/// The answer to state `request_seq` while the controller initialises: the
+/// Status that answered it (its time, flags but the link supervision's, and
+/// instructions in the output), numbered `seq`.
+pub fn initialising_answer(seq: u32, request_seq: u32, status: &decoy_link::StatusFrame) -> Answer {
+    Answer {
+        header: Header::new(kind::INITIALISING, seq),
+        rejection: Rejection::default(),
+        output: Output {
+            time_s: status.time_s,
+            request_seq,
+            flags: status.flags & !LINK_SUPERVISION_FLAGS,
+            instructions: status.instructions,
+            ..Output::default()
+        },
     }
 }
 

@@ -109,6 +109,9 @@ pub struct FeedSummary {
     pub frames_sent: usize,
     /// Of those, answered by an output.
     pub frames_answered: usize,
+    /// Of those, answered while the controller initialised (the trim's frames:
+    /// an `initialising` answer each, docs/bridge.md).
+    pub frames_initialising: usize,
     /// Of those, answered by a rejection.
     pub frames_rejected: usize,
     /// Of those, never answered (free-running samples the bridge lost).
@@ -361,6 +364,7 @@ fn replay(
     config: &SystemConfig,
     status: &Status,
     precision: Precision,
+    trim_at_once: bool,
     messages: &[HostMessage],
 ) -> Result<Vec<DeviceMessage>, BridgeError> {
     let mut backend = host_backend(
@@ -369,6 +373,7 @@ fn replay(
             precision: Some(precision),
             segments: Some(usize::from(status.segments)),
             grading: Some(status.grading_ratio),
+            trim_at_once,
             ..BackendOptions::default()
         },
     )?;
@@ -438,12 +443,10 @@ pub fn run_feed(
     } else {
         Precision::F32
     };
-    let host64 = replay(config, &status, Precision::F64, &seen)?;
-    let same = if precision == Precision::F64 {
-        host64.clone()
-    } else {
-        replay(config, &status, precision, &seen)?
-    };
+    // The f64 accuracy reference trims in the first frame (as the f32
+    // controller does); the same-precision replay is the bridge's controller.
+    let host64 = replay(config, &status, Precision::F64, true, &seen)?;
+    let same = replay(config, &status, precision, false, &seen)?;
     let answers: Vec<Answer> = flown.answers.iter().flatten().copied().collect();
     let bridge_messages: Vec<DeviceMessage> = answers.iter().map(device_message).collect();
     let only_outputs = |v: &[DeviceMessage]| -> Vec<DeviceMessage> {
@@ -488,7 +491,11 @@ pub fn run_feed(
         .iter()
         .filter(|a| a.header.kind == kind::OUTPUT)
         .count();
-    let rejected = answers.len() - answered;
+    let initialising = answers
+        .iter()
+        .filter(|a| a.header.kind == kind::INITIALISING)
+        .count();
+    let rejected = answers.len() - answered - initialising;
     let mut latency = flown.latency_us.clone();
     let summary = FeedSummary {
         run,
@@ -502,6 +509,7 @@ pub fn run_feed(
         client_cpus: crate::affinity::current_list(),
         frames_sent: flown.sent.len(),
         frames_answered: answered,
+        frames_initialising: initialising,
         frames_rejected: rejected,
         frames_lost: flown.sent.len() - answers.len(),
         latency_us: Percentiles::of(&mut latency),

@@ -108,7 +108,10 @@ impl<T: Real> AeroTable<T> {
     /// Coefficients at total angle of attack `alpha` (radians), linearly
     /// interpolated; clamped to the table's end rows outside 0..pi.
     pub fn at(&self, alpha: T) -> AeroCoefficients<T> {
-        let n = self.rows;
+        // At least two rows, at most the capacity: what `new` accepts, restated
+        // for the optimiser (no bounds check below, no panic on the frame path;
+        // the empty table of an unconfigured model is never looked up).
+        let n = self.rows.clamp(2, AERO_TABLE_CAPACITY);
         if alpha <= self.alpha[0] {
             return self.coefficients[0];
         }
@@ -118,7 +121,7 @@ impl<T: Real> AeroTable<T> {
         // The interval [lo, lo + 1] with alpha[lo] <= alpha < alpha[lo + 1] (one
         // only: the angles increase strictly), walked to from the bin's start row.
         let bin = (alpha * self.bins_per_radian).truncated_index();
-        let mut lo = usize::from(self.index[bin.min(INDEX_BINS - 1)]);
+        let mut lo = usize::from(self.index[bin.min(INDEX_BINS - 1)]).min(n - 2);
         while lo > 0 && alpha < self.alpha[lo] {
             lo -= 1;
         }

@@ -47,7 +47,9 @@ pub struct Workspace<T: Real, const N: usize> {
     pub(crate) joints: [JointScratch<T>; N],
     /// Right-hand side b_N of the towing-point joint (with the decoy's part).
     pub(crate) tow_rhs: Vec3<T>,
-    /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j.
+    /// Shooting reference: the affine carriers U_j of T_j = U_j T_0 + u_j (host
+    /// builds only).
+    #[cfg(feature = "std")]
     pub(crate) elimination: [Mat3<T>; N],
     /// Elimination: what the back sweep needs of joint j = i ([`Pivot`]); the
     /// shooting reference keeps its affine offsets u_j in `reduced_rhs`.
@@ -133,6 +135,7 @@ impl<T: Real, const N: usize> Workspace<T, N> {
             },
             joints: [JointScratch::ZERO; N],
             tow_rhs: z,
+            #[cfg(feature = "std")]
             elimination: [zero33(); N],
             pivots: [Pivot::ZERO; N],
             joint_force: [z; N],
@@ -173,6 +176,7 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
             },
             joints: [JointScratch::ZERO; N],
             tow_rhs: z,
+            #[cfg(feature = "std")]
             elimination: [Mat3::zeros(); N],
             pivots: [Pivot::ZERO; N],
             joint_force: [z; N],
@@ -195,12 +199,21 @@ impl<T: Real, const N: usize> Default for Workspace<T, N> {
     }
 }
 
-/// Which tension solver [`evaluate`] uses.
+/// Which tension solver [`evaluate`] uses. `repr(u8)`, the two-sweep 0: an
+/// `Option` of it keeps `None` in a niche, `Some(TwoSweep)` is zero bits, in
+/// every build (with one variant, as without `std`, it would otherwise be a
+/// zero-sized type whose `Option` needs a tag byte: the solver's all-zero
+/// constant, `Solver::UNCONFIGURED`, would not be).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum TensionMethod {
     /// Block LDLᵀ two-sweep elimination: O(N), numerically stable. The product's solver.
     TwoSweep,
-    /// The paper's single-sweep shooting form: O(N), round-off grows about 3.7^N. Reference only.
+    /// The paper's single-sweep shooting form: O(N), round-off grows about 3.7^N.
+    /// Reference only, in host builds (feature `std`): a `no_std` build, the
+    /// firmware's, has the two-sweep alone, so its frame path links no code of
+    /// this method (whose general matrix inverse can panic).
+    #[cfg(feature = "std")]
     Shooting,
 }
 
@@ -255,27 +268,47 @@ pub fn decoy_aero<T: Real>(
         return (zero, zero, T::zero(), speed, T::zero());
     }
     let q = T::lit(0.5) * density * speed * speed;
-    let vhat = vb / speed;
-    let x = Vec3::x();
-    let cos_a = vhat.x.clamp(-T::one(), T::one());
-    let perp = x - vhat * cos_a;
+    let inverse_speed = T::one() / speed;
+    let vhat = vb * inverse_speed;
+    // Within [-1, 1] by comparison (`clamp` is two library calls on the M4F, and
+    // an assertion).
+    let one = T::one();
+    let cos_a = if vhat.x > one {
+        one
+    } else if vhat.x < -one {
+        -one
+    } else {
+        vhat.x
+    };
+    // The part of the body axis x = (1, 0, 0) across the airflow, x - vhat cos_a,
+    // and its length sin_a.
+    let perp = Vec3::new(one - vhat.x * cos_a, -(vhat.y * cos_a), -(vhat.z * cos_a));
     let sin_a = norm(&perp);
     let alpha = sin_a.upper_atan2(cos_a);
     let c = decoy.aero.at(alpha);
     let qs = q * derived.reference_area;
     let qsl = qs * decoy.length;
-    let mut force_b = vhat * (-qs * c.cd);
+    let drag = -qs * c.cd;
+    let mut force_b = vhat * drag;
     let mut moment_b = Vec3::zeros();
     if sin_a > T::lit(1e-9) {
         let inv = T::one() / sin_a;
-        force_b += perp * (qs * c.cl * inv);
-        moment_b += vhat.cross(&x) * (qsl * c.cm * inv);
+        let lift = qs * c.cl * inv;
+        force_b += perp * lift;
+        // vhat x x = (0, vhat.z, -vhat.y).
+        let pitching = qsl * c.cm * inv;
+        moment_b = Vec3::new(T::zero(), vhat.z * pitching, -(vhat.y * pitching));
     }
-    moment_b += derived.mrp_from_cg.cross(&force_b);
-    let damping = qsl * decoy.length / (T::lit(2.0) * speed);
-    let roll = body_rate.x;
-    let w_perp = Vec3::new(T::zero(), body_rate.y, body_rate.z);
-    moment_b += w_perp * (damping * decoy.cm_q) + x * (damping * decoy.cl_p * roll);
+    // The force's moment about the CG from the moment reference point, on the body
+    // x axis at (m, 0, 0): m (0, -f_z, f_y).
+    let m = derived.mrp_from_cg.x;
+    let damping = qsl * decoy.length * (T::lit(0.5) * inverse_speed);
+    let pitch_yaw = damping * decoy.cm_q;
+    moment_b += Vec3::new(
+        damping * decoy.cl_p * body_rate.x,
+        body_rate.y * pitch_yaw - m * force_b.z,
+        body_rate.z * pitch_yaw + m * force_b.y,
+    );
     (rotation * force_b, moment_b, alpha, speed, q)
 }
 
@@ -300,7 +333,6 @@ fn cable_loads<T: Real, const N: usize, const AIR: bool, const LOADS: bool>(
     let n = model.segment_count();
     let env = &model.params().environment;
     let gravity = env.gravity;
-    let half = T::lit(0.5);
     let mut air = env.wind - connection.velocity;
     let mut altitude = -connection.position.z;
     let (normal_drag, tangential_drag) = model.drag_factors();
@@ -308,15 +340,14 @@ fn cable_loads<T: Real, const N: usize, const AIR: bool, const LOADS: bool>(
     let rows = state.directions[..n]
         .iter()
         .zip(&state.rates[..n])
-        .zip(model.lengths())
+        .zip(model.lengths().iter().zip(model.half_lengths()))
         .zip(normal_drag)
         .zip(tangential_drag)
         .zip(opaque(&mut ws.joints[..n]).iter_mut());
     let mut carry = connection.acceleration;
-    for (((((e, w), l), normal_drag), tangential_drag), joint) in rows {
+    for (((((e, w), (l, half_l)), normal_drag), tangential_drag), joint) in rows {
         // Copies first: the stores below may alias for all the optimiser knows.
-        let (e, w, l) = (*e, *w, *l);
-        let half_l = half * l;
+        let (e, w, l, half_l) = (*e, *w, *l, *half_l);
         let we = Vec3::new(
             w.y * e.z - w.z * e.y,
             w.z * e.x - w.x * e.z,
@@ -436,15 +467,13 @@ fn prepare_loads<T: Real, const N: usize, const LOADS: bool>(
     let gravity = Vec3::new(T::zero(), T::zero(), env.gravity);
     let has_air = air.air.density > T::zero() && params.cable.diameter > T::zero();
     ws.connection = *connection;
-    // The layer choice of the air column, once per evaluation rather than per segment.
-    let (tow_rhs, tow_altitude, tow_air) = match air.single_layer() {
-        _ if !has_air => {
-            cable_loads::<T, N, false, LOADS>(model, state, connection, ws, |_| T::zero())
-        }
-        Some(layer) => {
-            cable_loads::<T, N, true, LOADS>(model, state, connection, ws, |h| layer.density(h))
-        }
-        None => cable_loads::<T, N, true, LOADS>(model, state, connection, ws, |h| air.density(h)),
+    // One density law at every altitude (the tropopause's kink a term of its own,
+    // zero away from it): the segment loop's cost does not depend on the altitude.
+    let law = air.law;
+    let (tow_rhs, tow_altitude, tow_air) = if has_air {
+        cable_loads::<T, N, true, LOADS>(model, state, connection, ws, |h| law.density(h))
+    } else {
+        cable_loads::<T, N, false, LOADS>(model, state, connection, ws, |_| T::zero())
     };
     ws.tow_rhs = tow_rhs;
 
@@ -497,26 +526,27 @@ fn prepare_loads<T: Real, const N: usize, const LOADS: bool>(
             xz: f1[0] * c1[2] + f2[0] * c2[2],
             yz: f1[1] * c1[2] + f2[1] * c2[2],
         };
-        ws.decoy = DecoyScratch {
-            rotation: r,
-            tow_from_cg,
-            cg_position: ws.decoy.cg_position,
-            cg_velocity,
-            aero_force,
-            aero_moment_body,
-            gyroscopic,
-            angle_of_attack: alpha,
-            airspeed,
-            dynamic_pressure,
-            joint_block,
-            // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
-            joint_rhs: -(force * inverse_mass) - r * rhs_body,
-        };
-        ws.tow_rhs += ws.decoy.joint_rhs;
+        // Field by field (the CG position, set by `joint_kinematics`, stays).
+        let d = &mut ws.decoy;
+        d.rotation = r;
+        d.tow_from_cg = tow_from_cg;
+        d.cg_velocity = cg_velocity;
+        d.aero_force = aero_force;
+        d.aero_moment_body = aero_moment_body;
+        d.gyroscopic = gyroscopic;
+        d.angle_of_attack = alpha;
+        d.airspeed = airspeed;
+        d.dynamic_pressure = dynamic_pressure;
+        d.joint_block = joint_block;
+        // a_N (segment side) = a_tow: the decoy contributes -(F_d/m_d + R rhs_body) to b_N.
+        let joint_rhs = -(force * inverse_mass) - r * rhs_body;
+        d.joint_rhs = joint_rhs;
+        ws.tow_rhs = tow_rhs + joint_rhs;
     }
 }
 
 /// The diagonal contribution (I + 3P)/m = (4I - 3 e eᵀ)/m of one segment to each of its joints.
+#[cfg(feature = "std")]
 #[inline(always)]
 fn segment_block<T: Real>(e: &Vec3<T>, inverse_mass: T) -> Mat3<T> {
     let three = T::lit(3.0);
@@ -530,18 +560,21 @@ fn segment_block<T: Real>(e: &Vec3<T>, inverse_mass: T) -> Mat3<T> {
 }
 
 /// `B X` for the coupling block B = -(I - 3P)/m = (2I - 3 e eᵀ)/m.
+#[cfg(feature = "std")]
 #[inline(always)]
 fn coupling_times<T: Real>(e: &Vec3<T>, inverse_mass: T, x: &Mat3<T>) -> Mat3<T> {
     let row = e.transpose() * x;
     (x * T::lit(2.0) - e * row * T::lit(3.0)) * inverse_mass
 }
 
+#[cfg(feature = "std")]
 #[inline(always)]
 fn coupling_times_vec<T: Real>(e: &Vec3<T>, inverse_mass: T, v: &Vec3<T>) -> Vec3<T> {
     (v * T::lit(2.0) - e * (T::lit(3.0) * e.dot(v))) * inverse_mass
 }
 
 /// Right-hand side b_j and diagonal block D_j of joint `j` (0..=last).
+#[cfg(feature = "std")]
 #[inline(always)]
 fn joint_row<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -625,6 +658,7 @@ impl<T: Real> Sym3<T> {
     }
 
     /// The full matrix.
+    #[cfg(feature = "std")]
     fn matrix(&self) -> Mat3<T> {
         Mat3::new(
             self.xx, self.xy, self.xz, self.xy, self.yy, self.yz, self.xz, self.yz, self.zz,
@@ -683,22 +717,36 @@ impl<T: Real> Sym3<T> {
         (cofactors, det)
     }
 
-    /// Sylvester's criterion from the leading minors a, a d - b², det (false for NaN),
-    /// with det in (0, inf) tested as `det > 0 && 1/det > 0`: float compares (LLVM
-    /// turns `det.finite()` into a bitwise classification of about 20 instructions).
+    /// The pivot test of the elimination: 1/det > 0 (one float compare, false for
+    /// NaN): det positive and finite, or +0, whose infinite inverse then makes the
+    /// forces non-finite, which the evaluation's finiteness checks report (a
+    /// vanishing pivot shows as a non-finite force rather than a non-positive
+    /// pivot).
+    ///
+    /// Every pivot is a Schur complement of the SPD system matrix, so SPD in exact
+    /// arithmetic; rounding loses that near singularity by one eigenvalue crossing
+    /// zero, which turns the determinant's sign: that is what this catches. (An
+    /// indefinite pivot with a positive determinant, two eigenvalues crossing
+    /// together, needs rounding errors as large as the pivot's eigenvalues
+    /// themselves. Sylvester's other two minors, and `det > 0` besides `1/det >
+    /// 0`, cost about 15 instructions a joint, 2,900 a frame on the M4F.)
     #[inline(always)]
-    fn positive_definite(&self, det: T, inv_det: T) -> bool {
-        let zero = T::zero();
-        let minor2 = self.xx * self.yy - self.xy * self.xy;
-        self.xx > zero && minor2 > zero && det > zero && inv_det > zero
+    fn positive_definite(&self, _det: T, inv_det: T) -> bool {
+        inv_det > T::zero()
     }
 }
 
 /// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0).
 #[inline]
 fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
-    let n = model.segment_count();
-    if model.has_decoy() { n } else { n - 1 }
+    last_joint_of(model, model.segment_count())
+}
+
+/// [`last_joint`] of the model's segment count `n` read once by the caller (the
+/// optimiser then sees last <= n <= N: no bounds check on the arrays).
+#[inline(always)]
+fn last_joint_of<T: Real, const N: usize>(model: &Model<T, N>, n: usize) -> usize {
+    (if model.has_decoy() { n } else { n - 1 }).min(N)
 }
 
 /// Pass 2: the tension recurrence as a block LDLᵀ two-sweep elimination.
@@ -758,11 +806,38 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
     ws: &mut Workspace<T, N>,
     out: &mut Derivative<T, N>,
 ) -> Result<(), SolveError> {
+    tensions_and_accelerations::<T, N, true>(model, state, ws, out)
+}
+
+/// [`solve_tensions_and_accelerations`] for an intermediate RK4 stage, whose
+/// forces nobody reads: only T_0 and T_N (the decoy's equations read it) are
+/// kept, and nothing is probed (a non-finite force makes the stage's derivative
+/// and the step's state non-finite, which the step's final check finds). The
+/// same derivative, bit for bit.
+#[inline(never)]
+pub fn solve_tensions_and_accelerations_of_a_stage<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) -> Result<(), SolveError> {
+    tensions_and_accelerations::<T, N, false>(model, state, ws, out)
+}
+
+/// [`solve_tensions_and_accelerations`], keeping and probing every force
+/// (`KEEP`) or only T_0 and T_N.
+#[inline(always)]
+fn tensions_and_accelerations<T: Real, const N: usize, const KEEP: bool>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+) -> Result<(), SolveError> {
     let (model, state, ws, out) = opaque((model, state, ws, out));
-    let last = last_joint(model);
     let n = model.segment_count();
+    let last = last_joint_of(model, n);
     let directions = &state.directions;
-    let gains = model.rate_gains();
+    let gains = model.rate_gains_all();
     let mut t = forward_sweep(model, state, ws)?;
     let mut probe = t.x + t.y + t.z;
     // T_{j+1} while T_j is found; for a free end the last segment's downstream
@@ -799,21 +874,31 @@ pub fn solve_tensions_and_accelerations<T: Real, const N: usize>(
             // Copies first: the stores below may alias for all the optimiser knows.
             let (pivot, e, we, gain) = (*pivot, *e, joint.direction_rate, *gain);
             t = back_substitute(&pivot, &e, &t);
-            probe += t.x + t.y + t.z;
+            if KEEP {
+                probe += t.x + t.y + t.z;
+            }
             // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
             *de = we;
             *dw = -e.cross(&(t + downstream)) * gain;
             downstream = t;
-            *force = t;
+            if KEEP {
+                *force = t;
+            }
         }
         let e = &directions[0];
         t = back_substitute(&ws.pivots[0], e, &t);
-        probe += t.x + t.y + t.z;
+        if KEEP {
+            probe += t.x + t.y + t.z;
+        }
         out.directions[0] = ws.joints[0].direction_rate;
         out.rates[0] = -e.cross(&(t + downstream)) * gains[0];
     }
     ws.connection_force = t;
-    let result = finish_tensions(model, ws, probe);
+    let result = if KEEP {
+        finish_tensions(model, ws, probe)
+    } else {
+        Ok(())
+    };
     decoy_accelerations(model, state, ws, out);
     result
 }
@@ -854,8 +939,8 @@ fn forward_sweep<T: Real, const N: usize>(
     state: &State<T, N>,
     ws: &mut Workspace<T, N>,
 ) -> Result<Vec3<T>, SolveError> {
-    let last = last_joint(model);
     let n = model.segment_count();
+    let last = last_joint_of(model, n);
     let inverse_masses = &model.inverse_masses()[..n];
     let directions = &state.directions[..n];
     let four = T::lit(4.0);
@@ -1024,7 +1109,9 @@ fn finish_tensions<T: Real, const N: usize>(
 /// B_j⁻¹ = m (I/2 - 3/2 e eᵀ) in closed form. The last row's residual α T_0 + β = 0 fixes
 /// T_0 = -α⁻¹ β. The transverse growth factor of this recurrence is about 2 + √3 per
 /// segment, so round-off is amplified about 3.7^N: unusable beyond a few tens of
-/// segments in f64 and about 8 in f32 (DESIGN §3). Kept for tests and benchmarks only.
+/// segments in f64 and about 8 in f32 (DESIGN §3). Kept for tests and benchmarks only
+/// (feature `std`).
+#[cfg(feature = "std")]
 pub fn solve_tensions_shooting<T: Real, const N: usize>(
     model: &Model<T, N>,
     state: &State<T, N>,
@@ -1172,6 +1259,11 @@ fn decoy_derivative<T: Real, const N: usize>(
 /// RK4 stage in `stage` itself (the state evaluated, whose entries are no longer
 /// needed once their segment is done) and into the weighted sum: no derivative is
 /// stored and read back. Same arithmetic as the separate passes, so the same bits.
+///
+/// The forces found are not kept (only T_0 and T_N, which the decoy's equations
+/// read) and not probed: this is an intermediate stage, nobody reads its forces,
+/// and a non-finite force makes the stage non-finite, which the step's final check
+/// finds (`Rk4::step`).
 #[inline(never)]
 pub fn solve_tensions_to_stage<T: Real, const N: usize>(
     model: &Model<T, N>,
@@ -1187,17 +1279,18 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
         weight,
     } = next;
     let (base, sum, weight) = opaque((base, sum, weight));
-    let last = last_joint(model);
     let n = model.segment_count();
-    let gains = model.rate_gains();
+    let last = last_joint_of(model, n);
+    let gains = model.rate_gains_all();
     let mut t = forward_sweep(model, stage, ws)?;
-    let mut probe = t.x + t.y + t.z;
     // Segment index j's derivative (de, dw) into the stage and the sum.
     let update = |stage: &mut State<T, N>,
                   sum: &mut Derivative<T, N>,
                   j: usize,
                   de: Vec3<T>,
                   dw: Vec3<T>| {
+        // j is n - 1 or 0 (both below N), restated: no bounds check.
+        let j = j.min(N - 1);
         stage.directions[j] = base.directions[j] + de * h;
         stage.rates[j] = base.rates[j] + dw * h;
         sum.directions[j] += de * weight;
@@ -1238,30 +1331,28 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
                     .iter_mut()
                     .zip(sum.rates[range].iter_mut()),
             )
-            .zip(ws.joint_force[..last - 1].iter_mut())
             .rev();
-        for ((((((pivot, joint), gain), (e_out, w_out)), (e0, w0)), (se, sw)), force) in rows {
+        for (((((pivot, joint), gain), (e_out, w_out)), (e0, w0)), (se, sw)) in rows {
             // Copies first: the stores below may alias for all the optimiser knows.
             let (pivot, we, gain, e) = (*pivot, joint.direction_rate, *gain, *e_out);
             let (e0, w0, s_e, s_w) = (*e0, *w0, *se, *sw);
             t = back_substitute(&pivot, &e, &t);
-            probe += t.x + t.y + t.z;
             let dw = -e.cross(&(t + downstream)) * gain;
             *e_out = e0 + we * h;
             *w_out = w0 + dw * h;
             *se = s_e + we * weight;
             *sw = s_w + dw * weight;
             downstream = t;
-            *force = t;
         }
         let e = stage.directions[0];
         t = back_substitute(&ws.pivots[0], &e, &t);
-        probe += t.x + t.y + t.z;
         let dw = -e.cross(&(t + downstream)) * gains[0];
         update(stage, sum, 0, ws.joints[0].direction_rate, dw);
     }
     ws.connection_force = t;
-    let result = finish_tensions(model, ws, probe);
+    if !model.has_decoy() {
+        ws.joint_force[n - 1] = Vec3::zeros();
+    }
     let (dq, dw) = decoy_derivative(model, stage, ws);
     for ((o, b), (s, d)) in stage
         .decoy_attitude
@@ -1274,7 +1365,7 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
     }
     stage.decoy_rate = base.decoy_rate + dw * h;
     sum.decoy_rate += dw * weight;
-    result
+    Ok(())
 }
 
 /// Passes 2 and 3 as [`solve_tensions_and_accelerations`] at `state` (RK4's first
@@ -1291,15 +1382,44 @@ pub fn solve_tensions_first_stage<T: Real, const N: usize>(
     stage: &mut State<T, N>,
     h: T,
 ) -> Result<(), SolveError> {
+    tensions_first_stage::<T, N, true>(model, state, ws, out, stage, h)
+}
+
+/// [`solve_tensions_first_stage`] keeping only T_0 and T_N and probing nothing
+/// (as [`solve_tensions_and_accelerations_of_a_stage`]), for a caller that reads
+/// no force of the first stage: the same derivative and stage, bit for bit.
+#[inline(never)]
+pub fn solve_tensions_first_stage_unkept<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+    stage: &mut State<T, N>,
+    h: T,
+) -> Result<(), SolveError> {
+    tensions_first_stage::<T, N, false>(model, state, ws, out, stage, h)
+}
+
+#[inline(always)]
+fn tensions_first_stage<T: Real, const N: usize, const KEEP: bool>(
+    model: &Model<T, N>,
+    state: &State<T, N>,
+    ws: &mut Workspace<T, N>,
+    out: &mut Derivative<T, N>,
+    stage: &mut State<T, N>,
+    h: T,
+) -> Result<(), SolveError> {
     let (model, state, ws, out, stage) = opaque((model, state, ws, out, stage));
-    let last = last_joint(model);
     let n = model.segment_count();
+    let last = last_joint_of(model, n);
     let directions = &state.directions;
-    let gains = model.rate_gains();
+    let gains = model.rate_gains_all();
     let mut t = forward_sweep(model, state, ws)?;
     let mut probe = t.x + t.y + t.z;
     // Segment index j's derivative (de, dw) into `out` and the stage.
     let write = |out: &mut Derivative<T, N>, stage: &mut State<T, N>, j: usize, de, dw| {
+        // j is n - 1 or 0 (both below N), restated: no bounds check.
+        let j = j.min(N - 1);
         out.directions[j] = de;
         out.rates[j] = dw;
         stage.directions[j] = state.directions[j] + de * h;
@@ -1346,23 +1466,33 @@ pub fn solve_tensions_first_stage<T: Real, const N: usize>(
             // Copies first: the stores below may alias for all the optimiser knows.
             let (pivot, we, gain, e, w) = (*pivot, joint.direction_rate, *gain, *e, *w);
             t = back_substitute(&pivot, &e, &t);
-            probe += t.x + t.y + t.z;
+            if KEEP {
+                probe += t.x + t.y + t.z;
+            }
             let dw = -e.cross(&(t + downstream)) * gain;
             *de = we;
             *dw_out = dw;
             *e_out = e + we * h;
             *w_out = w + dw * h;
             downstream = t;
-            *force = t;
+            if KEEP {
+                *force = t;
+            }
         }
         let e = directions[0];
         t = back_substitute(&ws.pivots[0], &e, &t);
-        probe += t.x + t.y + t.z;
+        if KEEP {
+            probe += t.x + t.y + t.z;
+        }
         let dw = -e.cross(&(t + downstream)) * gains[0];
         write(out, stage, 0, ws.joints[0].direction_rate, dw);
     }
     ws.connection_force = t;
-    let result = finish_tensions(model, ws, probe);
+    let result = if KEEP {
+        finish_tensions(model, ws, probe)
+    } else {
+        Ok(())
+    };
     decoy_accelerations(model, state, ws, out);
     for ((o, b), d) in stage
         .decoy_attitude
@@ -1397,6 +1527,7 @@ pub fn evaluate_first_stage<T: Real, const N: usize>(
             prepare(model, state, connection, air, ws);
             solve_tensions_first_stage(model, state, ws, out, stage, h)
         }
+        #[cfg(feature = "std")]
         TensionMethod::Shooting => {
             evaluate(model, state, connection, air, method, ws, out)?;
             stage.set_stage(state, out, h, model.segment_count());
@@ -1420,11 +1551,14 @@ pub fn evaluate_to_stage<T: Real, const N: usize>(
     out: &mut Derivative<T, N>,
     next: StageUpdate<'_, T, N>,
 ) -> Result<(), SolveError> {
+    #[cfg(not(feature = "std"))]
+    let _ = out;
     match method {
         TensionMethod::TwoSweep => {
             prepare(model, stage, connection, air, ws);
             solve_tensions_to_stage(model, stage, ws, next)
         }
+        #[cfg(feature = "std")]
         TensionMethod::Shooting => {
             evaluate(model, stage, connection, air, method, ws, out)?;
             let n = model.segment_count();
@@ -1448,6 +1582,7 @@ pub fn evaluate<T: Real, const N: usize>(
     prepare(model, state, connection, air, ws);
     match method {
         TensionMethod::TwoSweep => solve_tensions_and_accelerations(model, state, ws, out),
+        #[cfg(feature = "std")]
         TensionMethod::Shooting => {
             solve_tensions_shooting(model, state, ws)?;
             accelerations(model, state, ws, out);

@@ -52,16 +52,16 @@ pub mod state;
 pub mod trim;
 
 pub use aero::{AeroCoefficients, AeroTable};
-pub use atmosphere::{AirColumn, AirProperties, Atmosphere};
+pub use atmosphere::{AirColumn, AirProperties, Atmosphere, DensityLaw};
 pub use dynamics::{TensionMethod, Workspace};
 pub use error::{AeroTableError, AtmosphereError, ConfigError, InputError, SolveError, TrimError};
 pub use model::{
     CableParams, DecoyParams, EndBody, Environment, Model, ModelParams, SegmentLayout,
 };
-pub use motion::{AircraftState, FlightPath, PointKinematics, Uniform};
+pub use motion::{AircraftState, FlightPath, NodePath, PointKinematics, Uniform};
 pub use pendulum::{pendulum_energy, pendulum_initial_state, reference_pendulum};
 pub use rk4::{DerivativeSource, Rk4};
 pub use scalar::{Mat3, Real, Vec3};
 pub use solver::{DecoyOutputs, Outputs, Solver};
 pub use state::{Derivative, State};
-pub use trim::trim;
+pub use trim::{TrimTask, trim};

@@ -140,6 +140,8 @@ pub struct Model<T: Real, const N: usize> {
     // The arrays the segment loop reads together are side by side (small address
     // offsets from one base on the Cortex-M).
     lengths: [T; N],
+    /// l_i / 2 (the segment loop's lever to the segment centre).
+    half_lengths: [T; N],
     normal_drag_factors: [T; N],
     tangential_drag_factors: [T; N],
     inverse_masses: [T; N],
@@ -371,6 +373,7 @@ impl<T: Real, const N: usize> Model<T, N> {
             },
             segment_count: 0,
             lengths: [z; N],
+            half_lengths: [z; N],
             masses: [z; N],
             inverse_masses: [z; N],
             rate_gains: [z; N],
@@ -418,6 +421,7 @@ impl<T: Real, const N: usize> Model<T, N> {
         let unused = count..N;
         for array in [
             &mut self.lengths,
+            &mut self.half_lengths,
             &mut self.masses,
             &mut self.inverse_masses,
             &mut self.rate_gains,
@@ -429,6 +433,7 @@ impl<T: Real, const N: usize> Model<T, N> {
         // Checked above: every length and mass is positive and finite.
         for_each_segment(params, count, |i, length, mass| {
             self.lengths[i] = length;
+            self.half_lengths[i] = T::lit(0.5) * length;
             self.masses[i] = mass;
             let inverse_mass = T::one() / mass;
             self.inverse_masses[i] = inverse_mass;
@@ -446,34 +451,66 @@ impl<T: Real, const N: usize> Model<T, N> {
     pub fn params(&self) -> &ModelParams<T> {
         &self.params
     }
-    /// Number of segments in use.
+    /// Number of segments in use: 1 to `N`. The model holds that by
+    /// construction ([`Model::configure`] rejects any other count); the clamp
+    /// restates it where the optimiser sees it, so that no index below the
+    /// count into an array of capacity `N` (nor the last segment's, count - 1)
+    /// keeps a bounds check: the frame path has no reachable panic
+    /// (firmware/examples/panic_never.rs). An unconfigured model (count 0)
+    /// reports 1; it is never evaluated.
+    #[inline]
     pub fn segment_count(&self) -> usize {
-        self.segment_count
+        self.segment_count.clamp(1, N)
+    }
+    /// Segment `i`'s length, m (`i` below the count; a larger `i` reads the
+    /// capacity's last entry, never a panic: for the trim, whose indices the
+    /// optimiser does not follow).
+    pub(crate) fn length_of(&self, i: usize) -> T {
+        self.lengths[i.min(N - 1)]
+    }
+    /// Segment `i`'s mass, kg (as [`Model::length_of`]).
+    pub(crate) fn mass_of(&self, i: usize) -> T {
+        self.masses[i.min(N - 1)]
+    }
+    /// True once configured (a model of zero bits, `Solver::UNCONFIGURED`'s,
+    /// is not).
+    pub fn is_configured(&self) -> bool {
+        self.segment_count != 0
     }
     /// Segment lengths, index 0 = segment 1 at the connection point.
     pub fn lengths(&self) -> &[T] {
-        &self.lengths[..self.segment_count]
+        &self.lengths[..self.segment_count()]
+    }
+    /// Half the segment lengths, l_i / 2 (exactly: halving is exact).
+    pub fn half_lengths(&self) -> &[T] {
+        &self.half_lengths[..self.segment_count()]
     }
     /// Segment masses, index 0 = segment 1 at the connection point.
     pub fn masses(&self) -> &[T] {
-        &self.masses[..self.segment_count]
+        &self.masses[..self.segment_count()]
     }
     /// Inverse segment masses 1/m_i.
     pub fn inverse_masses(&self) -> &[T] {
-        &self.inverse_masses[..self.segment_count]
+        &self.inverse_masses[..self.segment_count()]
     }
     /// 6/(m_i l_i): angular acceleration of segment i per unit of perpendicular hinge-force sum
     /// (a thin rod's transverse inertia about its centre is m l^2 / 12).
     pub fn rate_gains(&self) -> &[T] {
-        &self.rate_gains[..self.segment_count]
+        &self.rate_gains[..self.segment_count()]
+    }
+    /// [`Model::rate_gains`] as the whole array of capacity `N` (the entries
+    /// past the segment count are never read): for the sweeps, whose indices
+    /// below the count the optimiser then proves in range (no bounds check).
+    pub(crate) fn rate_gains_all(&self) -> &[T; N] {
+        &self.rate_gains
     }
     /// Cable drag per unit mass and unit density of each segment (DESIGN §2): the
     /// normal factors `0.5 d l_i C_n / m_i` and the tangential factors
     /// `0.5 d l_i pi C_f / m_i`, so that F_i/m_i = rho (k_n |u_n| u_n + k_t |u_t| u_t).
     pub fn drag_factors(&self) -> (&[T], &[T]) {
         (
-            &self.normal_drag_factors[..self.segment_count],
-            &self.tangential_drag_factors[..self.segment_count],
+            &self.normal_drag_factors[..self.segment_count()],
+            &self.tangential_drag_factors[..self.segment_count()],
         )
     }
     /// True with a decoy at the cable's end (`decoy().is_some()`, one load).

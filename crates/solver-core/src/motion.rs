@@ -141,6 +141,22 @@ pub trait FlightPath<T: Real> {
     }
 }
 
+/// A flight path over one interval that can be sampled at the nodes of equal
+/// RK4 steps: node k of `nodes` lies at the fraction k / nodes of the interval
+/// (with n steps, nodes = 2n: each step's start, middle and end). The
+/// controller's frame path ([`crate::Solver::steps_on`]): sampled by fractions
+/// that are exact (k/8 for four steps), not by times taken in f64, which on the
+/// Cortex-M4F are software-emulated.
+pub trait NodePath<T: Real> {
+    /// The interval's length, s.
+    fn span(&self) -> T;
+    /// The kinematics of the point fixed in the aircraft body at `r` (FRD, m) at
+    /// node `k` of `nodes` (0 <= k <= nodes): at node 0 and node `nodes` the
+    /// interval's ends, bit for bit as [`FlightPath::point_at`] gives them there.
+    fn node_point(&self, k: u32, nodes: u32, r: &Vec3<T>)
+    -> Result<PointKinematics<T>, InputError>;
+}
+
 /// A flight path that is one constant state moved along with its velocity and
 /// acceleration (steady flight when the acceleration is zero; a fixed anchor when
 /// the velocity is zero too). Attitude and rates stay as given.

@@ -142,11 +142,14 @@ pub struct StageUpdate<'a, T: Real, const N: usize> {
 #[derive(Clone, Debug)]
 pub struct Rk4<T: Real, const N: usize> {
     states: [State<T, N>; 2],
+    /// 0 or 1 (read as `current & 1`: the optimiser then knows the index is in
+    /// range, and no bounds check remains on the frame path).
     current: usize,
     /// The last stage's derivative (`derivatives[slope]`) and the weighted sum
     /// (the other one): a first stage reused from the last derivative swaps their
     /// roles rather than copying it.
     derivatives: [Derivative<T, N>; 2],
+    /// 0 or 1 (read as `slope & 1`, as `current`).
     slope: usize,
 }
 
@@ -174,13 +177,13 @@ impl<T: Real, const N: usize> Rk4<T, N> {
     /// The current state.
     #[inline(always)]
     pub fn state(&self) -> &State<T, N> {
-        &self.states[self.current]
+        &self.states[self.current & 1]
     }
 
     /// The current state, to write in place (the caller keeps it finite, its
     /// directions unit and perpendicular to its rates).
     pub fn state_mut(&mut self) -> &mut State<T, N> {
-        &mut self.states[self.current]
+        &mut self.states[self.current & 1]
     }
 
     /// Replaces the state (the caller checks it is finite).
@@ -191,14 +194,14 @@ impl<T: Real, const N: usize> Rk4<T, N> {
     /// Sets the current state's time, s, and nothing else (the caller checks it is
     /// finite).
     pub fn set_time(&mut self, time: f64) {
-        self.states[self.current].time = time;
+        self.states[self.current & 1].time = time;
     }
 
     /// The derivative of the last evaluation: the last stage of a step (k4), or what
     /// the caller wrote through [`Rk4::state_and_last_derivative`].
     #[inline(always)]
     pub fn last_derivative(&self) -> &Derivative<T, N> {
-        &self.derivatives[self.slope]
+        &self.derivatives[self.slope & 1]
     }
 
     /// The current state and the last derivative's buffer, for an evaluation at the
@@ -207,8 +210,8 @@ impl<T: Real, const N: usize> Rk4<T, N> {
     #[inline(always)]
     pub fn state_and_last_derivative(&mut self) -> (&State<T, N>, &mut Derivative<T, N>) {
         (
-            &self.states[self.current],
-            &mut self.derivatives[self.slope],
+            &self.states[self.current & 1],
+            &mut self.derivatives[self.slope & 1],
         )
     }
 
@@ -258,22 +261,55 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         if !(bits > 0 && bits < f64::INFINITY.to_bits()) {
             return Err(InputError::BadTimeStep.into());
         }
-        let n = source.segment_count();
-        let (state, stage) = halves(&mut self.states, self.current);
-        let t0 = state.time;
+        let t0 = self.state().time;
         let (t_half, t_end) = (t0 + half_of(dt), t0 + dt);
-        // The stage factors from dt rounded to T once.
-        let full = T::lit(dt);
-        let half = full * T::lit(0.5);
-        let sixth = full * T::lit(1.0 / 6.0);
-        let two = T::lit(2.0);
-
-        // The inputs are sampled once per distinct time: k2 and k3 both evaluate at
-        // t0 + dt/2.
         let start = match start {
             Some(inputs) => inputs,
             None => source.inputs_at(t0)?,
         };
+        self.step_sampled(
+            source,
+            T::lit(dt),
+            start,
+            |source| source.inputs_at(t_half),
+            |source| source.inputs_at(t_end),
+            t_end,
+            observe,
+        )
+    }
+
+    /// One RK4 step of `full` (the step in `T`, positive and finite: the caller
+    /// checks) with the source's inputs at the step's start (`start`), middle
+    /// (`middle`, sampled once for k2 and k3) and end (`end`, returned for the
+    /// next step's start); the new state's time is `time_after`. The core of
+    /// [`Rk4::step_from`], for a caller that samples its inputs otherwise than by
+    /// time (the controller's frames: at the nodes of the frame's steps,
+    /// [`crate::Solver::steps_on`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn step_sampled<S, F, M, E>(
+        &mut self,
+        source: &mut S,
+        full: T,
+        start: S::Inputs,
+        middle: M,
+        end: E,
+        time_after: f64,
+        observe: F,
+    ) -> Result<S::Inputs, SolveError>
+    where
+        S: DerivativeSource<T, N> + ?Sized,
+        F: FnOnce(&mut S, &State<T, N>, &Derivative<T, N>),
+        M: FnOnce(&mut S) -> Result<S::Inputs, SolveError>,
+        E: FnOnce(&mut S) -> Result<S::Inputs, SolveError>,
+    {
+        let n = source.segment_count();
+        let (state, stage) = halves(&mut self.states, self.current);
+        // The stage factors from the step rounded to T once.
+        let half = full * T::lit(0.5);
+        let sixth = full * T::lit(1.0 / 6.0);
+        let two = T::lit(2.0);
+
         // k1 at the current state, straight into the weighted sum (sum = k1); or, when
         // the source says the last evaluation was at this state with the same inputs,
         // that evaluation itself: the last derivative's buffer becomes the sum (the
@@ -292,7 +328,9 @@ impl<T: Real, const N: usize> Rk4<T, N> {
             source.evaluate_first_stage(state, &start, stage, sum, half)?;
         }
         observe(source, state, sum);
-        let middle = source.inputs_at(t_half)?;
+        // The inputs are sampled once per distinct time: k2 and k3 both evaluate at
+        // the step's middle.
+        let middle = middle(source)?;
         // k2 at y + dt/2 k1, turned into the stage y + dt/2 k2 (sum += 2 k2).
         let next = StageUpdate {
             base: state,
@@ -310,17 +348,21 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         };
         source.evaluate_to_stage(stage, &middle, slope, next)?;
         // k4 at y + dt k3.
-        let end = source.inputs_at(t_end)?;
+        let end = end(source)?;
         source.evaluate(stage, &end, slope)?;
         // y + dt/6 (k1 + 2 k2 + 2 k3 + k4).
         let probe = stage.set_final(state, sum, slope, sixth, n);
-        stage.time = t_end;
+        stage.time = time_after;
         source.finish()?;
         // The probe is finite only if every value is; the full check runs only when it is not.
-        let probe_finite = probe.finite() && t_end.is_finite();
+        let probe_finite = probe.finite() && time_after.is_finite();
         if !probe_finite && !stage.is_finite(n) {
-            let joint = (0..n)
-                .find(|&i| !(vec_finite(&stage.directions[i]) && vec_finite(&stage.rates[i])))
+            let joint = stage
+                .directions
+                .iter()
+                .zip(&stage.rates)
+                .take(n)
+                .position(|(e, w)| !(vec_finite(e) && vec_finite(w)))
                 .map_or(n, |i| i + 1);
             return Err(SolveError::NonFinite { joint });
         }

@@ -2,11 +2,11 @@
 
 use nalgebra::UnitQuaternion;
 
-use crate::atmosphere::{AirColumn, AirProperties};
+use crate::atmosphere::{AirCache, AirColumn};
 use crate::dynamics::{self, TensionMethod, Workspace};
 use crate::error::{ConfigError, InputError, SolveError};
 use crate::model::{Model, ModelParams};
-use crate::motion::{AircraftState, FlightPath, PointKinematics};
+use crate::motion::{AircraftState, FlightPath, NodePath, PointKinematics};
 use crate::rk4::{DerivativeSource, Rk4, StageUpdate};
 use crate::scalar::{Real, Vec3, zero3};
 use crate::state::{Derivative, State};
@@ -24,10 +24,10 @@ pub struct Solver<T: Real, const N: usize> {
     rk4: Rk4<T, N>,
     method: TensionMethod,
     ws: Workspace<T, N>,
-    /// The last air column built (a cache: [`AirColumn::about`] is a pure function
-    /// of the altitude, so a column reused while it [`AirColumn::serves`] is the one
-    /// that would be built).
-    air: Option<AirColumn<T>>,
+    /// The air columns built (a cache: [`AirColumn::about`] is a pure function of
+    /// the altitude's cell, so a column reused while it [`AirColumn::serves`] is
+    /// the one that would be built).
+    air: AirCache<T>,
     /// When `ws` and the last derivative of `rk4` hold the evaluation at the current
     /// state: the connection-point kinematics and air reference it was evaluated
     /// with. The next step's first stage reuses it if its inputs are the same bits
@@ -70,17 +70,22 @@ impl<T: Real> EvaluationKey<T> {
 /// The product's derivative for [`Rk4`]: the three passes of
 /// [`dynamics::evaluate`] along a flight path, with the solver's air column cache
 /// and its last output evaluation as the first stage's candidate.
-struct Towed<'a, T: Real, const N: usize, P: ?Sized> {
+///
+/// `KEEP`: every stage keeps and checks its forces (the product's steps, whose
+/// stages a caller may observe or read); without it only the last output
+/// evaluation's forces are kept ([`Solver::steps_on`], the controller's frames:
+/// the same states, bit for bit).
+struct Towed<'a, T: Real, const N: usize, P: ?Sized, const KEEP: bool = true> {
     model: &'a Model<T, N>,
     path: &'a P,
     method: TensionMethod,
     ws: &'a mut Workspace<T, N>,
-    air: &'a mut Option<AirColumn<T>>,
+    air: &'a mut AirCache<T>,
     evaluated: &'a mut Option<EvaluationKey<T>>,
 }
 
-impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
-    for Towed<'_, T, N, P>
+impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized, const KEEP: bool> DerivativeSource<T, N>
+    for Towed<'_, T, N, P, KEEP>
 {
     type Inputs = (PointKinematics<T>, AirColumn<T>);
 
@@ -104,6 +109,12 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
         (connection, air): &Self::Inputs,
         out: &mut Derivative<T, N>,
     ) -> Result<(), SolveError> {
+        if !KEEP && self.method == TensionMethod::TwoSweep {
+            dynamics::prepare(self.model, state, connection, air, self.ws);
+            return dynamics::solve_tensions_and_accelerations_of_a_stage(
+                self.model, state, self.ws, out,
+            );
+        }
         dynamics::evaluate(
             self.model,
             state,
@@ -144,6 +155,12 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
         out: &mut Derivative<T, N>,
         h: T,
     ) -> Result<(), SolveError> {
+        if !KEEP && self.method == TensionMethod::TwoSweep {
+            dynamics::prepare(self.model, state, connection, air, self.ws);
+            return dynamics::solve_tensions_first_stage_unkept(
+                self.model, state, self.ws, out, stage, h,
+            );
+        }
         dynamics::evaluate_first_stage(
             self.model,
             state,
@@ -166,6 +183,20 @@ impl<T: Real, const N: usize, P: FlightPath<T> + ?Sized> DerivativeSource<T, N>
     }
 }
 
+impl<T: Real, const N: usize, P: NodePath<T> + ?Sized, const KEEP: bool> Towed<'_, T, N, P, KEEP> {
+    /// The inputs at node `k` of `nodes` of the path ([`Solver::steps_on`]).
+    #[inline(always)]
+    fn inputs_at_node(
+        &mut self,
+        k: u32,
+        nodes: u32,
+        point: &Vec3<T>,
+    ) -> Result<(PointKinematics<T>, AirColumn<T>), SolveError> {
+        let connection = self.path.node_point(k, nodes, point)?;
+        Ok(inputs_at(self.model, self.air, connection)?)
+    }
+}
+
 impl<T: Real, const N: usize> Solver<T, N> {
     /// A solver without a model yet, as a constant of all zero bits: where a solver
     /// must not pass through the stack (tens of KB on a microcontroller), put this
@@ -173,8 +204,9 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// larger value built the same way) and give it its model there with
     /// [`Solver::configure`].
     ///
-    /// Until configured it has no segments: [`Solver::configure`] is the only
-    /// method to call. Stepping or evaluating it panics (an index out of bounds).
+    /// Until configured it has no model ([`Model::is_configured`] is false):
+    /// [`Solver::configure`] is the only method to call; stepping or evaluating
+    /// it computes nonsense from zero lengths and masses (never a panic).
     pub const UNCONFIGURED: Self = Solver {
         model: Model::UNCONFIGURED,
         rk4: Rk4::ZERO,
@@ -184,18 +216,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         // niche of nonzero bits, and the constant must be all zero bits to lie in
         // `.bss` (the HIL tests check that the firmware's controller does). Never
         // read: `configure` clears both caches.
-        air: Some(AirColumn {
-            reference_altitude: T::ZERO,
-            air: AirProperties {
-                density: T::ZERO,
-                density_slope: T::ZERO,
-                density_curvature: T::ZERO,
-                speed_of_sound: T::ZERO,
-                temperature: T::ZERO,
-                pressure: T::ZERO,
-            },
-            across_tropopause: None,
-        }),
+        air: AirCache::EMPTY,
         evaluated: Some(EvaluationKey {
             connection: PointKinematics {
                 position: zero3(),
@@ -220,7 +241,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         self.rk4.set_state(State::default());
         self.method = TensionMethod::TwoSweep;
         self.ws.reset();
-        self.air = None;
+        self.air.clear();
         self.evaluated = None;
         Ok(())
     }
@@ -234,7 +255,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
             rk4: Rk4::new(State::default()),
             method: TensionMethod::TwoSweep,
             ws: Workspace::default(),
-            air: None,
+            air: AirCache::EMPTY,
             evaluated: None,
         };
         solver.set_state(state)?;
@@ -283,6 +304,81 @@ impl<T: Real, const N: usize> Solver<T, N> {
         Ok(())
     }
 
+    /// Starts a trim for steady straight flight with the aircraft in `aircraft`
+    /// to be carried on in slices ([`Solver::advance_trim`]): the state is reset
+    /// to rest and the search to its beginning ([`crate::trim::TrimTask`]). On
+    /// error the state is left as it was.
+    pub fn start_trim(
+        &mut self,
+        aircraft: &AircraftState<T>,
+    ) -> Result<crate::trim::TrimTask<T, N>, crate::TrimError> {
+        // `TrimTask::start` checks everything before it writes the state.
+        let task = crate::trim::TrimTask::start(&self.model, aircraft, self.rk4.state_mut())?;
+        self.evaluated = None;
+        Ok(task)
+    }
+
+    /// Carries `task` (from [`Solver::start_trim`] on this solver) on into the
+    /// state for about `budget` work units ([`crate::trim::TrimTask::advance`]):
+    /// `Ok(true)` when the trim is complete, then at `time`. On error the state
+    /// is what the search had reached: restore a saved copy with
+    /// [`Solver::set_state`].
+    pub fn advance_trim(
+        &mut self,
+        task: &mut crate::trim::TrimTask<T, N>,
+        budget: u32,
+        time: f64,
+    ) -> Result<bool, crate::TrimError> {
+        self.evaluated = None;
+        let state = self.rk4.state_mut();
+        if !task.advance(&self.model, state, budget)? {
+            return Ok(false);
+        }
+        state.time = time;
+        if !state.is_finite(self.model.segment_count()) {
+            return Err(crate::TrimError::ColumnDidNotConverge);
+        }
+        Ok(true)
+    }
+
+    /// Turns the state about the vertical (NED z) by the rotation with cosine
+    /// `cos` and sine `sin` (`cos² + sin² = 1`; a positive angle turns north
+    /// toward east): every segment's direction and rate and the decoy's attitude
+    /// (its body rate is in the body frame and does not change). A trim for one
+    /// heading is then the trim for the other in still air.
+    pub fn turn_about_vertical(&mut self, cos: T, sin: T) {
+        self.evaluated = None;
+        let n = self.model.segment_count();
+        let state = self.rk4.state_mut();
+        let turn = |v: &Vec3<T>| Vec3::new(cos * v.x - sin * v.y, sin * v.x + cos * v.y, v.z);
+        for i in 0..n {
+            state.directions[i] = turn(&state.directions[i]);
+            state.rates[i] = turn(&state.rates[i]);
+        }
+        // q_z (half angle) q: q_z = (cos h, 0, 0, sin h), cos h = sqrt((1 + cos)/2),
+        // sin h = sin / (2 cos h) (the turn is within +-180 degrees, cos h >= 0).
+        let half = T::lit(0.5);
+        let ch = (half * (T::one() + cos)).square_root();
+        if ch > T::zero() {
+            let sh = half * sin / ch;
+            let [w, x, y, z] = state.decoy_attitude;
+            state.decoy_attitude = [
+                ch * w - sh * z,
+                ch * x - sh * y,
+                ch * y + sh * x,
+                ch * z + sh * w,
+            ];
+        }
+    }
+
+    /// Builds the air columns of the cells next to the one the solver used last
+    /// ([`AirCache::prefetch`]), for a caller with time to spare between frames:
+    /// a later step that climbs or descends into them finds them built.
+    pub fn prefetch_air(&mut self) {
+        self.air
+            .prefetch(&self.model.params().environment.atmosphere);
+    }
+
     /// Sets the state's time (s) without touching the rest of the state; for a
     /// caller that integrates to an exact end time, where n steps of (t1 - t0)/n
     /// can land an ulp away from t1. A non-finite `time` is ignored.
@@ -302,7 +398,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// f64 solvers; the arithmetic of the step uses `dt` rounded to `T`.
     pub fn step<P: FlightPath<T> + ?Sized>(&mut self, path: &P, dt: f64) -> Result<(), SolveError> {
         // As `step_observed` with nothing to observe (no joint kinematics for outputs).
-        let mut towed = Towed {
+        let mut towed: Towed<'_, T, N, P, true> = Towed {
             model: &self.model,
             path,
             method: self.method,
@@ -325,7 +421,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         dt: f64,
         count: u32,
     ) -> Result<(), SolveError> {
-        let mut towed = Towed {
+        let mut towed: Towed<'_, T, N, P, true> = Towed {
             model: &self.model,
             path,
             method: self.method,
@@ -337,6 +433,59 @@ impl<T: Real, const N: usize> Solver<T, N> {
         for _ in 0..count {
             start = Some(self.rk4.step_from(&mut towed, dt, start, |_, _, _| {})?);
         }
+        Ok(())
+    }
+
+    /// `count` RK4 steps over the whole interval of `path`, sampled at its nodes
+    /// ([`NodePath`]: step i from node 2i through 2i + 1 to 2i + 2 of 2 `count`),
+    /// each of the interval's span / `count` in `T`; the state's time is then
+    /// `time_after` (the interval's end, which the caller knows in f64). No time is
+    /// formed in f64 on the way (on the Cortex-M4F every f64 operation is a library
+    /// call). The first stage reuses the evaluation [`Solver::outputs`] left, as in
+    /// [`Solver::step`]. The stages keep no forces but T_0 and T_N: after these
+    /// steps, read the forces of [`Solver::outputs`] (the end state's), not
+    /// [`Solver::last_outputs`].
+    ///
+    /// `count` must be at least 1 ([`InputError::BadTimeStep`] otherwise, as for a
+    /// span that is not positive and finite). On an error the steps before the
+    /// failing one stand and the failing one leaves the state as it was; the time
+    /// is set only when every step succeeds.
+    pub fn steps_on<P: FlightPath<T> + NodePath<T> + ?Sized>(
+        &mut self,
+        path: &P,
+        count: u32,
+        time_after: f64,
+    ) -> Result<(), SolveError> {
+        let span = path.span();
+        if count == 0 || !(span > T::zero() && span.finite()) {
+            return Err(InputError::BadTimeStep.into());
+        }
+        let full = span / T::from_count(u64::from(count));
+        let nodes = 2 * count;
+        let point = self.model.params().connection_point;
+        let mut towed: Towed<'_, T, N, P, false> = Towed {
+            model: &self.model,
+            path,
+            method: self.method,
+            ws: &mut self.ws,
+            air: &mut self.air,
+            evaluated: &mut self.evaluated,
+        };
+        let time = self.rk4.state().time;
+        let mut start = towed.inputs_at_node(0, nodes, &point)?;
+        for i in 0..count {
+            let k = 2 * i;
+            start = self.rk4.step_sampled(
+                &mut towed,
+                full,
+                start,
+                |t| t.inputs_at_node(k + 1, nodes, &point),
+                |t| t.inputs_at_node(k + 2, nodes, &point),
+                time,
+                |_, _, _| {},
+            )?;
+        }
+        self.rk4.set_time(time_after);
         Ok(())
     }
 
@@ -356,7 +505,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
         P: FlightPath<T> + ?Sized,
         F: FnOnce(&Outputs<'_, T, N>),
     {
-        let mut towed = Towed {
+        let mut towed: Towed<'_, T, N, P, true> = Towed {
             model: &self.model,
             path,
             method: self.method,
@@ -388,9 +537,18 @@ impl<T: Real, const N: usize> Solver<T, N> {
         // Every tension finite (|T_j| from its square, which overflows f32 first: at
         // 1.8e19 N, for accelerations far beyond any aircraft's), or a typed error
         // naming the first joint where it is not.
+        // One sum of the squares, finite only if every |T_j|² is; the joints are
+        // searched only when it is not.
         let segments = self.model.segment_count();
-        if let Some(joint) =
-            (0..=segments).find(|&j| !outputs.joint_force(j).norm_squared().finite())
+        let squares = outputs
+            .downstream_joint_forces()
+            .iter()
+            .fold(outputs.joint_force(0).norm_squared(), |sum, f| {
+                sum + f.norm_squared()
+            });
+        if !squares.finite()
+            && let Some(joint) =
+                (0..=segments).find(|&j| !outputs.joint_force(j).norm_squared().finite())
         {
             return Err(SolveError::NonFinite { joint });
         }
@@ -450,18 +608,11 @@ impl<T: Real, const N: usize> Solver<T, N> {
 #[inline(always)]
 fn inputs_at<T: Real, const N: usize>(
     model: &Model<T, N>,
-    air: &mut Option<AirColumn<T>>,
+    air: &mut AirCache<T>,
     connection: PointKinematics<T>,
 ) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
     let altitude = -connection.position.z;
-    let column = match *air {
-        Some(column) if column.serves(altitude) => column,
-        _ => {
-            let column = AirColumn::about(&model.params().environment.atmosphere, altitude)?;
-            *air = Some(column);
-            column
-        }
-    };
+    let column = air.column(&model.params().environment.atmosphere, altitude)?;
     Ok((connection, column))
 }
 
@@ -530,7 +681,8 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection_force
         } else {
-            self.ws.joint_force[j - 1]
+            // j past the towing point reads the towing point's (never a panic).
+            self.ws.joint_force[(j - 1).min(self.model.segment_count() - 1)]
         }
     }
     /// The forces T_1 .. T_N ([`Outputs::joint_force`] of joints 1 to N) as one
@@ -564,7 +716,8 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
         if j == 0 {
             self.ws.connection.position
         } else {
-            self.ws.joints[j - 1].position
+            // j past the towing point reads the towing point's (never a panic).
+            self.ws.joints[(j - 1).min(self.model.segment_count() - 1)].position
         }
     }
     /// Velocity of joint `j`, NED, m/s.

@@ -198,7 +198,8 @@ impl<T: Real, const N: usize> State<T, N> {
             let e = e * crate::scalar::inverse_norm(&e);
             let w = w0 + (sw + kw) * h;
             let w = w - e * w.dot(&e);
-            probe += (e.x + e.y + e.z) + (w.x + w.y + w.z);
+            // w is finite only if e is (a non-finite e makes w - e (w.e) NaN).
+            probe += w.x + w.y + w.z;
             *e_out = e;
             *w_out = w;
         }

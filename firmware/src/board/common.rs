@@ -73,10 +73,26 @@ pub fn fail() -> ! {
     }
 }
 
+#[cfg(not(feature = "panic-never"))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     defmt::error!("panic: {}", defmt::Display2Format(info));
     fail()
+}
+
+// Feature `panic-never` (examples/panic_never.rs, a link-time check): the panic
+// handler calls a function that exists nowhere, so the build links only if the
+// optimiser removed every call of the handler, i.e. no panic is reachable.
+#[cfg(feature = "panic-never")]
+#[allow(unsafe_code)]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    unsafe extern "Rust" {
+        /// Defined nowhere: a reachable panic fails the link with this name.
+        fn a_panic_is_reachable_from_the_frame_path() -> !;
+    }
+    // SAFETY: never runs; the link fails if a call of it remains.
+    unsafe { a_panic_is_reachable_from_the_frame_path() }
 }
 
 // cortex-m-rt requires the HardFault handler to be an `unsafe fn` (it runs on a

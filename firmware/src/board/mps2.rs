@@ -281,7 +281,11 @@ impl Clock {
     /// count in every run. The clock loses less than one tick per call.
     pub fn align(&self) {
         self.ticks();
-        self.systick.borrow_mut().clear_current();
+        // Never borrowed elsewhere (single core, no interrupt uses it):
+        // `try_borrow_mut` rather than a borrow that could panic.
+        if let Ok(mut systick) = self.systick.try_borrow_mut() {
+            systick.clear_current();
+        }
         self.last_reading.set(SYST::get_current());
     }
 

@@ -507,7 +507,11 @@ impl Clock {
                     .wrapping_add(INSTRUCTIONS_PER_GROUP),
             );
         }
-        self.systick.borrow_mut().clear_current();
+        // Never borrowed elsewhere (single core, no interrupt uses it):
+        // `try_borrow_mut` rather than a borrow that could panic.
+        if let Ok(mut systick) = self.systick.try_borrow_mut() {
+            systick.clear_current();
+        }
         self.last_reading.set(SYST::get_current());
     }
 

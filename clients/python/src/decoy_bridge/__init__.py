@@ -13,7 +13,7 @@ Units SI; world frame flat-earth NED (altitude = -z); body FRD; quaternions
 Hamilton, scalar first, body→NED.
 """
 
-from .client import Bridge, check_answer, make_config, make_state
+from .client import Bridge, check_answer, is_initialising, make_config, make_state
 from .errors import BridgeError, BridgeTimeout, NoBridge, Rejected, VersionMismatch
 from .wire import PROTOCOL_VERSION
 
@@ -26,6 +26,7 @@ __all__ = [
     "Rejected",
     "VersionMismatch",
     "check_answer",
+    "is_initialising",
     "make_config",
     "make_state",
 ]

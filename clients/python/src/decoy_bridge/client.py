@@ -192,7 +192,9 @@ class Bridge:
         accepted by :func:`make_state`.
 
         Returns:
-            the :class:`~decoy_bridge.wire.Output`.
+            the :class:`~decoy_bridge.wire.Output`; while the controller
+            initialises (its trim, over the first state or a few), an output with
+            the ``INITIALISING`` flag and no solution (:func:`is_initialising`).
 
         Raises:
             Rejected: the bridge rejected the state (``reason``, ``count``); the
@@ -370,9 +372,20 @@ class Bridge:
         self.close()
 
 
+def is_initialising(output: Any) -> bool:
+    """True for the output answering a state while the bridge's controller
+    initialises (it is computing the trim its run starts from; the answer's kind
+    is ``initialising`` and the output's ``INITIALISING`` flag is set): its
+    ``time_s``, ``flags`` and ``instructions`` are set, its solution is zero.
+    The first state after the trim completes is answered by a real output."""
+    return bool(int(output.flags) & wire.LAYOUT.codes["flag"]["initialising"])
+
+
 def check_answer(answer: Any) -> Any:
-    """The :class:`~decoy_bridge.wire.Output` of an answer, or :class:`Rejected`."""
-    if answer.header.kind == _kind("output"):
+    """The :class:`~decoy_bridge.wire.Output` of an answer (while the controller
+    initialises, an output with the ``INITIALISING`` flag: see
+    :func:`is_initialising`), or :class:`Rejected`."""
+    if answer.header.kind in (_kind("output"), _kind("initialising")):
         return answer.output
     if answer.header.kind == _kind("rejected"):
         r = answer.rejection

@@ -101,6 +101,9 @@ class Record:
     latency_us: float
     output: Any | None = None
     rejection: Rejected | None = None
+    # Answered while the controller initialised (``output`` is then the
+    # initialising answer's, with no solution: not a row of the time series).
+    initialising: bool = False
 
 
 @dataclass
@@ -142,9 +145,10 @@ def fly_lockstep(bridge: Bridge, states: Iterable[AircraftState], progress: Any 
             latency = (time.perf_counter_ns() - t0) / 1e3
             rec = Record(s, bridge.last_seq, latency)
             try:
-                from .client import check_answer
+                from .client import check_answer, is_initialising
 
                 rec.output = check_answer(answer)
+                rec.initialising = is_initialising(rec.output)
             except Rejected as r:
                 rec.rejection = r
             run.records.append(rec)
@@ -257,7 +261,7 @@ def write_trajectory(path: Path, states: Iterable[AircraftState]) -> None:
 
 def write_outputs(path: Path, run: Run) -> list[dict[str, Any]]:
     """``timeseries.csv``: one row per answered frame (:data:`OUTPUT_COLUMNS`); returns the rows."""
-    rows = [output_row(r) for r in run.records if r.output is not None]
+    rows = [output_row(r) for r in run.records if r.output is not None and not r.initialising]
     with path.open("w", newline="") as f:
         w = csv.writer(f)
         w.writerow(OUTPUT_COLUMNS)
@@ -287,6 +291,7 @@ def summarize(
     sent = len(run.records)
     answered = len(rows)
     rejected = sum(1 for r in run.records if r.rejection is not None)
+    initialising = sum(1 for r in run.records if r.initialising)
     lat = [r.latency_us for r in run.records]
     out: dict[str, Any] = {"scenario": scenario}
     segments = int(status.segments) if status is not None else None
@@ -353,8 +358,9 @@ def summarize(
             "client_cpus": current_cpus(),
             "frames_sent": sent,
             "frames_answered": answered,
+            "frames_initialising": initialising,
             "frames_rejected": rejected,
-            "frames_lost": sent - answered - rejected,
+            "frames_lost": sent - answered - initialising - rejected,
             "latency_us": percentiles(lat),
             "frames_per_s": sent / run.wall_s if run.wall_s > 0 else 0.0,
             "instructions_per_step_max": max((r["instructions"] for r in rows[1:]), default=0),

@@ -1,5 +1,6 @@
-//! Writes `docs/benchmarks.md` and `docs/figures/bench-scaling.{png,svg}` from the
-//! results of one benchmark run. Run by `cargo xtask bench-report`, after it ran
+//! Writes `docs/benchmarks.md`, `docs/figures/bench-scaling.{png,svg}` and
+//! `docs/figures/envelope-worst-frame.{png,svg}` from the results of one
+//! benchmark run. Run by `cargo xtask bench-report`, after it ran
 //! the criterion and gungraun benchmarks; this binary also builds and runs the
 //! firmware under QEMU for each segment count of the report.
 //!
@@ -12,14 +13,15 @@ use std::process::{Command, ExitCode};
 use std::time::Duration;
 
 use benches::report::{
-    self, FIRMWARE_SEGMENTS, FirmwareCounts, FirmwareRow, Inputs, Machine, read_criterion,
-    read_gungraun,
+    self, EnvelopeBoard, EnvelopeFlight, FIRMWARE_SEGMENTS, FirmwareCounts, FirmwareRow, Inputs,
+    Machine, read_criterion, read_gungraun,
 };
 use decoy_hil::firmware;
 use decoy_hil::flight;
 use decoy_hil::link::Session;
 use decoy_hil::qemu::Board;
 use decoy_hil::step_cost::StepCost;
+use decoy_hil::sweep;
 
 /// Time limit of one firmware build.
 const BUILD_TIMEOUT: Duration = Duration::from_secs(600);
@@ -111,6 +113,15 @@ fn run() -> Result<(), String> {
         },
     };
 
+    let envelope = if firmware_runs {
+        [Board::M4, Board::Stm32f405, Board::M7]
+            .into_iter()
+            .map(envelope_board)
+            .collect()
+    } else {
+        Vec::new()
+    };
+
     let inputs = Inputs {
         machine: machine(),
         wall,
@@ -120,11 +131,18 @@ fn run() -> Result<(), String> {
         step_cost,
         step_cost_m7,
         pinocchio,
+        envelope,
     };
     let docs = root.join("docs");
     let figure = docs.join("figures").join("bench-scaling");
     decoy_plots::write_stacked(&report::scaling_plot(&inputs), &figure)
         .map_err(|e| e.to_string())?;
+    let envelope_plots = report::envelope_plot(&inputs);
+    if !envelope_plots.is_empty() {
+        let stem = docs.join("figures").join("envelope-worst-frame");
+        decoy_plots::write_stacked(&envelope_plots, &stem).map_err(|e| e.to_string())?;
+        println!("wrote {}.{{png,svg}}", stem.display());
+    }
     let out = docs.join("benchmarks.md");
     // The host bridge's section is measured by its own benchmark: kept as it is.
     let existing = std::fs::read_to_string(&out).unwrap_or_default();
@@ -136,6 +154,64 @@ fn run() -> Result<(), String> {
         figure.display()
     );
     Ok(())
+}
+
+/// The envelope sweep's full grid on `board` (two QEMU sessions at once), each
+/// flight summarised.
+fn envelope_board(board: Board) -> EnvelopeBoard {
+    let bound = if board == Board::M7 {
+        report::M7_FRAME_BOUND
+    } else {
+        report::F32_FRAME_BOUND
+    };
+    let flights = (|| -> Result<Vec<EnvelopeFlight>, String> {
+        let config = decoy_config::SystemConfig::builtin().map_err(|e| e.to_string())?;
+        let cases = sweep::cases(&config, sweep::Grid::Full).map_err(|e| e.to_string())?;
+        let elf = firmware::build_board(board, BUILD_TIMEOUT).map_err(|e| e.to_string())?;
+        let total = cases.len();
+        println!("envelope: {board}, {total} flights (two QEMU sessions at once)");
+        let flown = sweep::fly_all(&elf, board, &cases, 2, |f, done| {
+            let m = f.measured();
+            println!(
+                "envelope: {board} {done}/{total} {}: worst frame {}, mean {:.0}, trim {} frame(s) max {}",
+                f.case.label,
+                m.stats.worst_frame(),
+                m.stats.mean,
+                m.stats.trim_frames,
+                m.stats.trim_max
+            );
+        })?;
+        Ok(flown
+            .iter()
+            .map(|f| {
+                let m = f.measured();
+                EnvelopeFlight {
+                    label: f.case.label.clone(),
+                    group: f.case.group.name().to_owned(),
+                    frames: f.sent.len().saturating_sub(1),
+                    worst: m.stats.worst_frame(),
+                    mean: m.stats.mean,
+                    trim: (m.stats.trim_frames, m.stats.trim_max),
+                    bands: m.bands.iter().map(|&(b, w)| (b, w)).collect(),
+                    outside_envelope: m.outside_envelope,
+                    step_limited: m.step_limited,
+                }
+            })
+            .collect())
+    })();
+    if let Err(e) = &flights {
+        println!("envelope: {board}: {e}");
+    }
+    EnvelopeBoard {
+        board: match board {
+            Board::M4 => "M4",
+            Board::Stm32f405 => "STM32F405",
+            Board::M7 => "M7",
+        }
+        .to_owned(),
+        bound,
+        flights,
+    }
 }
 
 /// Builds the firmware for `board` with `segments` segments and runs it once under

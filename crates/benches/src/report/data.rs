@@ -222,13 +222,15 @@ pub struct Inputs {
     /// Firmware runs on the Cortex-M7 (QEMU mps2-an500), f64, by segment count
     /// (empty: rendered as not measured).
     pub firmware_m7: Vec<FirmwareRow>,
-    /// One RK4 step on the Cortex-M4F, f32, 16 graded segments
+    /// One RK4 step on the Cortex-M4F, f32, the embedded model
     /// (`firmware/examples/step_cost.rs`), or why it was not measured.
     pub step_cost: Result<decoy_hil::step_cost::StepCost, String>,
     /// The same on the Cortex-M7, f64.
     pub step_cost_m7: Result<decoy_hil::step_cost::StepCost, String>,
     /// The Pinocchio reference: its result line, or why there is none.
     pub pinocchio: Result<String, String>,
+    /// The envelope sweep, per board (empty: not run).
+    pub envelope: Vec<super::EnvelopeBoard>,
 }
 
 impl Default for Inputs {
@@ -243,6 +245,7 @@ impl Default for Inputs {
             step_cost: Err("not run".into()),
             step_cost_m7: Err("not run".into()),
             pinocchio: Err("not run".into()),
+            envelope: Vec::new(),
         }
     }
 }

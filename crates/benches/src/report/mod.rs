@@ -24,16 +24,20 @@
 //!   the report shows;
 //! - `claims` — the targets and their verdicts: per-segment costs, flatness, the
 //!   evaluation breakdown, the table of targets;
+//! - `envelope` — the operating envelope's sweep under QEMU: its section, its
+//!   target rows and its figure;
 //! - `figures` — the log-log scaling figure;
 //! - `render` — the Markdown document and its number formats.
 
 mod claims;
 mod data;
+mod envelope;
 mod figures;
 mod render;
 
 pub use claims::*;
 pub use data::*;
+pub use envelope::*;
 pub use figures::*;
 pub use render::*;
 
@@ -208,7 +212,7 @@ mod tests {
         // Without the RK4 step measurement the target has no verdict.
         let row = |md: &str| {
             md.lines()
-                .find(|l| l.starts_with("| firmware, 16 graded segments"))
+                .find(|l| l.starts_with("| firmware, the embedded model"))
                 .map(str::to_owned)
                 .unwrap_or_default()
         };

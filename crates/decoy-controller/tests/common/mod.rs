@@ -54,10 +54,50 @@ pub fn output(answer: DeviceMessage) -> OutputFrame {
     }
 }
 
-/// A controller trimmed at t = 0 and stepped through `frames` 10 ms frames.
+/// The Output of an answer, or `None` for the Status answering a State frame
+/// while the controller initialises (panics otherwise: tests only).
+pub fn output_or_initialising(answer: DeviceMessage) -> Option<OutputFrame> {
+    match answer {
+        DeviceMessage::Output(o) => Some(o),
+        DeviceMessage::Status(s)
+            if decoy_link::StatusFlags(s.flags).contains(decoy_link::StatusFlags::INITIALISING) =>
+        {
+            None
+        }
+        other => panic!("expected an Output or the initialisation's Status, got {other:?}"),
+    }
+}
+
+/// Sends the frames `frame(k)` for k = 0, 1, ... while the controller
+/// initialises; returns the first Output and its k (the frames after it are
+/// answered by Outputs).
+pub fn initialise<T: Real, const N: usize>(
+    c: &mut Controller<T, N>,
+    frame: impl Fn(u32) -> AircraftStateFrame,
+) -> (OutputFrame, u32) {
+    for k in 0..64 {
+        if let Some(o) = output_or_initialising(send(c, frame(k))) {
+            return (o, k);
+        }
+    }
+    panic!("the controller was still initialising after 64 frames");
+}
+
+/// A controller trimmed at t = 0 (initialised over its first frames) and stepped
+/// through `frames` 10 ms frames (answered by Outputs from the trim on).
 pub fn running(frames: u32) -> Controller<f32, CAPACITY> {
-    let mut c = controller();
-    for k in 0..=frames {
+    running_in(frames)
+}
+
+/// [`running`] in precision `T`.
+pub fn running_in<T: Real>(frames: u32) -> Controller<T, CAPACITY> {
+    let mut c = Controller::new(config::<T>()).unwrap();
+    let (_, first) = initialise(&mut c, |k| frame(k, 0.01 * f64::from(k)));
+    assert!(
+        first <= frames,
+        "initialised at frame {first}, after {frames}"
+    );
+    for k in first + 1..=frames {
         output(send(&mut c, frame(k, 0.01 * f64::from(k))));
     }
     c

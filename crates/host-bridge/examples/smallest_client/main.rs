@@ -90,8 +90,18 @@ fn main() -> Result<(), Box<dyn core::error::Error>> {
                 return Err("no answer from the bridge within 5 s".into());
             }
         };
-        if answer.header.kind != kind::OUTPUT {
-            return Err(format!("state {k} rejected: reason {}", answer.rejection.reason).into());
+        match answer.header.kind {
+            kind::OUTPUT => {}
+            // The controller is still computing its trim: no solution yet.
+            kind::INITIALISING => {
+                println!("t = {t:.2} s  initialising");
+                continue;
+            }
+            _ => {
+                return Err(
+                    format!("state {k} rejected: reason {}", answer.rejection.reason).into(),
+                );
+            }
         }
         if k % 10 == 0 {
             println!(

@@ -1,0 +1,355 @@
+//! The envelope sweep under QEMU (issue 22): the firmware flies the test grid of
+//! `decoy_hil::sweep` (steady flight at seven altitudes across 0-15 km, four of
+//! them in the tropopause band 10.6-11.7 km or at its ends, by three Mach numbers
+//! across 0.3-0.95; every shipped manoeuvre at its full duration; pull-ups and
+//! turns at the envelope's load-factor and body-rate limits at three corners; a
+//! climb and a descent through 11 km), each flight from its own trim, and for
+//! every State frame of every flight, the frames of the trim included:
+//!
+//! - the whole frame (validation, the trim's slice or the RK4 steps, outputs)
+//!   within [`FRAME_TARGET`] = 90,000 instructions on the M4 and the STM32F405
+//!   (issue 22: 10 % under the 100,000 budget), and the M7 (f64) within its
+//!   stated bound [`FRAME_BOUND_M7`];
+//! - every control step the nominal four RK4 steps (no STEP_LIMITED frame), the
+//!   decoy management within its budget;
+//! - no frame flagged OUTSIDE_ENVELOPE but in the two shipped manoeuvres beyond
+//!   the envelope's 4 g (the paper's 0.20 rad/s pull-up and turn);
+//! - every answer bit for bit the host controller's in the firmware's precision;
+//!   the shipped manoeuvres' tensions within the tolerances of the host's f64
+//!   (the precision's error) and, on the STM32F405, the advisory line as the
+//!   management reports it.
+//!
+//! The flights are dealt into two shards per f32 board (the test harness runs
+//! two tests at once: both cores busy); the M7 flies a subset. The full grid is
+//! `cargo xtask bench-report`'s (docs/benchmarks.md, the per-altitude figure).
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
+use std::time::Duration;
+
+use decoy_config::SystemConfig;
+use decoy_hil::flight;
+use decoy_hil::qemu::Board;
+use decoy_hil::reference::Reference;
+use decoy_hil::sweep::{self, Case, Flown, Grid, Group};
+use decoy_hil::{defmt, firmware};
+use decoy_link::DeviceMessage;
+
+/// Issue 22's bound on every frame over the envelope, M4 and STM32F405.
+const FRAME_TARGET: u32 = 90_000;
+/// The M7's (f64 in hardware) stated bound on every frame over the envelope:
+/// the worst frame measured before issue 22 (160,080), kept.
+const FRAME_BOUND_M7: u32 = 160_000;
+/// Most instructions of decoy management (monitors and one look-ahead slice)
+/// per frame (issue 13).
+const MANAGEMENT_BUDGET: u32 = 400_000;
+/// The tolerances of the shipped manoeuvres' tensions against the host's f64
+/// (connection, towing point; relative to the value, or with `true` to the
+/// run's peak connection tension): as `hil_link.rs` explains them.
+const STEADY_TOLERANCES: (f64, f64, bool) = (5e-3, 1.5e-2, false);
+const SNATCH_TOLERANCES: (f64, f64, bool) = (2e-2, 2e-2, true);
+/// The recorded flight (a pull-up into a climbing turn) through its cable's
+/// jerk at about 5.9 s: measured 3.05 % of the peak at the connection (15.1 N
+/// at seq 588; the peaks themselves agree within 0.1 %). A jerk is a near
+/// discontinuity whose timing f32's round-off moves by a fraction of a step.
+const RECORDED_TOLERANCES: (f64, f64, bool) = (4e-2, 4e-2, true);
+/// The frame-by-frame comparison of a snatch manoeuvre against the host's f64
+/// covers its first 10 s (the rotation, the jerk at about 8.7 s and its first
+/// ringing); over the full 20 s the ringing's phase drifts between f32 and f64
+/// (5.9 % of the peak at 0.20 rad/s by 20 s) while the peaks agree.
+const SNATCH_WINDOW_S: f64 = 10.0;
+/// The run's peak connection tension against the host's f64, relative.
+const PEAK_TOLERANCE: f64 = 5e-3;
+
+/// Time limit of a firmware build.
+const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
+
+fn config() -> &'static SystemConfig {
+    static CONFIG: OnceLock<SystemConfig> = OnceLock::new();
+    CONFIG.get_or_init(|| SystemConfig::builtin().expect("the built-in configuration"))
+}
+
+fn elf(board: Board) -> &'static PathBuf {
+    static ELFS: [OnceLock<PathBuf>; Board::ALL.len()] = [const { OnceLock::new() }; 3];
+    let index = Board::ALL
+        .iter()
+        .position(|&b| b == board)
+        .unwrap_or_else(|| unreachable!("Board::ALL lists every board"));
+    ELFS[index].get_or_init(|| {
+        defmt::require().unwrap_or_else(|e| panic!("{e}"));
+        firmware::build_board(board, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"))
+    })
+}
+
+/// Shard `k` of `of` of the test grid: the flights dealt by length, longest
+/// first, each to the shard with the fewest frames so far.
+fn shard(k: usize, of: usize) -> Vec<Case> {
+    let mut cases = sweep::cases(config(), Grid::Test).unwrap_or_else(|e| panic!("{e}"));
+    cases.sort_by(|a, b| b.t_end.total_cmp(&a.t_end));
+    let mut shards: Vec<(f64, Vec<Case>)> = (0..of).map(|_| (0.0, Vec::new())).collect();
+    for case in cases {
+        let lightest = shards
+            .iter_mut()
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap_or_else(|| unreachable!("at least one shard"));
+        lightest.0 += case.t_end;
+        lightest.1.push(case);
+    }
+    shards.swap_remove(k).1
+}
+
+/// The largest difference of the connection and of the towing-point tension
+/// between `firmware` and `host` outputs (by seq), relative as `tolerances`
+/// says, and the peaks' relative difference.
+fn against_f64(
+    firmware: &[DeviceMessage],
+    host: &[DeviceMessage],
+    peak_relative: bool,
+    until_s: f64,
+) -> ([f64; 2], f64) {
+    let (fo, ho) = (flight::outputs(firmware), flight::outputs(host));
+    let peak = |o: &[decoy_link::OutputFrame]| {
+        o.iter()
+            .map(|o| f64::from(o.connection_tension_n))
+            .fold(0.0, f64::max)
+    };
+    let (fp, hp) = (peak(&fo), peak(&ho));
+    let mut worst = [0.0f64; 2];
+    for out in fo.iter().filter(|o| o.time_s <= until_s) {
+        let Some(h) = ho.iter().find(|h| h.seq == out.seq) else {
+            continue;
+        };
+        for (k, (a, b)) in [
+            (out.connection_tension_n, h.connection_tension_n),
+            (out.tow_tension_n, h.tow_tension_n),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let diff = f64::from(a - b).abs();
+            let scale = if peak_relative {
+                hp
+            } else {
+                f64::from(b).abs()
+            };
+            worst[k] = worst[k].max(diff / scale);
+        }
+    }
+    (worst, (fp - hp).abs() / hp)
+}
+
+/// The advisory line's logged changes (seq, asserted) must be exactly the
+/// outputs where the management report's advisory line changes.
+fn check_advisory_log(label: &str, answers: &[DeviceMessage], log: &str) {
+    let logged: Vec<(u32, bool)> = log
+        .lines()
+        .filter_map(|line| {
+            let (_, rest) = line.split_once("advisory line ")?;
+            let (level, rest) = rest.split_once(": seq=")?;
+            let seq = rest.split_whitespace().next()?.parse().ok()?;
+            Some((seq, level == "asserted"))
+        })
+        .collect();
+    let mut expected = Vec::new();
+    let mut asserted = false;
+    for out in flight::outputs(answers) {
+        let line = out.management.advisory_line();
+        if line != asserted {
+            expected.push((out.seq, line));
+            asserted = line;
+        }
+    }
+    assert_eq!(
+        logged, expected,
+        "{label}: the advisory line's logged changes"
+    );
+}
+
+/// Every check of one flight on `board`; returns its report line.
+fn check_flight(board: Board, flown: &Flown, bound: u32) -> String {
+    let case = &flown.case;
+    let label = format!("{board}: {}", case.label);
+    let m = flown.measured();
+    let s = &m.stats;
+    assert_eq!(m.rejected, 0, "{label}: frames rejected");
+    assert!(s.trim_frames >= 1, "{label}: no frame of the trim");
+    assert_eq!(
+        flight::outputs(&flown.answers).len() + s.trim_frames - 1,
+        flown.sent.len() - 1,
+        "{label}: a frame not answered by the trim's Status or an Output"
+    );
+    let worst = s.worst_frame();
+    assert!(
+        worst <= bound,
+        "{label}: a frame took {worst} instructions (control steps at most {} at seq {}, the \
+         trim at most {} over {} frames), over {bound}",
+        s.max,
+        s.max_seq,
+        s.trim_max,
+        s.trim_frames
+    );
+    assert_eq!(m.step_limited, 0, "{label}: STEP_LIMITED frames");
+    assert_eq!(
+        s.nominal_steps, s.steps,
+        "{label}: control steps with more than four RK4 steps (at most {})",
+        s.most_rk4_steps
+    );
+    if case.group != Group::Shipped {
+        assert_eq!(
+            m.outside_envelope, 0,
+            "{label}: frames outside the envelope"
+        );
+    }
+    let management = flight::outputs(&flown.answers)
+        .iter()
+        .map(|o| o.management_instructions)
+        .max()
+        .unwrap_or(0);
+    assert!(
+        management <= MANAGEMENT_BUDGET,
+        "{label}: decoy management took {management} instructions"
+    );
+    // Bit for bit the host controller's answers in the firmware's precision.
+    let bits = if board == Board::M7 { 64 } else { 32 };
+    let host = Reference::for_config(config(), bits)
+        .and_then(|mut r| r.replay(&flown.sent))
+        .unwrap_or_else(|e| panic!("{label}: {e}"));
+    let (agreement, mismatches) = flight::compare(&flown.answers, &host);
+    assert!(
+        mismatches.is_empty(),
+        "{label}: {} answers differ from the host's f{bits}; first: {:#?}",
+        mismatches.len(),
+        mismatches[0]
+    );
+    assert_eq!(
+        agreement.identical, agreement.outputs,
+        "{label}: outputs not bit-identical to the host's f{bits}"
+    );
+    let mut accuracy = String::new();
+    if case.group == Group::Shipped && board != Board::M7 {
+        let (connection, tow, peak_relative) = if case.label.starts_with("recorded") {
+            RECORDED_TOLERANCES
+        } else if case.label.starts_with("pull-up") {
+            SNATCH_TOLERANCES
+        } else {
+            STEADY_TOLERANCES
+        };
+        let mut reference = flight::accuracy_controller(config()).unwrap_or_else(|e| panic!("{e}"));
+        let host64 = flight::replay(&mut reference, &flown.sent);
+        // Through a snatch the frame-by-frame comparison holds up to the first
+        // jerk and its ringing (10 s); after it the oscillation's phase drifts
+        // apart between the precisions (the peaks still agree).
+        let until = if peak_relative {
+            SNATCH_WINDOW_S
+        } else {
+            f64::INFINITY
+        };
+        let (worst64, peak) = against_f64(&flown.answers, &host64, peak_relative, until);
+        assert!(
+            worst64[0] <= connection && worst64[1] <= tow,
+            "{label}: tensions differ from the host's f64 by {:.3} % (connection) and {:.3} % \
+             (towing point){}",
+            worst64[0] * 100.0,
+            worst64[1] * 100.0,
+            if peak_relative { " of the peak" } else { "" }
+        );
+        assert!(
+            peak <= PEAK_TOLERANCE,
+            "{label}: the peak connection tension differs from the host's f64 by {:.3} %",
+            peak * 100.0
+        );
+        accuracy = format!(
+            "; vs f64 {:.2} % / {:.2} %{}, peak {:.3} %",
+            worst64[0] * 100.0,
+            worst64[1] * 100.0,
+            if peak_relative { " of peak" } else { "" },
+            peak * 100.0
+        );
+        if board == Board::Stm32f405 {
+            check_advisory_log(&label, &flown.answers, &flown.log);
+        }
+    }
+    format!(
+        "{label}: {} frames, {:.0}-{:.0} m; worst frame {worst} (control steps max {} at seq {}, \
+         mean {:.0}; trim {} frame(s), max {}); management max {management}; outside the \
+         envelope {}{accuracy}",
+        flown.sent.len() - 1,
+        m.altitudes_m.0,
+        m.altitudes_m.1,
+        s.max,
+        s.max_seq,
+        s.mean,
+        s.trim_frames,
+        s.trim_max,
+        m.outside_envelope,
+    )
+}
+
+/// Flies `cases` on `board` (one QEMU at a time: the harness runs two tests at
+/// once) and checks each flight against `bound`.
+fn sweep(board: Board, cases: &[Case], bound: u32) {
+    let elf = elf(board);
+    let total = cases.len();
+    let flown = sweep::fly_all(elf, board, cases, 1, |f, done| {
+        eprintln!("{board}: {done}/{total} {}", f.case.label);
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut worst = (0u32, String::new());
+    for f in &flown {
+        let line = check_flight(board, f, bound);
+        println!("{line}");
+        let w = f.measured().stats.worst_frame();
+        if w > worst.0 {
+            worst = (w, f.case.label.clone());
+        }
+    }
+    println!(
+        "{board}: {} flights, worst frame {} ({}), bound {bound}",
+        flown.len(),
+        worst.0,
+        worst.1
+    );
+}
+
+#[test]
+fn m4_envelope_shard_1_of_2() {
+    sweep(Board::M4, &shard(0, 2), FRAME_TARGET);
+}
+
+#[test]
+fn m4_envelope_shard_2_of_2() {
+    sweep(Board::M4, &shard(1, 2), FRAME_TARGET);
+}
+
+#[test]
+fn stm32f405_envelope_shard_1_of_2() {
+    sweep(Board::Stm32f405, &shard(0, 2), FRAME_TARGET);
+}
+
+#[test]
+fn stm32f405_envelope_shard_2_of_2() {
+    sweep(Board::Stm32f405, &shard(1, 2), FRAME_TARGET);
+}
+
+/// The M7 (f64): the steady corners of the envelope, the paper's 0.20 rad/s
+/// pull-up at its full duration and the climb through the tropopause.
+#[test]
+fn m7_envelope_subset() {
+    let cases: Vec<Case> = sweep::cases(config(), Grid::Test)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_iter()
+        .filter(|c| {
+            let corner = c.group == Group::Steady
+                && [
+                    "steady 0 m Mach 0.30",
+                    "steady 0 m Mach 0.95",
+                    "steady 11000 m Mach 0.95",
+                    "steady 15000 m Mach 0.30",
+                ]
+                .contains(&c.label.as_str());
+            corner || c.label.starts_with("pull-up 0.20") || c.label.starts_with("tropopause climb")
+        })
+        .collect();
+    assert_eq!(cases.len(), 6, "the M7's subset");
+    sweep(Board::M7, &cases, FRAME_BOUND_M7);
+}
