@@ -692,54 +692,104 @@ impl SystemConfig {
                 name: env.atmosphere.clone(),
             });
         }
+        // Physical ranges (docs/configuration in config/reference-system.toml's
+        // header): a value outside one is a typing error or a unit slip, never a
+        // flight condition, and would trim to nonsense rather than fail.
         c.positive("environment.gravity", env.gravity)?;
+        c.range("environment.gravity", env.gravity, 9.7, 9.9)?;
         c.positive("environment.gas_constant", env.gas_constant)?;
+        c.range("environment.gas_constant", env.gas_constant, 280.0, 300.0)?;
         c.positive("environment.gamma", env.gamma)?;
+        c.range("environment.gamma", env.gamma, 1.3, 1.45)?;
         c.finite_vec("environment.wind_ned", env.wind_ned)?;
+        let [north, east, down] = env.wind_ned;
+        let horizontal = north.hypot(east);
+        if horizontal > MAX_WIND_MPS {
+            return Err(c.invalid(
+                "environment.wind_ned",
+                format!(
+                    "must have a horizontal speed of at most {MAX_WIND_MPS} m/s (the strongest jet-stream winds), got {horizontal} m/s"
+                ),
+            ));
+        }
+        c.range(
+            "environment.wind_ned[2]",
+            down,
+            -MAX_VERTICAL_WIND_MPS,
+            MAX_VERTICAL_WIND_MPS,
+        )?;
 
         let a = &self.aircraft;
-        c.finite_vec("aircraft.connection_point", a.connection_point)?;
-        c.finite_vec("aircraft.exhaust_nozzle", a.exhaust_nozzle)?;
-        c.finite_vec("aircraft.exhaust_axis", a.exhaust_axis)?;
+        for (field, point) in [
+            ("aircraft.connection_point", a.connection_point),
+            ("aircraft.exhaust_nozzle", a.exhaust_nozzle),
+            ("aircraft.exhaust_axis", a.exhaust_axis),
+            ("aircraft.envelope_fore", a.envelope_fore),
+            ("aircraft.envelope_aft", a.envelope_aft),
+        ] {
+            c.finite_vec(field, point)?;
+            for (i, v) in point.iter().enumerate() {
+                c.range(
+                    &format!("{field}[{i}]"),
+                    *v,
+                    -MAX_BODY_OFFSET_M,
+                    MAX_BODY_OFFSET_M,
+                )?;
+            }
+        }
         if a.exhaust_axis.iter().all(|v| *v == 0.0) {
             return Err(c.invalid(
                 "aircraft.exhaust_axis",
                 "must not be the zero vector".to_owned(),
             ));
         }
-        c.non_negative("aircraft.exhaust_nozzle_radius", a.exhaust_nozzle_radius)?;
+        c.range(
+            "aircraft.exhaust_nozzle_radius",
+            a.exhaust_nozzle_radius,
+            0.0,
+            5.0,
+        )?;
         c.range(
             "aircraft.exhaust_half_angle_deg",
             a.exhaust_half_angle_deg,
             0.0,
             89.0,
         )?;
-        c.non_negative("aircraft.exhaust_length", a.exhaust_length)?;
-        c.finite_vec("aircraft.envelope_fore", a.envelope_fore)?;
-        c.finite_vec("aircraft.envelope_aft", a.envelope_aft)?;
-        c.non_negative("aircraft.envelope_radius", a.envelope_radius)?;
+        c.range("aircraft.exhaust_length", a.exhaust_length, 0.0, 500.0)?;
+        c.range("aircraft.envelope_radius", a.envelope_radius, 0.0, 20.0)?;
 
         let cable = &self.cable;
         c.positive("cable.length", cable.length)?;
+        c.range("cable.length", cable.length, 1.0, 1000.0)?;
         c.positive("cable.diameter", cable.diameter)?;
+        c.range("cable.diameter", cable.diameter, 1e-4, 0.05)?;
         c.positive("cable.linear_density", cable.linear_density)?;
+        c.range("cable.linear_density", cable.linear_density, 1e-4, 5.0)?;
         c.positive("cable.elastic_modulus", cable.elastic_modulus)?;
+        c.range("cable.elastic_modulus", cable.elastic_modulus, 1e8, 1e12)?;
         c.positive("cable.allowable_tension", cable.allowable_tension)?;
+        c.range("cable.allowable_tension", cable.allowable_tension, 1.0, 1e6)?;
         c.non_negative("cable.cd_normal", cable.cd_normal)?;
+        c.range("cable.cd_normal", cable.cd_normal, 0.0, 3.0)?;
         c.non_negative("cable.cf_tangential", cable.cf_tangential)?;
+        c.range("cable.cf_tangential", cable.cf_tangential, 0.0, 0.5)?;
 
         let d = &self.decoy;
         c.positive("decoy.mass", d.mass)?;
+        c.range("decoy.mass", d.mass, 0.1, 500.0)?;
         c.positive("decoy.length", d.length)?;
+        c.range("decoy.length", d.length, 0.1, 10.0)?;
         c.positive("decoy.diameter", d.diameter)?;
+        c.range("decoy.diameter", d.diameter, 0.01, 2.0)?;
         c.range("decoy.x_cg", d.x_cg, 0.0, d.length)?;
         c.range("decoy.x_tow", d.x_tow, 0.0, d.length)?;
         c.range("decoy.x_mrp", d.x_mrp, 0.0, d.length)?;
         for (axis, value) in ["roll", "pitch", "yaw"].iter().zip(d.inertia_cg) {
             c.positive(&format!("decoy.inertia_cg ({axis})"), value)?;
+            c.range(&format!("decoy.inertia_cg ({axis})"), value, 1e-6, 1e4)?;
         }
-        c.finite("decoy.cm_q", d.cm_q)?;
-        c.finite("decoy.cl_p", d.cl_p)?;
+        c.range("decoy.cm_q", d.cm_q, -1e4, 1e4)?;
+        c.range("decoy.cl_p", d.cl_p, -1e4, 1e4)?;
         if d.aero_table.trim().is_empty() {
             return Err(c.invalid(
                 "decoy.aero_table",
@@ -761,6 +811,7 @@ impl SystemConfig {
             10.0,
         )?;
         c.positive("solver.time_step_host", s.time_step_host)?;
+        c.range("solver.time_step_host", s.time_step_host, 1e-6, 0.01)?;
         self.management.validate(&c)?;
         self.envelope.validate(&c)?;
         Ok(())
@@ -923,6 +974,19 @@ struct Checker<'a> {
     file: &'a str,
 }
 
+/// Largest horizontal wind speed a configuration may give, m/s: the strongest
+/// jet-stream cores measured are about 110 m/s.
+pub const MAX_WIND_MPS: f64 = 120.0;
+/// Largest steady vertical wind, m/s (mountain waves reach about 20 m/s).
+pub const MAX_VERTICAL_WIND_MPS: f64 = 25.0;
+/// Largest offset of an aircraft station from the reference point, per body
+/// axis, m: twice the length of the largest towing aircraft (a B-52, 48 m).
+pub const MAX_BODY_OFFSET_M: f64 = 100.0;
+/// Largest magnitude of an aerodynamic coefficient of the table (on the body's
+/// cross-section, so a slender body's broadside drag is large: the reference
+/// table reaches 21.6).
+pub const MAX_AERO_COEFFICIENT: f64 = 50.0;
+
 impl Checker<'_> {
     fn invalid(&self, field: &str, message: String) -> ConfigError {
         ConfigError::Invalid {
@@ -1071,6 +1135,19 @@ pub fn parse_aero_csv(file: &str, text: &str) -> Result<Vec<AeroRow>, ConfigErro
                 ));
             }
             *value = parsed;
+        }
+        for (name, value) in AERO_CSV_HEADER[1..].iter().zip(&values[1..]) {
+            let low = if *name == "cd" {
+                0.0
+            } else {
+                -MAX_AERO_COEFFICIENT
+            };
+            if !(low..=MAX_AERO_COEFFICIENT).contains(value) {
+                return Err(error(
+                    Some(number),
+                    format!("{name} must be between {low} and {MAX_AERO_COEFFICIENT}, got {value}"),
+                ));
+            }
         }
         rows.push(AeroRow {
             alpha_deg: values[0],
@@ -1247,6 +1324,73 @@ mod tests {
             other => panic!("wrong error {other:?}"),
         }
         assert!(err.to_string().contains(&format!("line {line}")), "{err}");
+    }
+
+    /// Issue 27, item 8: every number of the configuration has a physical range.
+    /// Each numeric value of the reference system's TOML (every element of an
+    /// array too) set to a huge value, then to its negative, is rejected as
+    /// `Invalid` naming its own field (`wind_ned = [1e30, 0, 0]` trimmed to
+    /// 4.37e57 N before).
+    #[test]
+    fn every_configuration_number_has_a_physical_range() {
+        let reference: toml::Table = toml::from_str(BUILTIN_TOML).unwrap();
+        let mut checked = 0;
+        for (table, keys) in &reference {
+            let toml::Value::Table(keys) = keys else {
+                continue;
+            };
+            for (key, value) in keys {
+                let elements = match value {
+                    toml::Value::Array(a) => a.len(),
+                    toml::Value::Float(_) => 0,
+                    _ => continue,
+                };
+                for element in 0..elements.max(1) {
+                    for huge in [1e30, -1e30] {
+                        let mut edited = reference.clone();
+                        let slot = edited[table.as_str()]
+                            .as_table_mut()
+                            .unwrap()
+                            .get_mut(key.as_str())
+                            .unwrap();
+                        let slot = match slot {
+                            toml::Value::Array(a) => &mut a[element],
+                            other => other,
+                        };
+                        *slot = toml::Value::Float(huge);
+                        let text = toml::to_string(&edited).unwrap();
+                        let field = format!("{table}.{key}");
+                        match SystemConfig::from_str(&text, BUILTIN_AERO_CSV) {
+                            Err(ConfigError::Invalid { field: named, .. }) => assert!(
+                                named.starts_with(&field),
+                                "{field}[{element}] = {huge}: blamed on {named}"
+                            ),
+                            other => panic!("{field}[{element}] = {huge}: {other:?}"),
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 100, "{checked} values checked");
+        // The aerodynamic table's coefficients too.
+        for (edit, named) in [
+            ("\n0,1e30,0.450000,-0.000000", "cl"),
+            ("\n0,0.000000,-0.1,-0.000000", "cd"),
+            ("\n0,0.000000,0.450000,-1e30", "cm"),
+        ] {
+            let csv = BUILTIN_AERO_CSV.replacen("\n0,0.000000,0.450000,-0.000000", edit, 1);
+            assert_ne!(csv, BUILTIN_AERO_CSV, "the row at 0 degrees");
+            match SystemConfig::from_str(BUILTIN_TOML, &csv) {
+                Err(ConfigError::AeroCsv { message, .. }) => {
+                    assert!(
+                        message.starts_with(&format!("{named} must be between")),
+                        "{message}"
+                    )
+                }
+                other => panic!("{named}: {other:?}"),
+            }
+        }
     }
 
     #[test]

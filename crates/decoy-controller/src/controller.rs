@@ -36,8 +36,16 @@ pub const MAX_STEP_S: f64 = 0.0025;
 /// transverse wave speed at its larger end tension: a thin rod pulled at both
 /// ends swings at sqrt(12) c/l, and RK4 is stable to about 2.8 rad per step.
 pub const WAVE_STEP_FACTOR: f64 = 0.8;
-/// Most RK4 steps one frame may take (a floor of 0.5 ms on a 10 ms frame).
+/// Most RK4 steps one frame may take onboard (a floor of 0.5 ms on a 10 ms
+/// frame; `ControllerConfig::max_steps_per_frame`'s value for the embedded
+/// model).
 pub const MAX_STEPS_PER_FRAME: u32 = 20;
+/// Most RK4 steps one frame may take on a host that runs a finer model than the
+/// embedded one (the bridge's host model, 300 uniform segments): its shortest
+/// segment's wave-speed limit asks for up to about 150 steps in a 100 ms frame
+/// and through the snatch after the 0.20 rad/s pull-up; no frame budget bounds
+/// a host.
+pub const HOST_MAX_STEPS_PER_FRAME: u32 = 4096;
 /// The longest accepted interval between two State frames, s.
 pub const MAX_TIME_JUMP_S: f64 = 0.1;
 /// Rounding allowance of the time-jump check, s: an interval of exactly
@@ -131,6 +139,9 @@ pub struct ControllerConfig<T: Real> {
     /// The operating envelope the controller guarantees (frames outside it are
     /// flagged [`StatusFlags::OUTSIDE_ENVELOPE`]).
     pub envelope: OperatingEnvelope<T>,
+    /// Most RK4 steps one frame may take: [`MAX_STEPS_PER_FRAME`] onboard (the
+    /// frame budget), [`HOST_MAX_STEPS_PER_FRAME`] for a host's finer model.
+    pub max_steps_per_frame: u32,
     /// Work units of the trim each State frame carries on while the controller
     /// initialises: [`trim_slice_units`] onboard (the frame budget); a host
     /// reference that must start its run at the first frame, whatever its
@@ -176,6 +187,22 @@ struct Run {
     start_time_s: f64,
     /// Origin of the solver's positions, NED, m (horizontal position at the trim).
     origin: [f64; 3],
+}
+
+/// The last frame rejected for a time jump (`armed`), until a State frame is
+/// accepted. Plain fields rather than an `Option<f64>`: the controller's
+/// initial constant must be all zero bits to lie in `.bss`.
+#[derive(Clone, Copy, Debug)]
+struct PendingJump {
+    armed: bool,
+    time_s: f64,
+}
+
+impl PendingJump {
+    const NONE: Self = PendingJump {
+        armed: false,
+        time_s: 0.0,
+    };
 }
 
 /// A trim in progress: the controller answers each State frame with a Status
@@ -262,6 +289,13 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     envelope: OperatingEnvelope<T>,
     /// [`ControllerConfig::trim_units_per_frame`].
     trim_units_per_frame: u32,
+    /// [`ControllerConfig::max_steps_per_frame`].
+    max_steps_per_frame: u32,
+    /// The time of the last frame rejected for a time jump, until a State frame
+    /// is accepted: a next frame that follows it (later, within
+    /// [`MAX_TIME_JUMP_S`]) confirms a gap in the stream (docs/protocol.md §4,
+    /// "A gap").
+    pending_jump: PendingJump,
     profile: Profile,
     /// The flight path of the selected built-in profile (None: streamed), made
     /// when the profile is selected.
@@ -319,6 +353,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         allowable_tension_n: T::ZERO,
         envelope: OperatingEnvelope::ZERO,
         trim_units_per_frame: 0,
+        max_steps_per_frame: 0,
+        pending_jump: PendingJump::NONE,
         profile: Profile::Streamed,
         // `Some` of a zero path rather than `None`, whose niche is nonzero bits: the
         // constant must be all zero bits to lie in `.bss` (checked by the HIL
@@ -391,6 +427,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.allowable_tension_n = allowable_tension_n;
         self.envelope = config.envelope;
         self.trim_units_per_frame = config.trim_units_per_frame;
+        self.max_steps_per_frame = config.max_steps_per_frame.max(1);
+        self.pending_jump = PendingJump::NONE;
         self.profile = Profile::Streamed;
         self.builtin = None;
         self.run = None;
@@ -644,6 +682,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             Command::ResetToTrim => {
                 self.run = None;
                 self.init = Initialising::NONE;
+                self.pending_jump = PendingJump::NONE;
                 self.reset_management();
             }
             Command::SelectProfile(profile) => {
@@ -660,6 +699,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 self.builtin = self.builtin_path();
                 self.run = None;
                 self.init = Initialising::NONE;
+                self.pending_jump = PendingJump::NONE;
                 self.reset_management();
             }
             Command::GetStatus => {}
@@ -766,7 +806,28 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 return Solved::Answer(self.reject(seq, RejectReason::TimeNotIncreasing));
             }
             if interval.to_bits() > MAX_INTERVAL_BITS {
-                return Solved::Answer(self.reject(seq, RejectReason::TimeJump));
+                // A gap. This frame is rejected, as a stray time would be; a
+                // next frame that follows it (later, within the jump limit)
+                // confirms that the stream went on without the controller (lost
+                // samples, a failed frame's gap): the run ends and the
+                // controller initialises at that frame (docs/protocol.md §4).
+                let follows = self.pending_jump.armed && {
+                    let d = frame.time_s - self.pending_jump.time_s;
+                    d > 0.0 && d.to_bits() <= MAX_INTERVAL_BITS
+                };
+                if !follows {
+                    self.pending_jump = PendingJump {
+                        armed: true,
+                        time_s: frame.time_s,
+                    };
+                    return Solved::Answer(self.reject(seq, RejectReason::TimeJump));
+                }
+                self.run = None;
+                self.init = Initialising::NONE;
+                self.pending_jump = PendingJump::NONE;
+                self.reset_management();
+                self.counters.gap_restarts = self.counters.gap_restarts.wrapping_add(1);
+                interval = 0.0;
             }
         }
         // The used part only (the rest of `saved` stays zero, as the solver's).
@@ -799,6 +860,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             Ok(Some(advanced)) => advanced,
             Ok(None) => {
                 // A frame of the initialisation: accepted, answered by the Status.
+                self.pending_jump = PendingJump::NONE;
                 self.accepted();
                 self.outside_envelope = !inside;
                 return Solved::Answer(self.status_of(step_instructions));
@@ -841,6 +903,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         });
         self.path.end_into(&mut self.path_end, flown, origin);
         self.wave_rate = self.last_wave_rate();
+        self.pending_jump = PendingJump::NONE;
         self.accepted();
         self.hazard_flags = output.flags
             & (StatusFlags::OVER_TENSION
@@ -1032,28 +1095,31 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.path
             .set_after(&self.path_end, &run.last, flown, run.origin);
         self.path.set_towing(point);
-        let steps =
-            Self::integrate_checked(&mut self.solver, &self.path, saved, flown.time_s, steps)
-                .map_err(|_: SolveError| RejectReason::SolverFailure)?;
+        let steps = Self::integrate_checked(
+            &mut self.solver,
+            &self.path,
+            saved,
+            flown.time_s,
+            steps,
+            self.max_steps_per_frame,
+        )
+        .map_err(|_: SolveError| RejectReason::SolverFailure)?;
         Ok((run.origin, run.start_time_s, steps as u16, steps > nominal))
     }
 
     /// The RK4 steps for a frame `interval` seconds after the last one, whose
     /// [`nominal_steps`] are `nominal`: those and, with the tensions of the last
     /// evaluation (the previous frame's outputs), at most [`WAVE_STEP_FACTOR`]
-    /// l_i / c_i on every segment; at most [`MAX_STEPS_PER_FRAME`]. In steady
+    /// l_i / c_i on every segment; at most `max_steps_per_frame`. In steady
     /// flight the first limit decides (four steps per 10 ms frame for the
     /// reference system); a snatch load (the cable jerked taut after a pull-up)
     /// raises the tension, and with it the wave speed, tenfold for a moment, and
     /// the step shrinks with it.
     fn step_count(&self, interval: f64, nominal: u32) -> u32 {
-        let by_wave = wave_steps(interval, self.wave_rate);
+        let max = self.max_steps_per_frame;
+        let by_wave = wave_steps(interval, self.wave_rate, max);
         let steps = if by_wave > nominal { by_wave } else { nominal };
-        if steps < MAX_STEPS_PER_FRAME {
-            steps
-        } else {
-            MAX_STEPS_PER_FRAME
-        }
+        if steps < max { steps } else { max }
     }
 
     /// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
@@ -1066,7 +1132,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// evaluation there ([`Solver::outputs`]), again with more steps when a step
     /// or the evaluation fails or when the tensions at the end of the frame ask
     /// for more steps than were taken (they rose within the frame), doubling each
-    /// time up to [`MAX_STEPS_PER_FRAME`]; each attempt starts from the frame's
+    /// time up to `max` steps; each attempt starts from the frame's
     /// initial state `start`. Returns the steps of the attempt that stood.
     /// Deterministic: the same state and frames take the same attempts.
     fn integrate_checked(
@@ -1075,6 +1141,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         start: &State<T, N>,
         t1: f64,
         mut steps: u32,
+        max: u32,
     ) -> Result<u32, SolveError> {
         loop {
             // The steps, then the output evaluation at the frame's end, whose
@@ -1083,16 +1150,16 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 .steps_on(path, steps, t1)
                 .and_then(|()| solver.outputs(path).map(drop));
             let wanted = match attempt {
-                Ok(()) => wave_steps(path.span_s(), crate::lookahead::wave_rate_of(solver)),
+                Ok(()) => wave_steps(path.span_s(), crate::lookahead::wave_rate_of(solver), max),
                 Err(_) => 2 * steps,
             };
-            if wanted <= steps || steps >= MAX_STEPS_PER_FRAME {
+            if wanted <= steps || steps >= max {
                 return attempt.map(|()| steps);
             }
             // `start` was the solver's own state: finite and accepted.
             let _ = solver.set_state(*start);
             let doubled = 2 * steps;
-            steps = (if wanted > doubled { wanted } else { doubled }).min(MAX_STEPS_PER_FRAME);
+            steps = (if wanted > doubled { wanted } else { doubled }).min(max);
         }
     }
 
@@ -1259,16 +1326,16 @@ fn nominal_steps(interval: f64) -> u32 {
 
 /// The steps of `dt` the wave-speed limit asks for at the wave-speed rate `rate`
 /// (max_i c_i / l_i, 1/s): ceil(dt rate / [`WAVE_STEP_FACTOR`]); 0 if not finite
-/// (saturating at [`MAX_STEPS_PER_FRAME`] + 1).
-fn wave_steps<T: Real>(dt: f64, rate: T) -> u32 {
+/// (saturating at `max` + 1).
+fn wave_steps<T: Real>(dt: f64, rate: T, max: u32) -> u32 {
     // In T (f64 is emulated on the M4F); an exact integer here is a tie of no
     // consequence either way.
     let steps = (T::lit(dt) * rate * T::lit(1.0 / WAVE_STEP_FACTOR)).ceil();
     if !steps.finite() {
         return 0;
     }
-    if steps > T::from_count(u64::from(MAX_STEPS_PER_FRAME)) {
-        MAX_STEPS_PER_FRAME + 1
+    if steps > T::from_count(u64::from(max)) {
+        max + 1
     } else {
         steps.truncated_index() as u32
     }

@@ -45,9 +45,9 @@ pub mod validate;
 
 pub use controller::{
     CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,
-    DECOY_NEAR_AIRCRAFT_M, InstructionCounter, MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S,
-    MAX_TIME_JUMP_S, NoCounter, PREDICTION_CAPACITY, SILENCE_MS, TIME_TOLERANCE_S,
-    TRIM_SLICE_UNITS, TRIM_SLICE_UNITS_F64, trim_slice_units,
+    DECOY_NEAR_AIRCRAFT_M, HOST_MAX_STEPS_PER_FRAME, InstructionCounter,
+    MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S, MAX_TIME_JUMP_S, NoCounter, PREDICTION_CAPACITY,
+    SILENCE_MS, TIME_TOLERANCE_S, TRIM_SLICE_UNITS, TRIM_SLICE_UNITS_F64, trim_slice_units,
 };
 pub use envelope::{EnvelopeParams, OperatingEnvelope};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};

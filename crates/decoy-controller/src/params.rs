@@ -233,6 +233,7 @@ impl SystemParams {
             management: self.management(),
             envelope: OperatingEnvelope::new(&self.envelope, self.gravity),
             trim_units_per_frame: crate::controller::trim_slice_units::<T>(),
+            max_steps_per_frame: crate::controller::MAX_STEPS_PER_FRAME,
         })
     }
 }

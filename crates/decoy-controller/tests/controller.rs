@@ -179,6 +179,72 @@ fn time_going_backwards_standing_still_or_jumping_is_rejected() {
     output(send(&mut c, frame(6, 0.05 + 0.1)));
 }
 
+/// A gap in the stream (0.2 s without a frame: lost samples, or a frame the
+/// solver failed): the first frame after it is rejected (TimeJump) and leaves
+/// the run as it was; the next, which follows it within the jump limit, ends
+/// the run and the controller initialises there (counted in `gap_restarts`),
+/// answering as a controller started at that frame. Strays are mere
+/// rejections: a far time followed by the stream's own next frame, or two far
+/// times that do not follow each other.
+#[test]
+fn a_gap_in_the_stream_restarts_the_run_and_a_stray_time_does_not() {
+    let mut c = running(5);
+    let t = 0.05 + 0.2;
+    assert_eq!(
+        rejected(send(&mut c, frame(6, t))).1,
+        RejectReason::TimeJump
+    );
+    assert!(c.is_trimmed());
+    assert_eq!(c.counters().gap_restarts, 0);
+    let mut fresh = controller();
+    for k in 0..10u32 {
+        let f = frame(7 + k, t + 0.01 * f64::from(k + 1));
+        let (a, b) = (send(&mut c, f), send(&mut fresh, f));
+        match (&a, &b) {
+            (DeviceMessage::Output(x), DeviceMessage::Output(y)) => {
+                assert_eq!(wire_output(x), wire_output(y), "frame {k} after the gap")
+            }
+            (DeviceMessage::Status(x), DeviceMessage::Status(y)) => {
+                assert!(StatusFlags(x.flags).contains(StatusFlags::INITIALISING));
+                assert_eq!(x.flags, y.flags);
+            }
+            _ => panic!("frame {k} after the gap: {a:?} against a fresh controller's {b:?}"),
+        }
+    }
+    assert_eq!(c.counters().gap_restarts, 1);
+    assert_eq!(c.counters().time_jump, 1);
+    assert!(c.is_trimmed());
+
+    // Two strays that do not follow each other, then the stream's own frame.
+    let mut clean = running(5);
+    let mut tested = running(5);
+    assert_eq!(
+        rejected(send(&mut tested, frame(6, 5.0))).1,
+        RejectReason::TimeJump
+    );
+    assert_eq!(
+        rejected(send(&mut tested, frame(6, 9.0))).1,
+        RejectReason::TimeJump
+    );
+    let next = frame(6, 0.06);
+    assert_eq!(
+        wire_output(&output(send(&mut clean, next))),
+        wire_output(&output(send(&mut tested, next)))
+    );
+    assert_eq!(tested.counters().gap_restarts, 0);
+    // A stray time does not arm a later gap: the stream went on meanwhile.
+    assert_eq!(
+        rejected(send(&mut tested, frame(7, 5.0))).1,
+        RejectReason::TimeJump
+    );
+    output(send(&mut tested, frame(7, 0.07)));
+    assert_eq!(
+        rejected(send(&mut tested, frame(8, 5.01))).1,
+        RejectReason::TimeJump
+    );
+    assert_eq!(tested.counters().gap_restarts, 0);
+}
+
 #[test]
 fn a_reset_accepts_any_time_and_trims_again() {
     let mut c = running(5);

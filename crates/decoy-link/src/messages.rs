@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 5;
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -406,6 +406,9 @@ pub struct Counters {
     pub bad_quaternion: u32,
     /// Silences: times the link fell silent for [`crate::SILENCE_MS`].
     pub silences: u32,
+    /// Gaps: times a frame that followed one rejected for a time jump ended
+    /// the run and started the initialisation afresh (docs/protocol.md §4).
+    pub gap_restarts: u32,
 }
 
 impl Counters {
@@ -427,6 +430,7 @@ impl Counters {
         wrong_mode: 0,
         bad_quaternion: 0,
         silences: 0,
+        gap_restarts: 0,
     };
 
     /// Counts one rejection for `reason` and returns the new count.

@@ -101,6 +101,7 @@ fn counters(r: &mut Rng) -> Counters {
         wrong_mode: r.u32(),
         bad_quaternion: r.u32(),
         silences: r.u32(),
+        gap_restarts: r.u32(),
     }
 }
 
@@ -422,7 +423,7 @@ fn encode_reports_a_short_buffer() {
 }
 
 /// The example of docs/protocol.md and firmware/README.md, byte for byte: the
-/// ping and its answer (protocol version 5).
+/// ping and its answer (protocol version 6).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
@@ -436,6 +437,6 @@ fn the_documented_ping_frame() {
     };
     assert_eq!(
         wire(&pong),
-        [0x00, 0x08, 0x03, 0x07, 0x05, 0x03, 0x05, 0x2c, 0xc2, 0x00]
+        [0x00, 0x08, 0x03, 0x07, 0x06, 0xb9, 0x54, 0x25, 0x5b, 0x00]
     );
 }

@@ -153,7 +153,17 @@ fn host<T: Real, const N: usize>(
     let mut controller_config = config
         .controller_config::<T>(layout::<T>(segments, grading))
         .map_err(|e| BridgeError::Usage(format!("the model: {e}")))?;
-    if trim_at_once {
+    // A finer model than the embedded one (the host model of 300 segments) has no
+    // frame budget to keep, and the wave-speed limit of its short segments asks
+    // for more steps than the onboard 20 in a 100 ms frame or a snatch: it takes
+    // what it needs and trims in the first frame. The embedded model behaves as
+    // onboard (the firmware's bit-exact reference).
+    let embedded = segments == config.solver.segments_embedded
+        && grading == config.solver.grading_ratio_embedded;
+    if !embedded {
+        controller_config.max_steps_per_frame = decoy_controller::HOST_MAX_STEPS_PER_FRAME;
+    }
+    if trim_at_once || !embedded {
         controller_config.trim_units_per_frame = u32::MAX;
     }
     let controller = Controller::<T, N>::new(controller_config)
