@@ -304,9 +304,6 @@ def main(argv: list[str] | None = None) -> int:
             if builtin_summary is not None and (bdir / "timeseries.csv").is_file():
                 builtin = read_csv(bdir / "timeseries.csv")
 
-    def lateral(rows_lat: list[float]) -> float | None:
-        return max(rows_lat, key=abs) if rows_lat else None
-
     comparison = {
         "manoeuvre": a.manoeuvre,
         "rate_radps": a.rate,
@@ -317,7 +314,7 @@ def main(argv: list[str] | None = None) -> int:
             "max_tension_connection_N": summary.get("max_tension_connection_N"),
             "min_cable_clearance_to_exhaust_m": summary.get("min_cable_clearance_to_exhaust_m"),
             "min_decoy_clearance_to_aircraft_m": summary.get("min_decoy_clearance_to_aircraft_m"),
-            "max_abs_decoy_cg_lateral_m": lateral([r["decoy_cg_lateral_m"] for r in rows]),
+            "max_abs_decoy_cg_lateral_m": flight.largest_magnitude(r["decoy_cg_lateral_m"] for r in rows),
             "max_load_factor": max(s.extra["load_factor"] for s in traj) if traj else None,
             "final_mach": traj[-1].extra["mach"] if traj else None,
             "final_flight_path_deg": traj[-1].extra["flight_path_deg"] if traj else None,
@@ -334,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
             "max_tension_connection_N": builtin_summary.get("max_tension_connection_N"),
             "min_cable_clearance_to_exhaust_m": builtin_summary.get("min_cable_clearance_to_exhaust_m"),
             "min_decoy_clearance_to_aircraft_m": builtin_summary.get("min_decoy_clearance_to_aircraft_m"),
-            "max_abs_decoy_cg_lateral_m": lateral(builtin.get("decoy_cg_lateral_m", [])),
+            "max_abs_decoy_cg_lateral_m": flight.largest_magnitude(builtin.get("decoy_cg_lateral_m", [])),
             "latency_us": builtin_summary.get("latency_us"),
             "wall_s": builtin_summary.get("wall_s"),
         },

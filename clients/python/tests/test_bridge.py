@@ -3,6 +3,7 @@ lockstep, rejections, free-running, commands, timeouts, the JSBSim F-16."""
 
 from __future__ import annotations
 
+import csv
 import ctypes
 import json
 import math
@@ -267,3 +268,10 @@ def test_example_writes_feeds_keys_and_plots(bridge, decoy, tmp_path):
                  "clearances.png", "load-factor.png"):
         assert (out / name).is_file(), name
     assert "peak connection tension" in done.stdout
+    # The largest absolute lateral offset of each side: |x| of the largest |x|.
+    comparison = json.loads((out / "comparison.json").read_text())
+    for side, csv_path in (("f16", out / "timeseries.csv"), ("builtin", out / "builtin" / "timeseries.csv")):
+        with csv_path.open() as f:
+            lateral = [abs(float(r["decoy_cg_lateral_m"])) for r in csv.DictReader(f)]
+        assert comparison[side]["max_abs_decoy_cg_lateral_m"] == pytest.approx(max(lateral), abs=1e-6), side
+        assert comparison[side]["max_abs_decoy_cg_lateral_m"] >= 0.0, side

@@ -3,16 +3,17 @@
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
 use decoy_sim::Scenario;
 use host_bridge::affinity::{Cpus, current_list, pin_process, shown};
-use host_bridge::backend::{BackendKind, BackendOptions, Precision, make_backend};
+use host_bridge::backend::{
+    BackendKind, BackendOptions, Precision, describe_backend, make_backend,
+};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
-use host_bridge::feed::{FeedMode, FeedOptions, FeedRun, run_feed};
+use host_bridge::feed::{FeedError, FeedMode, FeedOptions, FeedRun, answer_timeout, run_feed};
 use host_bridge::services::{check_instance, iox_config, quiet_iceoryx_log};
 
 use crate::progress::Progress;
@@ -36,7 +37,7 @@ pub struct BridgeArgs {
     #[arg(long, value_enum)]
     precision: Option<PrecisionArg>,
     /// Cable segments (default: the configuration's solver.segments_embedded; host: up to 512).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
     /// Length ratio of neighbouring segments, short at the decoy (default: solver.grading_ratio_embedded; 1 = uniform).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
@@ -73,7 +74,12 @@ pub struct FeedArgs {
     #[arg(long)]
     no_plots: bool,
     /// Deadline of each answer, s.
-    #[arg(long, value_name = "S", default_value_t = 5.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 5.0,
+        allow_negative_numbers = true
+    )]
     timeout: f64,
     /// Run on these CPUs only (Linux list format: 0, 0,2, 0-3). Lockstep is fastest on the bridge's core (docs/bridge.md, "Cores").
     #[arg(long, value_name = "LIST")]
@@ -253,12 +259,7 @@ pub fn layout_command(json: bool) -> Result<String, Failure> {
 
 pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Result<String, Failure> {
     check_instance(&args.instance).map_err(bridge_failure)?;
-    if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        return Err(usage(format!(
-            "--timeout must be a positive number of seconds, got {}",
-            args.timeout
-        )));
-    }
+    let timeout = answer_timeout(args.timeout).map_err(bridge_failure)?;
     let scenario = Scenario::load(&args.scenario)?;
     pin(args.cpu.as_deref())?;
     quiet_iceoryx_log();
@@ -274,17 +275,18 @@ pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Resul
         rate: args.rate,
         out_dir: args.out.clone(),
         plots: !args.no_plots,
-        timeout: Duration::from_secs_f64(args.timeout),
+        timeout,
     };
+    // SIGINT and SIGTERM stop the flight at the next frame: host-bridge's
+    // handlers, chained after the client node's iceoryx2 handler (which would
+    // replace ones installed before it).
     let mut bar = Progress::new("feeding the bridge", json);
     let result = run_feed(config, &scenario, &options, &iox, |f| bar.update(f));
     bar.finish();
-    let run = result.map_err(|e| {
-        if e.is_usage() {
-            Failure::Usage(e.to_string())
-        } else {
-            Failure::Solver(e.to_string())
-        }
+    let run = result.map_err(|e| match &e {
+        FeedError::Interrupted { signal, .. } => Failure::interrupted(signal, e.to_string()),
+        _ if e.is_usage() => Failure::Usage(e.to_string()),
+        _ => Failure::Solver(e.to_string()),
     })?;
     if json {
         let mut text = serde_json::to_string_pretty(&run.summary)
@@ -301,11 +303,10 @@ fn feed_text(run: &FeedRun) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "Feed `{}` through bridge {} ({} {}, f{}, {} segments), {}{}",
+        "Feed `{}` through bridge {} ({}, f{}, {} segments), {}{}",
         r.scenario,
         f.instance,
-        f.backend,
-        f.board,
+        describe_backend(&f.backend, &f.board),
         f.precision_bits,
         r.segments,
         f.mode,

@@ -20,8 +20,10 @@
 //!   iceoryx2 (`host_bridge`, docs/bridge.md).
 //!
 //! Human-readable output by default, `--json` for machines. Errors are one line
-//! `error: ...` on stderr; the exit code is 2 for usage and configuration errors and
-//! 1 when the solver fails.
+//! `error: ...` on stderr; the exit code is 2 for usage and configuration errors,
+//! 1 when the solver fails, and 130 or 143 when SIGINT or SIGTERM stopped
+//! `decoy simulate`, `decoy hil` or `decoy feed` (which then write what they
+//! flew; a second signal ends them at once: `signals`).
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -30,6 +32,7 @@ use std::process::ExitCode;
 
 mod bridge_cmd;
 mod progress;
+mod signals;
 mod studies;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -108,7 +111,7 @@ struct HilArgs {
     #[arg(long, value_enum, default_value_t = BoardArg::M4)]
     board: BoardArg,
     /// Cable segments (default: the configuration's solver.segments_embedded; another count builds a firmware variant).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
     /// Simulated time, s (default: the scenario's).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
@@ -142,13 +145,13 @@ enum BoardArg {
 #[derive(Args, Debug)]
 struct PendulumArgs {
     /// Number of rods.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: usize,
     /// End of the simulated interval, s.
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
     t_end: f64,
     /// RK4 time step, s.
-    #[arg(long, value_name = "DT")]
+    #[arg(long, value_name = "DT", allow_negative_numbers = true)]
     dt: f64,
     /// Sample times, s, comma separated; each a whole number of time steps, at most --t-end.
     #[arg(long, value_name = "t1,t2,...", value_delimiter = ',', num_args = 1.., required = true, allow_negative_numbers = true)]
@@ -167,7 +170,7 @@ struct TrimArgs {
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     mach: f64,
     /// Number of cable segments (default: the configuration's solver.segments_host).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
     /// Grade the segments geometrically by this length ratio, short at the decoy (1 = uniform).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
@@ -180,7 +183,7 @@ struct SimulateArgs {
     #[arg(long, value_name = "NAME|FILE")]
     scenario: String,
     /// Number of cable segments (default: the scenario's, else the configuration's solver.segments_host).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
     /// Grade the segments geometrically by this length ratio, short at the decoy (1 = uniform).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
@@ -236,6 +239,14 @@ enum Failure {
     Usage(String),
     /// The solver could not produce a result: exit code 1.
     Solver(String),
+    /// A signal stopped the run (its outputs are written): exit code 130
+    /// (SIGINT) or 143 (SIGTERM), [`signals::exit_code`].
+    Interrupted {
+        /// What stopped where, and where the outputs are.
+        message: String,
+        /// The exit code.
+        code: u8,
+    },
 }
 
 impl Failure {
@@ -243,18 +254,28 @@ impl Failure {
         match self {
             Failure::Usage(_) => 2,
             Failure::Solver(_) => 1,
+            Failure::Interrupted { code, .. } => *code,
         }
     }
     fn message(&self) -> &str {
         match self {
-            Failure::Usage(m) | Failure::Solver(m) => m,
+            Failure::Usage(m) | Failure::Solver(m) | Failure::Interrupted { message: m, .. } => m,
+        }
+    }
+    /// The signal `signal` stopped the run: `message` says where.
+    fn interrupted(signal: &str, message: String) -> Self {
+        Failure::Interrupted {
+            message,
+            code: signals::exit_code(signal),
         }
     }
 }
 
 impl From<SimError> for Failure {
     fn from(e: SimError) -> Self {
-        if e.is_usage() {
+        if let SimError::Interrupted { signal, .. } = &e {
+            Failure::interrupted(signal, e.to_string())
+        } else if e.is_usage() {
             Failure::Usage(e.to_string())
         } else {
             Failure::Solver(e.to_string())
@@ -413,10 +434,28 @@ fn simulate_command(
         out_dir: args.out.clone(),
         plots: !args.no_plots,
     };
+    // SIGINT and SIGTERM stop the run at a step boundary (module `signals`).
+    let interrupts = signals::Interrupts::install()?;
     let mut bar = Progress::new("simulating", json);
-    let result = decoy_sim::simulate(config, &scenario, &options, |f| bar.update(f));
+    let result = decoy_sim::simulate_until(
+        config,
+        &scenario,
+        &options,
+        |f| bar.update(f),
+        || interrupts.received(),
+    );
     bar.finish();
     let run = result?;
+    if let Some(signal) = interrupts.received() {
+        // After the last step: the run and its files are complete.
+        return Err(Failure::interrupted(
+            signal,
+            format!(
+                "interrupted by {signal} after the last step; the outputs in {} are complete",
+                run.out_dir.display()
+            ),
+        ));
+    }
     if json {
         let mut text = serde_json::to_string_pretty(&run.summary)
             .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
@@ -597,15 +636,23 @@ fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<Stri
         plots: !args.no_plots,
         firmware: args.firmware.clone(),
     };
+    // SIGINT and SIGTERM stop the flight at the next frame (module `signals`).
+    let interrupts = signals::Interrupts::install()?;
     let mut bar = Progress::new("flying on the firmware", json);
-    let result = decoy_hil::hil_run::run_hil(config, &scenario, &options, |f| bar.update(f));
+    let result = decoy_hil::hil_run::run_hil_until(
+        config,
+        &scenario,
+        &options,
+        |f| bar.update(f),
+        || interrupts.received(),
+    );
     bar.finish();
-    let run = result.map_err(|e| {
-        if e.is_usage() {
-            Failure::Usage(e.to_string())
-        } else {
-            Failure::Solver(e.to_string())
+    let run = result.map_err(|e| match &e {
+        decoy_hil::hil_run::HilError::Interrupted { signal, .. } => {
+            Failure::interrupted(signal, e.to_string())
         }
+        _ if e.is_usage() => Failure::Usage(e.to_string()),
+        _ => Failure::Solver(e.to_string()),
     })?;
     if json {
         let mut text = serde_json::to_string_pretty(&run.summary)

@@ -14,9 +14,9 @@ use decoy_sim::sweep::{
 };
 use decoy_sim::sweep::{
     SettlingSpec, SettlingSweep, StationVariable, SteadySweep, SteadySweepSpec, SteadyVariable,
-    SweepRange, layout, layout_parts, settling_sweep, steady_sweep, write_settling_sweep,
-    write_steady_sweep,
+    SweepRange, settling_sweep, steady_sweep, write_settling_sweep, write_steady_sweep,
 };
+use decoy_sim::trim::host_layout;
 use serde::Serialize;
 
 use crate::progress::Progress;
@@ -83,7 +83,7 @@ pub struct SweepArgs {
     altitude: Option<f64>,
     /// Cable segments (default: speed and altitude the configuration's host model,
     /// tow-point and cg its embedded model).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
     /// Segment length ratio, short at the decoy (1 = uniform; default as --segments).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
@@ -221,17 +221,12 @@ pub fn sweep_command(
                 not_for(args.kind, flag, given, "tow-point, cg, static-margin")?;
             }
             let (default, mach, altitude) = SteadySweepSpec::paper_range(variable);
-            let host = layout_parts(&config.host_layout());
             let spec = SteadySweepSpec {
                 variable,
                 values: range(args, default)?,
                 mach: args.mach.unwrap_or(mach),
                 altitude_m: args.altitude.unwrap_or(altitude),
-                layout: layout(
-                    args.segments.unwrap_or(host.0),
-                    args.grading
-                        .unwrap_or(if args.segments.is_some() { 1.0 } else { host.1 }),
-                )?,
+                layout: host_layout(config, args.segments, args.grading)?,
             };
             let sweep = steady_sweep(config, &spec, |f| bar.update(f));
             bar.finish();

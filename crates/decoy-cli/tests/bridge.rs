@@ -263,6 +263,7 @@ fn a_killed_bridge_times_out_its_client_and_restarts_cleanly() {
 fn feed_without_a_bridge_fails_plainly() {
     let iso = Isolated::new().unwrap();
     let dir = std::env::temp_dir().join(format!("decoy-bridge-none-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
     let started = Instant::now();
     let out = feed(&iso, "absent", &dir, &["--scenario", "steady"]);
     assert_eq!(out.status.code(), Some(1));
@@ -274,6 +275,33 @@ fn feed_without_a_bridge_fails_plainly() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(started.elapsed() < Duration::from_secs(10));
     assert!(!dir.exists());
+    // Issue 27, item 5: into the directory of an earlier run, a feed that fails
+    // before it starts leaves none of that run's files (its summary least of
+    // all) to be taken for its own; other files stay.
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in [
+        "summary.json",
+        "timeseries.csv",
+        "cable.csv",
+        "tensions.svg",
+        "notes.txt",
+    ] {
+        std::fs::write(dir.join(name), "an earlier run's\n").unwrap();
+    }
+    let out = feed(&iso, "absent", &dir, &["--scenario", "steady"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(names_in(&dir), ["notes.txt"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The names of the files in `dir`, sorted.
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
 }
 
 /// `decoy feed` writes what `decoy hil` writes plus its own keys; lockstep over
@@ -284,6 +312,18 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
     let iso = Isolated::new().unwrap();
     let child = bridge(&iso, "files", &[]);
     let dir = std::env::temp_dir().join(format!("decoy-bridge-files-{}", std::process::id()));
+    // Issue 27, item 5: an earlier `decoy simulate`'s files in the directory
+    // are removed (a feed writes no cable.csv and no cable plots).
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for stale in [
+        "cable.csv",
+        "cable-side.png",
+        "cable-top.svg",
+        "tensions.svg.partial",
+    ] {
+        std::fs::write(dir.join(stale), "an earlier run's\n").unwrap();
+    }
     for mode in ["lockstep", "free"] {
         let out = feed(
             &iso,
@@ -349,6 +389,14 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
             assert!(m["first_violation_s"].is_null(), "{mode} {r}: {m}");
         }
         assert!(csv.lines().next().unwrap().contains("exhaust_margin_m"));
+        for stale in [
+            "cable.csv",
+            "cable-side.png",
+            "cable-top.svg",
+            "tensions.svg.partial",
+        ] {
+            assert!(!dir.join(stale).exists(), "{mode}: {stale} left");
+        }
     }
     signal(&child, "INT");
     assert!(child.wait_with_output().unwrap().status.success());
@@ -474,4 +522,101 @@ fn the_layout_json_describes_every_type() {
         String::from_utf8_lossy(&text.stdout)
             .contains("AircraftState (decoy.bridge.v3.AircraftState): size 104, align 8")
     );
+}
+
+/// Issue 27, item 9: the human summaries of the bridge and of a feed name the
+/// host backend once ("host", not "host host"), a qemu one with its board.
+#[test]
+fn the_human_summaries_name_the_backend_once() {
+    let iso = Isolated::new().unwrap();
+    let child = bridge(&iso, "words", &[]);
+    let dir = std::env::temp_dir().join(format!("decoy-bridge-words-{}", std::process::id()));
+    let out = feed(
+        &iso,
+        "words",
+        &dir,
+        &["--scenario", "steady", "--t-end", "0.2", "--no-plots"],
+    );
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("through bridge words (host, f32, "), "{text}");
+    assert!(!text.contains("host host"), "{text}");
+    signal(&child, "INT");
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("bridge words (host, f32, "), "{text}");
+    assert!(!text.contains("host host"), "{text}");
+    assert_eq!(
+        host_bridge::backend::describe_backend("qemu", "m4"),
+        "qemu m4"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 27, item 6, for `decoy feed`: SIGINT or SIGTERM stops the flight at
+/// the next frame with 130 or 143; the frames flown are written whole and the
+/// summary says it stopped and why.
+#[test]
+fn a_feed_stops_cleanly_on_sigint_and_sigterm() {
+    let iso = Isolated::new().unwrap();
+    let child = bridge(&iso, "stopfeed", &[]);
+    for (sig, code) in [("INT", 130), ("TERM", 143)] {
+        let dir = std::env::temp_dir().join(format!(
+            "decoy-bridge-stopfeed-{sig}-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut watcher =
+            BridgeClient::connect("stopfeed", &format!("watch-{sig}"), &iso.config).unwrap();
+        let before = watcher.get_status().unwrap().counters.accepted;
+        let feeding = Command::new(DECOY)
+            .args(["feed", "--instance", "stopfeed", "--out"])
+            .arg(&dir)
+            .args([
+                "--scenario",
+                "steady",
+                "--t-end",
+                "60",
+                "--realtime",
+                "--no-plots",
+                "--json",
+            ])
+            .envs(iso.env())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Flying: a second of frames accepted.
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while watcher.get_status().unwrap().counters.accepted < before + 100 {
+            assert!(Instant::now() < deadline, "SIG{sig}: the feed did not fly");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        drop(watcher);
+        signal(&feeding, sig);
+        let out = feeding.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "SIG{sig}: {stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: interrupted by SIG{sig} after t = ")),
+            "{stderr}"
+        );
+        let summary: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            summary["stopped"]["reason"],
+            format!("interrupted by SIG{sig}")
+        );
+        let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
+        assert!(csv.ends_with('\n'));
+        let columns = csv.lines().next().unwrap().split(',').count();
+        assert!(csv.lines().count() > 10, "{csv}");
+        assert!(csv.lines().all(|l| l.split(',').count() == columns));
+        assert!(names_in(&dir).iter().all(|n| !n.ends_with(".partial")));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    signal(&child, "INT");
+    assert!(child.wait_with_output().unwrap().status.success());
 }

@@ -1046,6 +1046,11 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
     // The same ELF given with --firmware (as an installed `decoy` would): the
     // same answers, and the summary says where the firmware came from.
     let elf = summary["elf"].as_str().unwrap().to_owned();
+    // Issue 27, item 5: written into a directory of an earlier `decoy simulate`
+    // (and of the run above), the directory holds this run's files only.
+    for stale in ["cable.csv", "cable-side.svg", "tension-profile.png"] {
+        std::fs::write(dir.join(stale), "an earlier run's\n").unwrap();
+    }
     let given = json(&[
         "hil",
         "--scenario",
@@ -1060,6 +1065,11 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
         "--json",
     ]);
     assert_eq!(given["firmware_source"], "given with --firmware");
+    assert_eq!(
+        file_names(&dir),
+        ["firmware.log", "summary.json", "timeseries.csv"],
+        "only the --no-plots run's files"
+    );
     // The same ELF on the wrong board: its Hello names its own.
     let wrong = decoy(&[
         "hil",
@@ -1081,6 +1091,8 @@ fn hil_flies_the_firmware_and_writes_the_outputs() {
         stderr.contains("built for the board mps2-an386"),
         "{stderr}"
     );
+    // A run that fails before it starts leaves no earlier summary behind.
+    assert!(file_names(&dir).is_empty(), "{:?}", file_names(&dir));
     assert_eq!(given["elf"], elf.as_str());
     assert_eq!(
         num(&given, "max_tension_diff_vs_host_same_precision_N"),
@@ -1143,4 +1155,282 @@ fn hil_rejects_a_firmware_that_is_not_an_elf() {
     assert_eq!(out.status.code(), Some(2), "{out:?}");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("not a readable ELF"), "{stderr}");
+}
+
+/// The names of the files in `dir`, sorted.
+fn file_names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Every row of the CSV file `path` has the header's number of fields, each a
+/// number (or empty); returns the rows (header left out).
+fn full_rows(path: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(text.ends_with('\n'), "{}: cut mid-row", path.display());
+    let mut lines = text.lines();
+    let columns = lines.next().unwrap().split(',').count();
+    lines
+        .enumerate()
+        .map(|(i, line)| {
+            let fields: Vec<String> = line.split(',').map(str::to_owned).collect();
+            assert_eq!(
+                fields.len(),
+                columns,
+                "{} row {}: {line}",
+                path.display(),
+                i + 1
+            );
+            for f in &fields {
+                assert!(
+                    f.is_empty() || f.parse::<f64>().is_ok(),
+                    "{} row {}: `{f}`",
+                    path.display(),
+                    i + 1
+                );
+            }
+            fields
+        })
+        .collect()
+}
+
+/// Issue 27, item 6: SIGINT or SIGTERM stops `decoy simulate` at a step boundary
+/// with 130 or 143; the summary says it stopped and why, the CSV files hold whole
+/// rows up to that step, the plots are complete, and no `.partial` file is left.
+#[test]
+fn simulate_stops_cleanly_on_sigint_and_sigterm() {
+    for (signal, code) in [("INT", 130), ("TERM", 143)] {
+        let out = sim_out(&format!("signal-{signal}"));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_decoy"))
+            .args(["simulate", "--scenario", "turn", "--t-end", "600", "--out"])
+            .arg(&out)
+            .arg("--json")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Well into the integration: the time series being written (under its
+        // partial name).
+        let written = || {
+            ["timeseries.csv.partial", "timeseries.csv"]
+                .iter()
+                .map(|name| std::fs::metadata(out.join(name)).map_or(0, |m| m.len()))
+                .max()
+                .unwrap_or(0)
+        };
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+        while written() < 100_000 {
+            assert!(
+                std::time::Instant::now() < deadline,
+                "SIG{signal}: the run did not start"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        let sent = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let status = child.wait().unwrap();
+        let mut stderr = String::new();
+        std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+        assert_eq!(status.code(), Some(code), "SIG{signal}: {stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: interrupted by SIG{signal} at t = ")),
+            "{stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+
+        let summary: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let stopped = &summary["stopped"];
+        assert_eq!(stopped["reason"], format!("interrupted by SIG{signal}"));
+        let t_s = num(stopped, "t_s");
+        assert!(t_s > 0.0 && t_s < 600.0, "{summary}");
+        assert!(num(&summary["final"], "tension_connection_N").is_finite());
+        let rows = full_rows(&out.join("timeseries.csv"));
+        let last: f64 = rows.last().unwrap()[0].parse().unwrap();
+        assert_eq!(last, t_s, "the last row is the stopping state");
+        let cable = full_rows(&out.join("cable.csv"));
+        let cable_last: f64 = cable.last().unwrap()[0].parse().unwrap();
+        assert_eq!(cable_last, t_s, "the last snapshot is the stopping state");
+        let names = file_names(&out);
+        assert!(
+            names.iter().all(|n| !n.ends_with(".partial")),
+            "SIG{signal}: {names:?}"
+        );
+        for plot in ["tensions", "attitude", "cable-side", "management"] {
+            let svg = std::fs::read_to_string(out.join(format!("{plot}.svg"))).unwrap();
+            assert!(svg.trim_end().ends_with("</svg>"), "{plot}.svg is cut");
+            assert!(out.join(format!("{plot}.png")).is_file(), "{plot}.png");
+        }
+        let _ = std::fs::remove_dir_all(&out);
+    }
+}
+
+/// Issue 27, item 5: a run's directory holds only its own files; partial files
+/// of a killed run are removed too, other files stay.
+#[test]
+fn simulate_removes_an_earlier_runs_partial_files() {
+    let out = sim_out("partial-leftovers");
+    std::fs::create_dir_all(&out).unwrap();
+    for name in [
+        "timeseries.csv.partial",
+        "tensions.svg.partial",
+        "firmware.log",
+        "instructions.svg",
+        "notes.txt",
+    ] {
+        std::fs::write(out.join(name), "left by an earlier run\n").unwrap();
+    }
+    stdout_of(&[
+        "simulate",
+        "--scenario",
+        "steady",
+        "--segments",
+        "8",
+        "--t-end",
+        "0.2",
+        "--no-plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        file_names(&out),
+        ["cable.csv", "notes.txt", "summary.json", "timeseries.csv"]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Issue 27, item 7: numbers that do not fit a duration or a frame count are
+/// usage errors (exit 2) naming the flag, never a panic or a saturated count.
+#[test]
+fn huge_numbers_are_usage_errors() {
+    for timeout in ["2e19", "1e-10", "inf", "1e6"] {
+        let e = error_of(
+            &[
+                "feed",
+                "--instance",
+                "absent",
+                "--scenario",
+                "steady",
+                "--timeout",
+                timeout,
+            ],
+            2,
+        );
+        assert!(e.contains("--timeout must be"), "{timeout}: {e}");
+        assert!(!e.contains("panicked"), "{e}");
+    }
+    // More frames than a run keeps: refused before the bridge is looked for.
+    let e = error_of(
+        &[
+            "feed",
+            "--instance",
+            "absent",
+            "--scenario",
+            "steady",
+            "--t-end",
+            "1e5",
+        ],
+        2,
+    );
+    assert!(e.contains("--t-end 100000 s needs 1e7 frames"), "{e}");
+    let e = error_of(&["hil", "--scenario", "steady", "--t-end", "1e5"], 2);
+    assert!(e.contains("--t-end 100000 s needs 1e7 frames"), "{e}");
+}
+
+/// Issue 27, item 9: a value is blamed where it came from, a grading that
+/// overflows says so, and negative numbers are values, not flags.
+#[test]
+fn messages_name_the_source_and_the_problem() {
+    let dir = config_copy("segments-600", |t| {
+        t.replacen("segments_host = 300 ", "segments_host = 600 ", 1)
+            .replacen("segments_embedded = ", "segments_embedded = 600 #", 1)
+    });
+    let path = dir.join("system.toml");
+    let config = path.to_str().unwrap();
+    for args in [
+        vec!["trim", "--altitude", "9000", "--mach", "0.8"],
+        vec!["sweep", "speed", "--out", dir.to_str().unwrap()],
+    ] {
+        let mut all = vec!["--config", config];
+        all.extend(&args);
+        let e = error_of(&all, 2);
+        assert!(
+            e.contains("system.toml: solver.segments_host must be between 1 and 512, got 600"),
+            "{args:?}: {e}"
+        );
+        assert!(!e.contains("command line"), "{args:?}: {e}");
+    }
+    let e = error_of(&["--config", config, "bridge", "--instance", "blame"], 2);
+    assert!(
+        e.contains("system.toml: solver.segments_embedded must be between 1 and 512"),
+        "{e}"
+    );
+    // The flag when it is the flag's value.
+    let e = error_of(
+        &[
+            "trim",
+            "--altitude",
+            "9000",
+            "--mach",
+            "0.8",
+            "--segments",
+            "600",
+        ],
+        2,
+    );
+    assert!(e.contains("command line: --segments"), "{e}");
+    let _ = std::fs::remove_dir_all(dir);
+
+    for command in [
+        vec!["trim", "--altitude", "9000", "--mach", "0.8"],
+        vec!["simulate", "--scenario", "steady", "--t-end", "0.1"],
+    ] {
+        let mut args = command.clone();
+        args.extend(["--segments", "512", "--grading", "10"]);
+        let e = error_of(&args, 2);
+        assert!(
+            e.contains("grading ratio 10 over 512 segments overflows"),
+            "{command:?}: {e}"
+        );
+        assert!(!e.contains("not a finite number"), "{e}");
+    }
+
+    let e = error_of(
+        &[
+            "feed",
+            "--instance",
+            "absent",
+            "--scenario",
+            "steady",
+            "--timeout",
+            "-1",
+        ],
+        2,
+    );
+    assert!(
+        e.contains("--timeout must be") && e.contains("got -1"),
+        "{e}"
+    );
+    for command in [
+        vec!["simulate", "--scenario", "steady"],
+        vec!["trim", "--altitude", "9000", "--mach", "0.8"],
+        vec!["hil", "--scenario", "steady"],
+        vec!["bridge", "--instance", "negative"],
+    ] {
+        let mut args = command.clone();
+        args.extend(["--segments", "-1"]);
+        let e = error_of(&args, 2);
+        assert!(
+            e.contains("invalid value '-1' for '--segments"),
+            "{command:?}: {e}"
+        );
+    }
 }

@@ -37,9 +37,39 @@ pub fn scenario_frames<P: FlightPath<f64>>(path: &P, count: u32) -> Vec<Aircraft
         .collect()
 }
 
-/// Frames needed to fly `t_end` seconds: the last one at or just after `t_end`.
+/// Frames needed to fly `t_end` seconds: the last one at or just after `t_end`
+/// (for a `t_end` of at most [`MAX_FRAMES`] frames; a run's, from the user,
+/// goes through [`checked_frame_count`]).
 pub fn frame_count(t_end: f64) -> u32 {
     (t_end / CONTROL_PERIOD_S - 1e-9).ceil().max(1.0) as u32
+}
+
+/// The most frames one run of `decoy hil` or `decoy feed` flies: 10 000 s of
+/// 10 ms frames (2.8 h). Every frame, its answers and the host's replay are
+/// kept in memory until the files are written.
+pub const MAX_FRAMES: u32 = 1_000_000;
+
+/// [`frame_count`] of a run's `t_end`, checked: a message for a usage error
+/// when it needs more than [`MAX_FRAMES`] (never a saturated count).
+/// `from_flag`: `t_end` is `--t-end`'s (else the scenario's `t_end_s`), for the
+/// message.
+pub fn checked_frame_count(t_end: f64, from_flag: bool) -> Result<u32, String> {
+    let frames = (t_end / CONTROL_PERIOD_S - 1e-9).ceil().max(1.0);
+    if frames.is_finite() && frames <= f64::from(MAX_FRAMES) {
+        return Ok(frames as u32);
+    }
+    Err(format!(
+        "{} {} s needs {} frames of {} s, more than the {MAX_FRAMES} ({} s) one run flies",
+        if from_flag {
+            "--t-end"
+        } else {
+            "the scenario's t_end_s"
+        },
+        decoy_sim::format::format_number(t_end),
+        decoy_sim::format::format_number(frames),
+        decoy_sim::format::format_number(CONTROL_PERIOD_S),
+        decoy_sim::format::format_number(f64::from(MAX_FRAMES) * CONTROL_PERIOD_S),
+    ))
 }
 
 /// Every manoeuvre the product ships, as issue 14's accuracy and worst-frame
@@ -542,6 +572,13 @@ mod tests {
         assert_eq!(frame_count(10.0), 1000);
         assert_eq!(frame_count(0.015), 2);
         assert_eq!(frame_count(0.0), 1);
+        assert_eq!(checked_frame_count(10.0, true), Ok(1000));
+        assert_eq!(checked_frame_count(10_000.0, true), Ok(MAX_FRAMES));
+        let e = checked_frame_count(1e7, false).unwrap_err();
+        assert!(
+            e.starts_with("the scenario's t_end_s 1e7 s needs 1e9 frames"),
+            "{e}"
+        );
     }
 
     /// The harness against the host controller on the other end of a real TCP

@@ -2,6 +2,13 @@
 //! the link, beside the host's replay of the same frames, written as `decoy
 //! simulate` writes its runs (`timeseries.csv`, `summary.json`, plots; see
 //! `docs/outputs.md`).
+//!
+//! The output directory follows `decoy simulate`'s rule: once the options and
+//! the firmware are checked, the files an earlier run left there are removed
+//! ([`decoy_sim::clear_output_dir`]) before the firmware is built and booted, and
+//! every file is written whole. A stop request ([`run_hil_until`]: the command
+//! line's SIGINT or SIGTERM) ends the flight at the next frame; the frames flown
+//! are written and the result is [`HilError::Interrupted`].
 
 use std::fmt;
 use std::fs;
@@ -10,9 +17,10 @@ use std::time::{Duration, Instant};
 
 use decoy_config::SystemConfig;
 use decoy_link::{AircraftStateFrame, DeviceMessage, HostMessage, OutputFrame};
+use decoy_sim::atomic::write_atomically;
 use decoy_sim::{
-    RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary, format_time, format_value,
-    summarize, write_comparison_plots,
+    FIRMWARE_LOG, RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary, clear_output_dir,
+    format_time, format_value, summarize, write_comparison_plots,
 };
 use serde::Serialize;
 
@@ -174,6 +182,16 @@ pub enum HilError {
         /// Where the outputs are.
         out_dir: PathBuf,
     },
+    /// A stop request (SIGINT, SIGTERM) ended the flight at a frame: the
+    /// outputs up to then are written, `summary.json`'s `stopped.reason` names it.
+    Interrupted {
+        /// Time of the last answered frame, s.
+        t_s: f64,
+        /// What asked to stop (`SIGINT`).
+        signal: &'static str,
+        /// Where the outputs are.
+        out_dir: PathBuf,
+    },
     /// Writing an output failed.
     Output(String),
 }
@@ -206,6 +224,16 @@ impl fmt::Display for HilError {
             } => write!(
                 f,
                 "the firmware stopped accepting the scenario after t = {} s: {reason}; the outputs up to then are in {}",
+                format_time(*t_s),
+                out_dir.display()
+            ),
+            HilError::Interrupted {
+                t_s,
+                signal,
+                out_dir,
+            } => write!(
+                f,
+                "interrupted by {signal} after t = {} s; the outputs up to then are in {}",
                 format_time(*t_s),
                 out_dir.display()
             ),
@@ -252,6 +280,22 @@ pub fn run_hil(
     options: &HilOptions,
     progress: impl FnMut(f64),
 ) -> Result<HilRun, HilError> {
+    run_hil_until(config, scenario, options, progress, || None)
+}
+
+/// [`run_hil`], stopping at the next frame when `stop` (asked before every
+/// frame) returns `Some(signal)`: the command line passes the name of the
+/// signal it received. The frames flown are written as a rejection's are, with
+/// `interrupted by SIGNAL` as `summary.json`'s `stopped.reason`, and the result is
+/// [`HilError::Interrupted`]. A link that fails once a stop was requested (QEMU
+/// got the terminal's SIGINT too) counts as the same stop.
+pub fn run_hil_until(
+    config: &SystemConfig,
+    scenario: &Scenario,
+    options: &HilOptions,
+    progress: impl FnMut(f64),
+    stop: impl Fn() -> Option<&'static str>,
+) -> Result<HilRun, HilError> {
     let configured = config.solver.segments_embedded;
     let segments = options.segments.unwrap_or(configured);
     check_segments(segments)?;
@@ -276,13 +320,25 @@ pub fn run_hil(
             },
         )
         .map_err(HilError::Scenario)?;
-    let (elf, firmware_source) = match &options.firmware {
+    let frame_count = flight::checked_frame_count(plan.t_end, options.t_end.is_some())
+        .map_err(HilError::Usage)?;
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("hil-{}", plan.name)));
+    // The firmware given is checked (a usage error leaves the directory as it
+    // was) before the directory is cleared, and that before the build.
+    let origin = match &options.firmware {
         Some(path) => {
             firmware::check_elf(path).map_err(HilError::Build)?;
-            (path.clone(), "given with --firmware".to_owned())
+            FirmwareOrigin::Given(path.clone())
         }
-        None => {
-            let dir = firmware::locate_source().map_err(HilError::Build)?;
+        None => FirmwareOrigin::Source(firmware::locate_source().map_err(HilError::Build)?),
+    };
+    clear_output_dir(&out_dir).map_err(|e| HilError::Output(e.to_string()))?;
+    let (elf, firmware_source) = match origin {
+        FirmwareOrigin::Given(elf) => (elf, "given with --firmware".to_owned()),
+        FirmwareOrigin::Source(dir) => {
             let elf = build_firmware(options.board, segments, configured)?;
             (elf, format!("built from {}", dir.display()))
         }
@@ -290,7 +346,7 @@ pub fn run_hil(
     let memory = firmware::memory_usage(&elf).map_err(HilError::Output)?;
 
     let wall = Instant::now();
-    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(plan.t_end));
+    let frames = flight::scenario_frames(&plan.profile, frame_count);
     let messages = flight::scenario_messages(&frames);
     let mut session = Session::start(&elf, options.board).map_err(HilError::Link)?;
     let hello = session.hello;
@@ -311,7 +367,7 @@ pub fn run_hil(
             hello.segments
         )));
     }
-    let flown = fly_until_rejected(&mut session, &messages, progress);
+    let flown = fly_until_rejected(&mut session, &messages, progress, &stop);
     let log = session.finish();
     let marks = firmware::stack_marks(&log.log).ok();
     let (exchanges, stop, fps) = match flown {
@@ -333,10 +389,6 @@ pub fn run_hil(
     let (vs_same, _) = flight::compare(&answers, &same_precision);
     let stats: InstructionStats = flight::instruction_stats(&answers);
 
-    let out_dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(format!("hil-{}", plan.name)));
     fs::create_dir_all(&out_dir)
         .map_err(|e| HilError::Output(format!("cannot create {}: {e}", out_dir.display())))?;
     let rows = paired_rows(&frames, &answers, &host64);
@@ -359,7 +411,7 @@ pub fn run_hil(
         plan.profile.manoeuvre_start(),
         &firmware_samples,
         wall.elapsed().as_secs_f64(),
-        stop.as_ref().map(|(_, reason)| reason.clone()),
+        stop.as_ref().map(|s| s.reason.clone()),
     );
     let summary = HilSummary {
         run,
@@ -406,10 +458,10 @@ pub fn run_hil(
     let mut json = serde_json::to_string_pretty(&summary)
         .map_err(|e| HilError::Output(format!("cannot write the summary: {e}")))?;
     json.push('\n');
-    fs::write(&summary_path, json)
+    write_atomically(&summary_path, json.as_bytes())
         .map_err(|e| HilError::Output(format!("cannot write {}: {e}", summary_path.display())))?;
-    let log_path = out_dir.join("firmware.log");
-    fs::write(&log_path, &log.log)
+    let log_path = out_dir.join(FIRMWARE_LOG);
+    write_atomically(&log_path, log.log.as_bytes())
         .map_err(|e| HilError::Output(format!("cannot write {}: {e}", log_path.display())))?;
     let mut files = vec![timeseries, summary_path, log_path];
     if options.plots {
@@ -438,11 +490,23 @@ pub fn run_hil(
             .map_err(|e| HilError::Output(e.to_string()))?,
         );
     }
-    if let Some((t_s, reason)) = stop {
-        return Err(HilError::Stopped {
-            t_s,
-            reason,
-            out_dir,
+    if let Some(FlightStop {
+        t_s,
+        reason,
+        requested,
+    }) = stop
+    {
+        return Err(match requested {
+            Some(signal) => HilError::Interrupted {
+                t_s,
+                signal,
+                out_dir,
+            },
+            None => HilError::Stopped {
+                t_s,
+                reason,
+                out_dir,
+            },
         });
     }
     Ok(HilRun {
@@ -453,25 +517,61 @@ pub fn run_hil(
     })
 }
 
-/// The exchanges up to and including the first rejected frame, why it was rejected
-/// (and the time of the last accepted frame), and the round trips per second.
-type Flight = (
-    Vec<(HostMessage, DeviceMessage)>,
-    Option<(f64, String)>,
-    f64,
-);
+/// Where a run's firmware comes from.
+enum FirmwareOrigin {
+    /// An ELF given with `--firmware`.
+    Given(PathBuf),
+    /// Built from the firmware source in this directory.
+    Source(PathBuf),
+}
+
+/// Why a flight ended early.
+struct FlightStop {
+    /// Time of the last accepted frame, s.
+    t_s: f64,
+    /// Why, in words (`summary.json`'s `stopped.reason`).
+    reason: String,
+    /// The stop request that ended it (a signal's name), if one did rather than
+    /// a rejection.
+    requested: Option<&'static str>,
+}
+
+/// The exchanges up to and including the first rejected frame (or up to a stop
+/// request), why the flight ended early, and the round trips per second.
+type Flight = (Vec<(HostMessage, DeviceMessage)>, Option<FlightStop>, f64);
 
 fn fly_until_rejected(
     session: &mut Session,
     messages: &[HostMessage],
     mut progress: impl FnMut(f64),
+    stop: &dyn Fn() -> Option<&'static str>,
 ) -> Result<Flight, LinkError> {
     let started = Instant::now();
     let mut exchanges = Vec::with_capacity(messages.len());
     let mut last_time = 0.0;
     let every = (messages.len() / 500).max(1);
+    let fps = |n: usize| n as f64 / started.elapsed().as_secs_f64().max(1e-9);
+    let requested = |signal: &'static str, last_time: f64| FlightStop {
+        t_s: last_time,
+        reason: format!("interrupted by {signal}"),
+        requested: Some(signal),
+    };
     for (i, message) in messages.iter().enumerate() {
-        let answer = session.link.request(message)?;
+        if let Some(signal) = stop() {
+            let n = exchanges.len();
+            return Ok((exchanges, Some(requested(signal, last_time)), fps(n)));
+        }
+        let answer = match session.link.request(message) {
+            Ok(answer) => answer,
+            // QEMU, in the terminal's process group, got the SIGINT as well.
+            Err(e) => match stop() {
+                Some(signal) => {
+                    let n = exchanges.len();
+                    return Ok((exchanges, Some(requested(signal, last_time)), fps(n)));
+                }
+                None => return Err(e),
+            },
+        };
         let rejected = match (&answer, message) {
             (DeviceMessage::Rejected(r), HostMessage::State(frame)) => Some(format!(
                 "frame {} (t = {} s) rejected: {:?} ({} so far)",
@@ -488,16 +588,21 @@ fn fly_until_rejected(
         };
         exchanges.push((*message, answer));
         if let Some(reason) = rejected {
-            let fps = exchanges.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
-            return Ok((exchanges, Some((last_time, reason)), fps));
+            let n = exchanges.len();
+            let stop = FlightStop {
+                t_s: last_time,
+                reason,
+                requested: None,
+            };
+            return Ok((exchanges, Some(stop), fps(n)));
         }
         if i % every == 0 {
             progress(i as f64 / messages.len() as f64);
         }
     }
     progress(1.0);
-    let fps = exchanges.len() as f64 / started.elapsed().as_secs_f64().max(1e-9);
-    Ok((exchanges, None, fps))
+    let n = exchanges.len();
+    Ok((exchanges, None, fps(n)))
 }
 
 /// The frames answered by an output on both sides, with both outputs, matched by
@@ -518,8 +623,9 @@ pub fn paired_rows(
         .collect()
 }
 
-/// The file stem of the instruction-count plot.
-pub const INSTRUCTIONS_PLOT: &str = "instructions";
+/// The file stem of the instruction-count plot (named in decoy-sim, with every
+/// other output file, for [`decoy_sim::clear_output_dir`]).
+pub use decoy_sim::INSTRUCTIONS_PLOT;
 
 /// Draws the instructions of every control step against time (the trim frame
 /// left out), with the target for comparison.
@@ -662,7 +768,7 @@ pub fn write_timeseries(
         }
         text.push('\n');
     }
-    fs::write(path, text)
+    write_atomically(path, text.as_bytes())
         .map_err(|e| HilError::Output(format!("cannot write {}: {e}", path.display())))
 }
 

@@ -30,6 +30,9 @@
 //!   drawn line therefore covers exactly the same vertical extent in every column, so
 //!   peaks and spikes stay visible, while a 100k-point series costs a few thousand line
 //!   segments. Data are never changed, only what is drawn.
+//! - **Whole files**: each file is written under `<name>.partial` and renamed when
+//!   complete ([`atomic`], which the other output files of the project use too), so
+//!   a process killed while plotting never leaves a half-written image under its name.
 //! - **Determinism**: the same input gives byte-identical SVG and PNG files (no
 //!   timestamps, no randomness, no hash-order dependence).
 //!
@@ -55,6 +58,8 @@
 //! # let _ = (png, svg);
 //! # Ok::<(), decoy_plots::PlotError>(())
 //! ```
+
+pub mod atomic;
 
 use std::borrow::Cow;
 use std::ffi::OsString;
@@ -137,7 +142,8 @@ pub enum PlotError {
 ///
 /// The extensions are appended to `stem` (`out/run.v2` gives `out/run.v2.png`), and the
 /// parent directory is created if missing. Both images are rendered in memory before
-/// either file is written, so a rendering error leaves no partial files.
+/// either file is written, so a rendering error leaves no partial files, and each file
+/// is written whole ([`atomic::write_atomically`]): under `<name>.partial`, then renamed.
 ///
 /// # Errors
 ///
@@ -600,8 +606,10 @@ fn write_figure_shaded(
             source,
         })?;
     }
+    // Each file whole or not at all: a run stopped while plotting leaves no
+    // half-written image under its name.
     for (path, bytes) in [(&png_path, png.as_slice()), (&svg_path, svg.as_bytes())] {
-        std::fs::write(path, bytes).map_err(|source| PlotError::Io {
+        atomic::write_atomically(path, bytes).map_err(|source| PlotError::Io {
             path: path.clone(),
             source,
         })?;

@@ -98,6 +98,19 @@ pub enum SimError {
         /// The output directory.
         out_dir: PathBuf,
     },
+    /// A stop request (from the command line: a signal, SIGINT or SIGTERM) ended
+    /// the run at a step boundary ([`crate::simulate_until`]). The outputs up to
+    /// `t_s` are written whole and `summary.json`'s `"stopped"` names the
+    /// request.
+    #[error("interrupted by {signal} at t = {t_s} s; the outputs up to then are in {}", out_dir.display())]
+    Interrupted {
+        /// Time of the last state, s.
+        t_s: f64,
+        /// What asked to stop (`SIGINT`; `summary.json`'s `stopped.reason` is `interrupted by SIGINT`).
+        signal: &'static str,
+        /// The output directory.
+        out_dir: PathBuf,
+    },
     /// An input file (scenario, recorded flight) could not be read.
     #[error("cannot read {}: {source}", path.display())]
     Read {

@@ -13,7 +13,11 @@
 //! - [`RecordedFlight`]: a recorded flight CSV, interpolated into a
 //!   [`solver_core::FlightPath`].
 //! - [`simulate`]: runs a plan and writes `timeseries.csv`, `cable.csv`,
-//!   `summary.json` and the plots (columns and definitions in `docs/outputs.md`).
+//!   `summary.json` and the plots (columns and definitions in `docs/outputs.md`);
+//!   [`simulate_until`] stops at the step a caller's stop request (the command
+//!   line's SIGINT or SIGTERM) comes. [`clear_output_dir`] makes an output
+//!   directory hold one run's files only (every command that writes one calls
+//!   it), and every file is written whole (`decoy_plots::atomic`).
 //! - [`trace()`]: the same run kept in memory (optionally from a perturbed trim),
 //!   for the studies below.
 //! - [`sweep`]: the paper's steady-flight sweeps (speed, altitude; Figs. 15-22)
@@ -83,6 +87,9 @@ pub mod sweep;
 pub mod trace;
 pub mod trim;
 
+/// Files written whole or not at all (`decoy-plots`' module, which every
+/// output file of a run goes through).
+pub use decoy_plots::atomic;
 pub use error::SimError;
 pub use format::{describe_layout, format_time, format_value};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
@@ -95,7 +102,10 @@ pub use plots::{
 pub use profile::FlightProfile;
 pub use record::{CABLE_HEADER, Sample, Snapshot, TIMESERIES_HEADER};
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
-pub use run::{RunOutput, output_file_names, simulate};
+pub use run::{
+    FIRMWARE_LOG, INSTRUCTIONS_PLOT, RunOutput, clear_output_dir, known_output_file_names,
+    output_file_names, simulate, simulate_until,
+};
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,
 };

@@ -1,11 +1,10 @@
 //! The recorder: what a run measures at every step (the probe, the running
 //! statistics) and keeps or writes (`timeseries.csv` rows, `cable.csv` snapshots).
 
-use std::fs::File;
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use decoy_config::SystemConfig;
+use decoy_plots::atomic::AtomicFile;
 use nalgebra::Vector3;
 use solver_core::{AircraftState, Model, Outputs, SolveError};
 
@@ -282,21 +281,22 @@ impl Statistics {
     }
 }
 
-/// A CSV file written row by row, each row with one `write` so that the file
-/// stays valid (whole rows) if the run stops.
+/// A CSV file written row by row under its partial name
+/// ([`decoy_plots::atomic::AtomicFile`]) and renamed to its name by
+/// [`CsvFile::finish`] once the run has ended (finished, failed or stopped): the
+/// name never holds part of a file.
 pub(crate) struct CsvFile {
-    file: File,
-    path: PathBuf,
+    file: AtomicFile,
 }
 
 impl CsvFile {
     pub(crate) fn create(path: PathBuf, header: &str) -> Result<Self, SimError> {
-        let file = File::create(&path).map_err(|source| SimError::Io {
+        let file = AtomicFile::create(&path).map_err(|source| SimError::Io {
             action: "create",
             path: path.clone(),
             source,
         })?;
-        let mut csv = CsvFile { file, path };
+        let mut csv = CsvFile { file };
         csv.write(&format!("{header}\n"))?;
         Ok(csv)
     }
@@ -306,9 +306,18 @@ impl CsvFile {
             .write_all(text.as_bytes())
             .map_err(|source| SimError::Io {
                 action: "write",
-                path: self.path.clone(),
+                path: self.file.path().to_owned(),
                 source,
             })
+    }
+
+    /// Gives the file its name, complete.
+    pub(crate) fn finish(mut self) -> Result<(), SimError> {
+        self.file.commit().map_err(|source| SimError::Io {
+            action: "write",
+            path: self.file.path().to_owned(),
+            source,
+        })
     }
 }
 
@@ -378,8 +387,38 @@ pub(crate) struct Recorder<'a> {
     pub management: Option<ManagementTrack>,
 }
 
-/// Why a run stopped early: the reason in words and the solver's error.
-pub(crate) type Stop = (String, Option<SolveError>);
+/// Why a run stopped early.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Stop {
+    /// In words (`summary.json`'s `stopped.reason`).
+    pub reason: String,
+    /// The solver's error, when the solver reported one.
+    pub source: Option<SolveError>,
+    /// The stop request that ended the run (the name of the signal the command
+    /// line received, `SIGINT`), when one did rather than a failure.
+    pub requested: Option<&'static str>,
+}
+
+impl Stop {
+    /// A failure: `reason` in words, the solver's error if it reported one.
+    pub(crate) fn failure(reason: String, source: Option<SolveError>) -> Self {
+        Stop {
+            reason,
+            source,
+            requested: None,
+        }
+    }
+
+    /// A stop requested from outside the run (`signal`: the signal's name;
+    /// the reason is `interrupted by SIGINT`).
+    pub(crate) fn requested(signal: &'static str) -> Self {
+        Stop {
+            reason: format!("interrupted by {signal}"),
+            source: None,
+            requested: Some(signal),
+        }
+    }
+}
 
 impl<'a> Recorder<'a> {
     /// A recorder for `plan` keeping a sample every `sample_interval` s and a
@@ -439,7 +478,7 @@ impl<'a> Recorder<'a> {
         self.probe
             .snapshot_into(out, &aircraft, &mut self.candidate_cable);
         if !(sample.tension_connection.is_finite() && sample.tension_tow.is_finite()) {
-            return Ok(Some((
+            return Ok(Some(Stop::failure(
                 format!(
                     "the cable tension became non-finite at t = {} s: the state diverged (is the time step {} s too long?)",
                     format_time(t),

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use decoy_config::SystemConfig;
+use decoy_plots::atomic::{partial_path, write_atomically};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use solver_core::{AircraftState, Model, SolveError, Solver, State, trim};
 
@@ -35,13 +36,15 @@ pub struct RunOutput {
 
 /// Integrates `plan.steps` steps from the solver's state, recording every
 /// evaluated state with `recorder`; `progress` gets the fraction done now and
-/// then. Returns why it stopped early, if it did (the recorder then holds every
-/// state up to the last good one).
+/// then, and `stop` is asked before every step whether to stop there (`Some`:
+/// why, [`simulate_until`]). Returns why it stopped early, if it did (the
+/// recorder then holds every state up to the last good one).
 pub(crate) fn integrate<const N: usize>(
     solver: &mut Solver<f64, N>,
     plan: &RunPlan,
     recorder: &mut Recorder<'_>,
     mut progress: impl FnMut(f64),
+    stop: &dyn Fn() -> Option<&'static str>,
 ) -> Result<Option<Stop>, SimError> {
     let path = &plan.profile;
     let steps = plan.steps;
@@ -49,9 +52,9 @@ pub(crate) fn integrate<const N: usize>(
         Ok(out) => recorder.record(0, &out)?,
         Err(e) => return Err(SimError::Initial(e)),
     };
-    if let Some((_, error)) = initial {
+    if let Some(stop) = initial {
         return Err(SimError::Initial(
-            error.unwrap_or(SolveError::NonFinite { joint: 0 }),
+            stop.source.unwrap_or(SolveError::NonFinite { joint: 0 }),
         ));
     }
     progress(0.0);
@@ -59,6 +62,22 @@ pub(crate) fn integrate<const N: usize>(
     let progress_every = (steps / 1000).max(1);
     let mut stopped: Option<Stop> = None;
     for k in 1..=steps {
+        // A stop request ends the run at this step boundary: at the state after
+        // step k - 1, recorded here (step k's first stage would have recorded it).
+        if let Some(requested) = stop() {
+            if k > 1 {
+                // This state ends the run: recorded as the last one is (a row,
+                // a cable snapshot, the management's observation).
+                recorder.steps = k - 1;
+                stopped = match solver.outputs(path) {
+                    Ok(out) => recorder.record(k - 1, &out)?,
+                    Err(e) => Some(Stop::failure(stop_reason(&e, plan.dt), Some(e))),
+                };
+            }
+            // A state that proves unusable is the failure it is, not the request.
+            stopped.get_or_insert(Stop::requested(requested));
+            break;
+        }
         // The observer sees the state after step k - 1 (step 0 is recorded above).
         let mut observed = Ok(None);
         let stepped = solver.step_observed(path, plan.dt, |out| {
@@ -71,7 +90,7 @@ pub(crate) fn integrate<const N: usize>(
             break;
         }
         if let Err(e) = stepped {
-            stopped = Some((stop_reason(&e, plan.dt), Some(e)));
+            stopped = Some(Stop::failure(stop_reason(&e, plan.dt), Some(e)));
             break;
         }
         if k.is_multiple_of(progress_every) {
@@ -81,7 +100,7 @@ pub(crate) fn integrate<const N: usize>(
     if stopped.is_none() {
         stopped = match solver.outputs(path) {
             Ok(out) => recorder.record(steps, &out)?,
-            Err(e) => Some((stop_reason(&e, plan.dt), Some(e))),
+            Err(e) => Some(Stop::failure(stop_reason(&e, plan.dt), Some(e))),
         };
     }
     recorder.finish()?;
@@ -108,23 +127,49 @@ pub(crate) fn integrate<const N: usize>(
 /// non-positive pivot, the aircraft left the atmosphere) the CSV files hold every
 /// row up to the last good state, `summary.json` records `"stopped"`, the plots
 /// are drawn from what there is, and the result is [`SimError::Stopped`].
+///
+/// The output directory holds only this run's files: before the run starts,
+/// [`clear_output_dir`] removes those an earlier run of any command left there.
+/// Every file is written under a temporary name and renamed when complete
+/// ([`decoy_plots::atomic`]), so none is ever half-written.
 pub fn simulate(
     config: &SystemConfig,
     scenario: &Scenario,
     options: &RunOptions,
     progress: impl FnMut(f64),
 ) -> Result<RunOutput, SimError> {
-    let wall = Instant::now();
-    let plan = scenario.plan(config, options)?;
-    with_capacity!(plan.layout.count(), N => simulate_with::<N>(config, plan, options, progress, wall))
+    simulate_until(config, scenario, options, progress, || None)
 }
 
-/// [`simulate`] with a model of capacity `N`.
+/// [`simulate`], stopping early when `stop` asks to: it is called before every
+/// step, and a `Some(signal)` (the command line passes the name of the signal
+/// it received, `SIGINT` or `SIGTERM`) ends the run at that step boundary as a
+/// failure would, but for its result: the CSV files hold every state up to
+/// then, `summary.json`'s `stopped` has that time and the reason `interrupted
+/// by SIGNAL`, the plots are
+/// drawn from what was flown, and the result is [`SimError::Interrupted`].
+///
+/// The library installs no signal handler: the caller decides what `stop`
+/// watches (an `AtomicBool` or a signal flag, read with one load).
+pub fn simulate_until(
+    config: &SystemConfig,
+    scenario: &Scenario,
+    options: &RunOptions,
+    progress: impl FnMut(f64),
+    stop: impl Fn() -> Option<&'static str>,
+) -> Result<RunOutput, SimError> {
+    let wall = Instant::now();
+    let plan = scenario.plan(config, options)?;
+    with_capacity!(plan.layout.count(), N => simulate_with::<N>(config, plan, options, progress, &stop, wall))
+}
+
+/// [`simulate_until`] with a model of capacity `N`.
 fn simulate_with<const N: usize>(
     config: &SystemConfig,
     plan: RunPlan,
     options: &RunOptions,
     progress: impl FnMut(f64),
+    stop: &dyn Fn() -> Option<&'static str>,
     wall: Instant,
 ) -> Result<RunOutput, SimError> {
     let out_dir = options
@@ -140,7 +185,7 @@ fn simulate_with<const N: usize>(
         path: out_dir.clone(),
         source,
     })?;
-    remove_previous_outputs(&out_dir)?;
+    clear_output_dir(&out_dir)?;
     let timeseries_path = out_dir.join("timeseries.csv");
     let cable_path = out_dir.join("cable.csv");
     let files = (
@@ -158,11 +203,11 @@ fn simulate_with<const N: usize>(
     // A run that cannot start (no trim, an initial state that cannot be
     // evaluated) still leaves a summary that says so.
     let started = initial_solver(model, options.initial, &plan)
-        .and_then(|mut solver| integrate(&mut solver, &plan, &mut recorder, progress));
+        .and_then(|mut solver| integrate(&mut solver, &plan, &mut recorder, progress, stop));
     let (stopped, not_started) = match started {
         Ok(stopped) => (stopped, None),
         Err(e @ (SimError::NoTrim(_) | SimError::Initial(_))) => (
-            Some((format!("the run could not start: {e}"), None)),
+            Some(Stop::failure(format!("the run could not start: {e}"), None)),
             Some(e),
         ),
         Err(e) => return Err(e),
@@ -177,7 +222,10 @@ fn simulate_with<const N: usize>(
         last,
         ..
     } = recorder;
-    drop((timeseries, cable));
+    // The CSV files get their names, complete.
+    for csv in [timeseries, cable].into_iter().flatten() {
+        csv.finish()?;
+    }
 
     let identity = RunIdentity {
         scenario: &plan.name,
@@ -197,7 +245,7 @@ fn simulate_with<const N: usize>(
         &samples,
         &last,
         wall.elapsed().as_secs_f64(),
-        stopped.as_ref().map(|(reason, _)| reason.clone()),
+        stopped.as_ref().map(|stop| stop.reason.clone()),
     );
     let summary_path = out_dir.join("summary.json");
     let mut json = serde_json::to_string_pretty(&summary).map_err(|e| SimError::Io {
@@ -206,7 +254,7 @@ fn simulate_with<const N: usize>(
         source: std::io::Error::other(e),
     })?;
     json.push('\n');
-    std::fs::write(&summary_path, json).map_err(|source| SimError::Io {
+    write_atomically(&summary_path, json.as_bytes()).map_err(|source| SimError::Io {
         action: "write",
         path: summary_path.clone(),
         source,
@@ -224,12 +272,20 @@ fn simulate_with<const N: usize>(
         files.extend(crate::plots::write_all(&recorded, &plan, config, &out_dir)?);
     }
 
-    if let Some((reason, source)) = stopped {
-        return Err(SimError::Stopped {
-            t_s: round_time(last.t),
-            reason,
-            source,
-            out_dir,
+    if let Some(stop) = stopped {
+        let t_s = round_time(last.t);
+        return Err(match stop.requested {
+            Some(signal) => SimError::Interrupted {
+                t_s,
+                signal,
+                out_dir,
+            },
+            None => SimError::Stopped {
+                t_s,
+                reason: stop.reason,
+                source: stop.source,
+                out_dir,
+            },
         });
     }
     Ok(RunOutput {
@@ -257,6 +313,13 @@ fn initial_solver<const N: usize>(
     ))
 }
 
+/// `decoy hil`'s firmware log (the decoded defmt log of the run), in its output
+/// directory.
+pub const FIRMWARE_LOG: &str = "firmware.log";
+
+/// The file stem of `decoy hil`'s instruction-count plot.
+pub const INSTRUCTIONS_PLOT: &str = "instructions";
+
 /// The names of every file `decoy simulate` writes into its output directory.
 pub fn output_file_names() -> Vec<String> {
     let mut names: Vec<String> = ["timeseries.csv", "cable.csv", "summary.json"]
@@ -268,21 +331,40 @@ pub fn output_file_names() -> Vec<String> {
     names
 }
 
-/// Removes the files an earlier run of `decoy simulate` left in `dir` (only the
-/// names in [`output_file_names`]; any other file stays), so that the directory
-/// describes the new run only.
-fn remove_previous_outputs(dir: &Path) -> Result<(), SimError> {
-    for name in output_file_names() {
+/// The names of every file a run writes into its output directory, whichever
+/// command it is (`decoy simulate`'s [`output_file_names`], and those of `decoy
+/// hil` and `decoy feed` it does not write: [`FIRMWARE_LOG`] and the
+/// [`INSTRUCTIONS_PLOT`]; their other files have `simulate`'s names).
+pub fn known_output_file_names() -> Vec<String> {
+    let mut names = output_file_names();
+    names.push(FIRMWARE_LOG.to_owned());
+    names.extend(["png", "svg"].map(|ext| format!("{INSTRUCTIONS_PLOT}.{ext}")));
+    names
+}
+
+/// Prepares `dir` for a run: removes every file of [`known_output_file_names`]
+/// that an earlier run (of any command) left there, and their partial files
+/// (`NAME.partial`, [`decoy_plots::atomic`]) of a run killed while writing, so
+/// that the directory holds only the new run's files and no earlier summary can
+/// be taken for its own, even if the new run fails before it writes one. Any
+/// other file stays. A directory that does not exist is left so.
+///
+/// Every command that writes an output directory calls this before its run
+/// starts (after its options are checked).
+pub fn clear_output_dir(dir: &Path) -> Result<(), SimError> {
+    for name in known_output_file_names() {
         let path = dir.join(name);
-        match std::fs::remove_file(&path) {
-            Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(source) => {
-                return Err(SimError::Io {
-                    action: "remove the previous run's",
-                    path,
-                    source,
-                });
+        for path in [partial_path(&path), path] {
+            match std::fs::remove_file(&path) {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(source) => {
+                    return Err(SimError::Io {
+                        action: "remove the previous run's",
+                        path,
+                        source,
+                    });
+                }
             }
         }
     }
@@ -354,9 +436,23 @@ mod tests {
             };
             let plan = scenario.plan(&config, &options).unwrap();
             let out = if capacity == SMALL_CAPACITY {
-                simulate_with::<SMALL_CAPACITY>(&config, plan, &options, |_| {}, Instant::now())
+                simulate_with::<SMALL_CAPACITY>(
+                    &config,
+                    plan,
+                    &options,
+                    |_| {},
+                    &|| None,
+                    Instant::now(),
+                )
             } else {
-                simulate_with::<MAX_SEGMENTS>(&config, plan, &options, |_| {}, Instant::now())
+                simulate_with::<MAX_SEGMENTS>(
+                    &config,
+                    plan,
+                    &options,
+                    |_| {},
+                    &|| None,
+                    Instant::now(),
+                )
             };
             std::fs::read(out.unwrap().out_dir.join("timeseries.csv")).unwrap()
         };

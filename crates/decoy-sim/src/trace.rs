@@ -157,7 +157,7 @@ fn trace_with<const N: usize>(
         options.sample_interval_s,
         options.snapshot_interval_s,
     );
-    let stopped = integrate(&mut solver, plan, &mut recorder, progress)?;
+    let stopped = integrate(&mut solver, plan, &mut recorder, progress, &|| None)?;
     let statistics = &recorder.statistics;
     Ok(Trace {
         plan: plan.clone(),
@@ -168,9 +168,9 @@ fn trace_with<const N: usize>(
         pitch_oscillation_amplitude_deg: statistics.pitch_amplitude(),
         min_cable_clearance_to_exhaust_m: statistics.min_exhaust,
         min_decoy_clearance_to_aircraft_m: statistics.min_decoy,
-        stopped: stopped.map(|(reason, _)| StoppedAt {
+        stopped: stopped.map(|stop| StoppedAt {
             t_s: round_time(recorder.last.t),
-            reason,
+            reason: stop.reason,
         }),
         joint_along_m,
         samples: std::mem::take(&mut recorder.samples),

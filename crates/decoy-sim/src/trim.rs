@@ -140,9 +140,38 @@ pub fn level_trim(config: &SystemConfig, request: &TrimRequest) -> Result<LevelT
     let cli = |field: &str, message: String| SimError::invalid("command line", field, message);
     check_altitude(&cli, "--altitude", request.altitude)?;
     check_mach(&cli, "--mach", request.mach)?;
-    let count = request.segments.unwrap_or(config.solver.segments_host);
-    check_segments(&cli, "--segments", count)?;
-    let layout = match request.grading {
+    let layout = host_layout(config, request.segments, request.grading)?;
+    let point = trim_point(config, layout, request.altitude, request.mach)?;
+    if let Some(joint) = point.cable.iter().position(|c| !c.tension_n.is_finite()) {
+        return Err(SimError::Initial(SolveError::NonFinite { joint }));
+    }
+    Ok(LevelTrim { layout, point })
+}
+
+/// The layout of `segments` (`--segments`; `None`: the configuration's
+/// `solver.segments_host`) graded by `grading` (`--grading`; `None` or 1:
+/// uniform), checked: an error names the flag, or the configuration file and
+/// its key when the value came from there.
+pub fn host_layout(
+    config: &SystemConfig,
+    segments: Option<usize>,
+    grading: Option<f64>,
+) -> Result<SegmentLayout<f64>, SimError> {
+    let cli = |field: &str, message: String| SimError::invalid("command line", field, message);
+    let count = match segments {
+        Some(count) => {
+            check_segments(&cli, "--segments", count)?;
+            count
+        }
+        None => {
+            let count = config.solver.segments_host;
+            let from_config =
+                |field: &str, message: String| SimError::invalid(&config.source, field, message);
+            check_segments(&from_config, "solver.segments_host", count)?;
+            count
+        }
+    };
+    Ok(match grading {
         None => SegmentLayout::Uniform { count },
         Some(ratio) => {
             check_grading(&cli, "--grading", ratio)?;
@@ -152,12 +181,7 @@ pub fn level_trim(config: &SystemConfig, request: &TrimRequest) -> Result<LevelT
                 SegmentLayout::Graded { count, ratio }
             }
         }
-    };
-    let point = trim_point(config, layout, request.altitude, request.mach)?;
-    if let Some(joint) = point.cable.iter().position(|c| !c.tension_n.is_finite()) {
-        return Err(SimError::Initial(SolveError::NonFinite { joint }));
-    }
-    Ok(LevelTrim { layout, point })
+    })
 }
 
 /// The trim of steady level flight at `altitude` m and `mach` with `layout`, and

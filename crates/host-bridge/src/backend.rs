@@ -132,6 +132,16 @@ impl<T: Real, const N: usize> Backend for HostBackend<T, N> {
     }
 }
 
+/// A backend and its board in words, as the summaries print them: `qemu m4`,
+/// or `host` alone for the host backend (whose board is `host`).
+pub fn describe_backend(backend: &str, board: &str) -> String {
+    if board == backend {
+        backend.to_owned()
+    } else {
+        format!("{backend} {board}")
+    }
+}
+
 /// The layout of `segments` graded by `grading` (exactly uniform at 1).
 fn layout<T: Real>(segments: usize, grading: f64) -> SegmentLayout<T> {
     if grading == 1.0 {
@@ -196,8 +206,13 @@ pub fn host_backend(
         .grading
         .unwrap_or(config.solver.grading_ratio_embedded);
     if !(1..=LARGE_CAPACITY).contains(&segments) {
+        // The value's own origin: the flag, or the configuration file's key.
+        let field = match options.segments {
+            Some(_) => "--segments".to_owned(),
+            None => format!("{}: solver.segments_embedded", config.source),
+        };
         return Err(BridgeError::Usage(format!(
-            "--segments must be between 1 and {LARGE_CAPACITY}, got {segments}"
+            "{field} must be between 1 and {LARGE_CAPACITY}, got {segments}"
         )));
     }
     if !(grading.is_finite() && grading > 0.0) {

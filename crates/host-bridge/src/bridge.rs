@@ -115,10 +115,9 @@ impl BridgeSummary {
     pub fn text(&self) -> String {
         let c = &self.counters;
         let mut s = format!(
-            "bridge {} ({} {}, f{}, {} segments graded {}, CPUs {}) ended by {} after {:.1} s\n",
+            "bridge {} ({}, f{}, {} segments graded {}, CPUs {}) ended by {} after {:.1} s\n",
             self.instance,
-            self.backend,
-            self.board,
+            crate::backend::describe_backend(&self.backend, &self.board),
             self.precision_bits,
             self.segments,
             self.grading_ratio,

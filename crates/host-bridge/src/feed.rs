@@ -2,10 +2,20 @@
 //! hil`) flown through a running bridge at the 10 ms control period, lockstep or
 //! free-running, written as `decoy hil` writes its runs (`timeseries.csv`,
 //! `summary.json`, plots) beside the host's replay of the same frames.
+//!
+//! The output directory follows `decoy simulate`'s rule: the options are checked
+//! first, then the files an earlier run left there are removed
+//! ([`decoy_sim::clear_output_dir`]) before the bridge is contacted, and every
+//! file is written whole. SIGINT or SIGTERM stops the flight at the next frame:
+//! the frames flown are written, `summary.json`'s `stopped` names the signal and
+//! the result is [`FeedError::Interrupted`]; a second signal ends the process at
+//! once.
 
 use std::collections::HashMap;
 use std::fs;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use bridge_types::{Answer, Status, command, field_text, kind};
@@ -13,8 +23,10 @@ use decoy_config::SystemConfig;
 use decoy_hil::flight;
 use decoy_hil::hil_run::{paired_rows, sample, write_timeseries};
 use decoy_link::{AircraftStateFrame, Command, DeviceMessage, HostMessage, RejectReason, Rejected};
+use decoy_sim::atomic::write_atomically;
+use decoy_sim::format::format_number;
 use decoy_sim::{
-    RunOptions, Sample, Scenario, ScenarioKind, Summary, format_time, summarize,
+    RunOptions, Sample, Scenario, ScenarioKind, Summary, clear_output_dir, format_time, summarize,
     write_comparison_plots, write_management_plot,
 };
 use serde::Serialize;
@@ -64,6 +76,25 @@ pub struct FeedOptions {
     pub plots: bool,
     /// Deadline of each answer.
     pub timeout: Duration,
+}
+
+/// The longest deadline of an answer `--timeout` accepts, s (a day: a longer
+/// one is no deadline but a hang).
+pub const MAX_TIMEOUT_S: f64 = 86_400.0;
+
+/// `--timeout S` as the deadline of each answer: a number of seconds above 0
+/// (at least a nanosecond) and at most [`MAX_TIMEOUT_S`], else a
+/// [`BridgeError::Usage`] naming the value.
+pub fn answer_timeout(seconds: f64) -> Result<Duration, BridgeError> {
+    let usable = seconds.is_finite() && seconds > 0.0 && seconds <= MAX_TIMEOUT_S;
+    match Duration::try_from_secs_f64(seconds) {
+        Ok(d) if usable && !d.is_zero() => Ok(d),
+        _ => Err(BridgeError::Usage(format!(
+            "--timeout must be a number of seconds above 0 and at most {} (a day), got {}",
+            format_number(MAX_TIMEOUT_S),
+            format_number(seconds)
+        ))),
+    }
 }
 
 impl Default for FeedOptions {
@@ -168,6 +199,16 @@ pub enum FeedError {
         /// Where the outputs are.
         out_dir: PathBuf,
     },
+    /// SIGINT or SIGTERM stopped the flight at a frame: the outputs up to then
+    /// are written, `summary.json`'s `stopped.reason` is `interrupted by SIGINT` (or SIGTERM).
+    Interrupted {
+        /// Time of the last answered state, s.
+        t_s: f64,
+        /// `SIGINT` or `SIGTERM`.
+        signal: &'static str,
+        /// Where the outputs are.
+        out_dir: PathBuf,
+    },
 }
 
 impl FeedError {
@@ -176,7 +217,7 @@ impl FeedError {
         match self {
             FeedError::Bridge(e) => e.is_usage(),
             FeedError::Scenario(e) => e.is_usage(),
-            FeedError::Stopped { .. } => false,
+            FeedError::Stopped { .. } | FeedError::Interrupted { .. } => false,
         }
     }
 }
@@ -193,6 +234,16 @@ impl std::fmt::Display for FeedError {
             } => write!(
                 f,
                 "the bridge stopped accepting the scenario after t = {} s: {reason}; the outputs up to then are in {}",
+                format_time(*t_s),
+                out_dir.display()
+            ),
+            FeedError::Interrupted {
+                t_s,
+                signal,
+                out_dir,
+            } => write!(
+                f,
+                "interrupted by {signal} after t = {} s; the outputs up to then are in {}",
                 format_time(*t_s),
                 out_dir.display()
             ),
@@ -218,7 +269,69 @@ struct Flown {
     answers: Vec<Option<Answer>>,
     latency_us: Vec<f64>,
     wall: Duration,
+    /// A rejection (lockstep): the time of the last accepted state and why.
     stop: Option<(f64, String)>,
+    /// The signal that stopped the flight, if one did.
+    interrupted: Option<&'static str>,
+}
+
+/// SIGINT and SIGTERM during a feed, registered after the client's node (whose
+/// iceoryx2 handler records a signal but consumes it, and would replace handlers
+/// installed before it; signal-hook chains it) and unregistered when dropped.
+/// The first signal of either kind is recorded for the flight to stop at the next
+/// frame; a second ends the process at once with the signal's default action.
+struct FeedSignals {
+    /// The number of the first signal received (0: none yet).
+    received: Arc<AtomicUsize>,
+    ids: Vec<signal_hook::SigId>,
+}
+
+impl FeedSignals {
+    const SIGNALS: [(i32, &'static str); 2] = [
+        (signal_hook::consts::SIGINT, "SIGINT"),
+        (signal_hook::consts::SIGTERM, "SIGTERM"),
+    ];
+
+    fn register() -> Result<Self, BridgeError> {
+        let received = Arc::new(AtomicUsize::new(0));
+        let armed = Arc::new(AtomicBool::new(false));
+        let mut signals = FeedSignals {
+            received: Arc::clone(&received),
+            ids: Vec::new(),
+        };
+        for (signal, _) in Self::SIGNALS {
+            // In this order: the default action only once `armed` is set, so on
+            // the second signal; the first one's number kept.
+            let ids = [
+                signal_hook::flag::register_conditional_default(signal, Arc::clone(&armed)),
+                signal_hook::flag::register_usize(signal, Arc::clone(&received), signal as usize),
+                signal_hook::flag::register(signal, Arc::clone(&armed)),
+            ];
+            for id in ids {
+                signals.ids.push(id.map_err(|e| {
+                    BridgeError::Output(format!("cannot install the SIGINT/SIGTERM handlers: {e}"))
+                })?);
+            }
+        }
+        Ok(signals)
+    }
+
+    /// The name of the signal received, if one came: one load.
+    fn received(&self) -> Option<&'static str> {
+        let number = self.received.load(Ordering::Relaxed);
+        Self::SIGNALS
+            .iter()
+            .find(|(signal, _)| *signal as usize == number)
+            .map(|(_, name)| *name)
+    }
+}
+
+impl Drop for FeedSignals {
+    fn drop(&mut self) {
+        for id in self.ids.drain(..) {
+            signal_hook::low_level::unregister(id);
+        }
+    }
 }
 
 fn pace(started: Instant, frame: &AircraftStateFrame) {
@@ -244,6 +357,7 @@ fn fly_lockstep(
     frames: &[AircraftStateFrame],
     realtime: bool,
     mut progress: impl FnMut(f64),
+    signals: &FeedSignals,
 ) -> Result<Flown, BridgeError> {
     let started = Instant::now();
     let mut flown = Flown {
@@ -252,10 +366,16 @@ fn fly_lockstep(
         latency_us: Vec::new(),
         wall: Duration::ZERO,
         stop: None,
+        interrupted: None,
     };
     let mut last_time = 0.0;
     let every = (frames.len() / 500).max(1);
     for (i, frame) in frames.iter().enumerate() {
+        // A signal stops the flight between two frames.
+        if let Some(signal) = signals.received() {
+            flown.interrupted = Some(signal);
+            break;
+        }
         if realtime {
             pace(started, frame);
         }
@@ -284,6 +404,7 @@ fn fly_free(
     frames: &[AircraftStateFrame],
     realtime: bool,
     mut progress: impl FnMut(f64),
+    signals: &FeedSignals,
 ) -> Result<Flown, BridgeError> {
     // The outputs service's history (earlier runs' answers) is not this run's.
     client.take_outputs()?;
@@ -308,10 +429,19 @@ fn fly_free(
         Ok(())
     };
     let every = (frames.len() / 500).max(1);
+    let mut interrupted = None;
+    let mut published = 0;
     for (i, frame) in frames.iter().enumerate() {
+        // A signal stops the publishing between two frames (the answers to
+        // those sent are still collected).
+        if let Some(signal) = signals.received() {
+            interrupted = Some(signal);
+            break;
+        }
         if realtime {
             pace(started, frame);
         }
+        published = i + 1;
         let state = convert::from_link_frame(frame);
         sent_at.insert(frame.seq, Instant::now());
         client.publish(&state)?;
@@ -320,6 +450,7 @@ fn fly_free(
             progress(i as f64 / frames.len() as f64);
         }
     }
+    let frames = &frames[..published];
     let drain_until = Instant::now() + FREE_DRAIN;
     while got.len() < frames.len() && Instant::now() < drain_until {
         client.wait_event(Duration::from_millis(20))?;
@@ -343,6 +474,7 @@ fn fly_free(
         latency_us,
         wall,
         stop: None,
+        interrupted,
     })
 }
 
@@ -380,7 +512,26 @@ fn replay(
     messages.iter().map(|m| backend.handle(*m)).collect()
 }
 
+/// The run options of the feed's plan: the bridge's layout (`segments`,
+/// `grading`), the controller's step, the feed's time and rate.
+fn plan_options(options: &FeedOptions, segments: usize, grading: f64) -> RunOptions {
+    RunOptions {
+        segments: Some(segments),
+        grading: Some(grading),
+        dt: Some(decoy_controller::MAX_STEP_S),
+        t_end: options.t_end,
+        rate: options.rate,
+        plots: false,
+        ..RunOptions::default()
+    }
+}
+
 /// Flies `scenario` through bridge `options.instance` and writes the outputs.
+///
+/// Order: the options and the scenario are checked (usage errors leave the
+/// output directory as it was), the output directory is cleared of an earlier
+/// run's files ([`clear_output_dir`]), then the bridge is contacted: a feed that
+/// fails from there on leaves no earlier summary to be taken for its own.
 pub fn run_feed(
     config: &SystemConfig,
     scenario: &Scenario,
@@ -393,26 +544,33 @@ pub fn run_feed(
             BridgeError::Usage("--rate does not apply to a recorded flight".to_owned()).into(),
         );
     }
+    // Everything but the layout (which the bridge decides) checked before
+    // anything is touched: one uniform segment stands for it here.
+    let checked = scenario
+        .plan(config, &plan_options(options, 1, 1.0))
+        .map_err(FeedError::Scenario)?;
+    let frame_count = flight::checked_frame_count(checked.t_end, options.t_end.is_some())
+        .map_err(BridgeError::Usage)?;
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("feed-{}", checked.name)));
+    clear_output_dir(&out_dir).map_err(|e| BridgeError::Output(e.to_string()))?;
+
     let node_name = format!("feed-{}-{}", options.instance, std::process::id());
     let mut client = BridgeClient::connect(&options.instance, &node_name, iox)?;
+    // After the client's node, whose iceoryx2 handler they chain.
+    let signals = FeedSignals::register()?;
     client.set_timeout(options.timeout);
     let status = client.get_status()?;
     let segments = usize::from(status.segments);
     let plan = scenario
         .plan(
             config,
-            &RunOptions {
-                segments: Some(segments),
-                grading: Some(status.grading_ratio),
-                dt: Some(decoy_controller::MAX_STEP_S),
-                t_end: options.t_end,
-                rate: options.rate,
-                plots: false,
-                ..RunOptions::default()
-            },
+            &plan_options(options, segments, status.grading_ratio),
         )
         .map_err(FeedError::Scenario)?;
-    let frames = flight::scenario_frames(&plan.profile, flight::frame_count(plan.t_end));
+    let frames = flight::scenario_frames(&plan.profile, frame_count);
     let reset = client.simple_command(command::RESET_TO_TRIM)?;
     if reset.result != bridge_types::result::OK {
         return Err(BridgeError::Backend(format!(
@@ -422,8 +580,10 @@ pub fn run_feed(
         .into());
     }
     let flown = match options.mode {
-        FeedMode::Lockstep => fly_lockstep(&mut client, &frames, options.realtime, progress)?,
-        FeedMode::Free => fly_free(&mut client, &frames, options.realtime, progress)?,
+        FeedMode::Lockstep => {
+            fly_lockstep(&mut client, &frames, options.realtime, progress, &signals)?
+        }
+        FeedMode::Free => fly_free(&mut client, &frames, options.realtime, progress, &signals)?,
     };
     drop(client);
 
@@ -459,10 +619,6 @@ pub fn run_feed(
     let (vs_same, _) = flight::compare(&only_outputs(&bridge_messages), &only_outputs(&same));
     let stats = flight::instruction_stats(&bridge_messages);
 
-    let out_dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(format!("feed-{}", plan.name)));
     fs::create_dir_all(&out_dir)
         .map_err(|e| BridgeError::Output(format!("cannot create {}: {e}", out_dir.display())))?;
     let rows = paired_rows(&flown.sent, &bridge_messages, &host64);
@@ -485,7 +641,11 @@ pub fn run_feed(
         plan.profile.manoeuvre_start(),
         &bridge_samples,
         flown.wall.as_secs_f64(),
-        flown.stop.as_ref().map(|(_, r)| r.clone()),
+        flown
+            .stop
+            .as_ref()
+            .map(|(_, r)| r.clone())
+            .or(flown.interrupted.map(|s| format!("interrupted by {s}"))),
     );
     let answered = answers
         .iter()
@@ -524,7 +684,7 @@ pub fn run_feed(
     let mut json = serde_json::to_string_pretty(&summary)
         .map_err(|e| BridgeError::Output(format!("cannot write the summary: {e}")))?;
     json.push('\n');
-    fs::write(&summary_path, json).map_err(|e| {
+    write_atomically(&summary_path, json.as_bytes()).map_err(|e| {
         BridgeError::Output(format!("cannot write {}: {e}", summary_path.display()))
     })?;
     let mut files = vec![timeseries, summary_path];
@@ -557,6 +717,13 @@ pub fn run_feed(
         return Err(FeedError::Stopped {
             t_s,
             reason,
+            out_dir,
+        });
+    }
+    if let Some(signal) = flown.interrupted {
+        return Err(FeedError::Interrupted {
+            t_s: summary.run.stopped.as_ref().map_or(0.0, |s| s.t_s),
+            signal,
             out_dir,
         });
     }

@@ -76,6 +76,15 @@ pub enum ConfigError {
     },
     /// The decoy aerodynamic table is unusable.
     AeroTable(AeroTableError),
+    /// A graded layout whose ratio, raised to the segment count, leaves the
+    /// scalar's range: the shortest segment's length underflows to zero (or the
+    /// sum of the length weights overflows).
+    GradingOverflow {
+        /// Segments requested.
+        count: usize,
+        /// The grading ratio.
+        ratio: f64,
+    },
 }
 
 /// The prescribed aircraft motion at some time is unusable.
@@ -216,6 +225,11 @@ impl fmt::Display for ConfigError {
                 )
             }
             ConfigError::AeroTable(e) => write!(f, "{e}"),
+            ConfigError::GradingOverflow { count, ratio } => write!(
+                f,
+                "grading ratio {ratio} over {count} segments overflows: the longest segment would be {ratio}^{} times the shortest, beyond the floating-point range, so the shortest segment's length underflows to zero; use a smaller grading ratio or fewer segments",
+                count.saturating_sub(1)
+            ),
         }
     }
 }

@@ -409,7 +409,15 @@ impl<T: Real, const N: usize> Model<T, N> {
                 segments = check;
             }
         });
-        segments?;
+        // The cable's length and density are checked above: a graded segment
+        // that is not positive and finite comes from ratio^count leaving the range.
+        segments.map_err(|e| match params.layout {
+            SegmentLayout::Graded { count, ratio } => ConfigError::GradingOverflow {
+                count,
+                ratio: ratio.to_f64(),
+            },
+            SegmentLayout::Uniform { .. } => e,
+        })?;
         let decoy = match &params.end {
             EndBody::Free => None,
             EndBody::Decoy(d) => Some(decoy_derived(d)?),
@@ -601,5 +609,55 @@ mod tests {
             Model::<f64, 8>::new(p),
             Err(ConfigError::OutOfRange { .. })
         ));
+    }
+
+    /// A ratio whose power over the segments leaves the range is named as such,
+    /// in f64 (10^511) and in f32 (3^99), not as a non-finite segment length.
+    #[test]
+    fn a_grading_that_overflows_is_named() {
+        let overflow = ConfigError::GradingOverflow {
+            count: 512,
+            ratio: 10.0,
+        };
+        assert_eq!(
+            Model::<f64, 512>::new(params(SegmentLayout::Graded {
+                count: 512,
+                ratio: 10.0,
+            }))
+            .unwrap_err(),
+            overflow
+        );
+        let p = ModelParams::<f32> {
+            environment: Environment {
+                gravity: 9.81,
+                wind: Vec3::zeros(),
+                atmosphere: Atmosphere::Vacuum,
+            },
+            connection_point: Vec3::zeros(),
+            cable: CableParams {
+                length: 100.0,
+                diameter: 0.0,
+                linear_density: 0.01,
+                cd_normal: 0.0,
+                cf_tangential: 0.0,
+            },
+            layout: SegmentLayout::Graded {
+                count: 100,
+                ratio: 3.0,
+            },
+            end: EndBody::Free,
+        };
+        assert_eq!(
+            Model::<f32, 128>::new(p).unwrap_err(),
+            ConfigError::GradingOverflow {
+                count: 100,
+                ratio: 3.0,
+            }
+        );
+        let text = overflow.to_string();
+        assert!(
+            text.contains("10^511") && text.contains("fewer segments"),
+            "{text}"
+        );
     }
 }

@@ -165,6 +165,16 @@ def fly_lockstep(bridge: Bridge, states: Iterable[AircraftState], progress: Any 
     return run
 
 
+def largest_magnitude(values: Iterable[float]) -> float | None:
+    """The largest absolute value of ``values`` (never negative), ``None`` when empty.
+
+    ``max(values, key=abs)`` would keep the sign of that value: a decoy drifting
+    3.8 mm to the right would report a "largest absolute" offset of -0.0038 m.
+    """
+    magnitudes = [abs(v) for v in values]
+    return max(magnitudes) if magnitudes else None
+
+
 def percentiles(values: list[float]) -> dict[str, float]:
     """``{"p50", "p99", "p999", "max"}`` by nearest rank (as ``decoy feed``), zeros when empty."""
     if not values:

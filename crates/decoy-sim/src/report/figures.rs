@@ -187,8 +187,9 @@ pub fn recompress_png(path: &std::path::Path) -> Result<(), SimError> {
     Ok(())
 }
 
+/// Writes `bytes` to `path`, whole ([`crate::atomic`]).
 pub(super) fn write_text_bytes(path: &std::path::Path, bytes: &[u8]) -> Result<(), SimError> {
-    std::fs::write(path, bytes).map_err(|source| SimError::Io {
+    crate::atomic::write_atomically(path, bytes).map_err(|source| SimError::Io {
         action: "write",
         path: path.to_owned(),
         source,

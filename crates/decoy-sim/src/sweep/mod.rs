@@ -236,9 +236,9 @@ pub(crate) fn create_dir(dir: &Path) -> Result<(), SimError> {
     })
 }
 
-/// Writes `text` to `path`.
+/// Writes `text` to `path`, whole ([`crate::atomic`]).
 pub(crate) fn write_text(path: &Path, text: &str) -> Result<PathBuf, SimError> {
-    std::fs::write(path, text).map_err(|source| SimError::Io {
+    crate::atomic::write_atomically(path, text.as_bytes()).map_err(|source| SimError::Io {
         action: "write",
         path: path.to_owned(),
         source,
