@@ -47,7 +47,9 @@ fn main() {
     for name in scenarios {
         for &h in &altitudes {
             for &m in &machs {
-                let v = config.mach_to_speed(h, m).expect("an altitude of the atmosphere");
+                let v = config
+                    .mach_to_speed(h, m)
+                    .expect("an altitude of the atmosphere");
                 for &n in &loads {
                     let rate = if name == "turn" {
                         g * (n * n - 1.0f64).sqrt() / v
