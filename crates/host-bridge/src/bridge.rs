@@ -61,6 +61,7 @@ impl Timing {
     }
 
     /// Heap bytes held (the histograms' counts: fixed).
+    #[cfg(test)]
     fn heap_bytes(&self) -> usize {
         self.all.heap_bytes() + self.window.heap_bytes()
     }

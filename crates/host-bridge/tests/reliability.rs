@@ -315,8 +315,10 @@ fn commands_status_and_lockstep_are_answered_during_a_flood() {
 
 /// A stop request during a flood ends the bridge within [`STOP_BOUND`] while
 /// the flood goes on (looked at between batches), not when the flood ends.
-/// (SIGTERM and SIGINT are looked at in the same place: `Halt::requested`;
-/// decoy-cli's tests/bridge.rs sends a real SIGTERM during a flood.)
+/// (SIGTERM and SIGINT are looked at in the same place, `Halt::requested` in
+/// crates/host-bridge/src/bridge.rs, after each round; the soak, docs/soak.md,
+/// sends a real SIGTERM to `decoy bridge` during a flood and reports how long it
+/// took.)
 #[test]
 fn a_stop_request_during_a_flood_ends_the_bridge_at_once() {
     let _one = one_at_a_time();
