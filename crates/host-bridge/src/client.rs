@@ -231,16 +231,29 @@ impl BridgeClient {
     /// Publishes `state` on the free-running service (its `header.seq` as
     /// given; see [`BridgeClient::next_free_seq`]) and wakes the bridge.
     pub fn publish(&mut self, state: &AircraftState) -> Result<(), BridgeError> {
+        self.publish_quietly(state)?;
+        self.wake_for_states();
+        Ok(())
+    }
+
+    /// [`BridgeClient::publish`] without waking the bridge: a publisher of
+    /// many samples can wake it once per batch ([`BridgeClient::wake_for_states`]);
+    /// the bridge's 100 ms tick serves the samples anyway.
+    pub fn publish_quietly(&mut self, state: &AircraftState) -> Result<(), BridgeError> {
         self.state
             .loan_uninit()
             .map_err(|e| ipc("loaning a sample", e))?
             .write_payload(*state)
             .send()
             .map_err(|e| ipc("publishing a state", e))?;
+        Ok(())
+    }
+
+    /// Wakes the bridge for the free-running samples published (`STATE`).
+    pub fn wake_for_states(&self) {
         let _ = self
             .to_bridge
             .notify_with_custom_event_id(EventId::new(event::STATE));
-        Ok(())
     }
 
     /// The next sequence number of this client's free-running samples (from 0).
