@@ -7,7 +7,8 @@
 //!   no_std cross build, the firmware build), failing fast.
 //! - `run`: the main job on the built-in reference system (see [`MAIN_JOB`]).
 //! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
-//!   [`bench_report`]).
+//!   [`bench_report`]), then the bridge's soak.
+//! - `soak`: the bridge's soak alone (see [`soak`]): `docs/soak.md`, `docs/soak.json`.
 
 mod apt;
 mod layering;
@@ -55,8 +56,16 @@ enum Cmd {
     /// Run the main job on the built-in reference system.
     Run,
     /// Run the wall-clock and instruction-count benchmarks and the firmware under
-    /// QEMU, and write docs/benchmarks.md and docs/figures/bench-scaling.{png,svg}.
+    /// QEMU, and write docs/benchmarks.md and docs/figures/bench-scaling.{png,svg};
+    /// then the bridge's soak (docs/soak.md).
     BenchReport,
+    /// The bridge's soak alone: `decoy bridge` serving lockstep, a free-running
+    /// flood and commands side by side; writes docs/soak.md and docs/soak.json.
+    Soak {
+        /// How long the bridge serves (e.g. 30s, 10m, 1h; default 10m).
+        #[arg(long, value_name = "DURATION", default_value = SOAK_DURATION)]
+        duration: String,
+    },
 }
 
 fn main() -> ExitCode {
@@ -66,7 +75,8 @@ fn main() -> ExitCode {
         Cmd::Setup => setup::setup(&root, Scope::Full).map(drop),
         Cmd::Test => test(&root),
         Cmd::Run => run(&root),
-        Cmd::BenchReport => bench_report(&root),
+        Cmd::BenchReport => bench_report(&root).and_then(|()| soak(&root, SOAK_DURATION)),
+        Cmd::Soak { duration } => soak(&root, &duration),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -358,6 +368,39 @@ const PINOCCHIO_SCRIPT: &str = "crates/benches/pinocchio/aba_300.py";
 const PINOCCHIO_RESULT: &str = "target/bench-report/pinocchio.txt";
 /// Time limit of the Pinocchio script.
 const PINOCCHIO_TIMEOUT: Duration = Duration::from_secs(300);
+
+/// The soak's default duration.
+const SOAK_DURATION: &str = "10m";
+
+/// `cargo xtask soak` (and the last stage of `cargo xtask bench-report`): builds
+/// `decoy` (release), then runs `crates/host-bridge/examples/soak.rs` against
+/// it for `duration`; the example writes `docs/soak.md` and `docs/soak.json`.
+fn soak(root: &Path, duration: &str) -> Result<()> {
+    println!();
+    println!("==> bridge soak ({duration})");
+    process::run(&mut cargo(
+        root,
+        &["build", "--release", "-p", "decoy-cli", "--bin", "decoy"],
+    ))?;
+    let decoy = root.join("target/release/decoy");
+    let decoy = decoy.to_string_lossy();
+    process::run(&mut cargo(
+        root,
+        &[
+            "run",
+            "--release",
+            "-p",
+            "host-bridge",
+            "--example",
+            "soak",
+            "--",
+            "--duration",
+            duration,
+            "--decoy",
+            &decoy,
+        ],
+    ))
+}
 
 /// `cargo xtask bench-report`: setup (target toolchain and QEMU for the firmware,
 /// `gungraun-runner` of the library's version), the criterion and gungraun

@@ -46,6 +46,66 @@ def test_no_bridge_is_a_clear_error():
         sweep_iceoryx(prefix, root)
 
 
+def test_a_client_waits_for_the_readiness_mark_not_for_the_first_services():
+    """Services that exist before the bridge serves them all (a bridge part-way
+    through its start: every service, the lockstep server, but no status
+    publisher yet) are not a bridge: the client waits for the readiness mark and
+    says there is no bridge, instead of connecting and losing its first command
+    (issue 27: a command sent before the commands server existed)."""
+    import time
+
+    import iceoryx2 as iox
+
+    from decoy_bridge.client import make_config
+
+    prefix = unique_prefix()
+    root = Path(tempfile.mkdtemp(prefix="dxpy", dir="/tmp"))
+    try:
+        node = iox.NodeBuilder.new().config(make_config(prefix, str(root))).create(iox.ServiceType.Ipc)
+
+        def name(service: str):
+            return iox.ServiceName.new(f"decoy/half/{service}")
+
+        lockstep = node.service_builder(name("lockstep")).request_response(wire.AircraftState, wire.Answer).create()
+        server = lockstep.server_builder().create()
+        made = [
+            node.service_builder(name("commands")).request_response(wire.Command, wire.CommandReply).create(),
+            node.service_builder(name("state")).publish_subscribe(wire.AircraftState).create(),
+            node.service_builder(name("outputs")).publish_subscribe(wire.Answer).create(),
+            node.service_builder(name("status")).publish_subscribe(wire.Status).create(),
+            node.service_builder(name("to-bridge")).event().create(),
+            node.service_builder(name("from-bridge")).event().create(),
+        ]
+        t0 = time.monotonic()
+        with pytest.raises(NoBridge, match="no bridge .* is ready"):
+            Bridge("half", prefix=prefix, root=str(root), connect_timeout_s=0.3)
+        assert time.monotonic() - t0 < 5.0
+        del server, made, lockstep, node
+    finally:
+        sweep_iceoryx(prefix, root)
+
+
+def test_a_command_sent_at_once_while_the_bridge_starts_is_never_lost(bridge_factory):
+    """Startups raced: the client connects as early as it can (no pause between
+    attempts) while the bridge starts and pings at once; never lost."""
+    import time
+
+    for round_ in range(8):
+        b = bridge_factory()
+        deadline = time.monotonic() + 60.0
+        while True:
+            try:
+                c = Bridge(b.instance, prefix=b.prefix, root=str(b.root), timeout_s=5.0, connect_timeout_s=0.01)
+                break
+            except NoBridge:
+                if b.proc.poll() is not None or time.monotonic() > deadline:
+                    raise
+        with c:
+            reply = c.ping(nonce=round_)
+            assert reply.nonce == round_
+        b.stop()
+
+
 def test_lockstep_session_answers_every_frame_and_types_rejections(bridge):
     """300 frames of level flight with bad frames interleaved: every frame is answered,
     each bad one by its typed rejection and counter, nothing lost, and the valid

@@ -33,7 +33,9 @@ use host_bridge::bridge::{BridgeOptions, Percentiles, run_bridge};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::from_link_frame;
 use host_bridge::local::Isolated;
-use host_bridge::services::{Ipc, Services, iox_config, node, quiet_iceoryx_log};
+use host_bridge::services::{
+    Ipc, Services, create_status_service, iox_config, node, quiet_iceoryx_log,
+};
 use iceoryx2::prelude::*;
 use solver_core::profiles::LevelTurn;
 
@@ -316,6 +318,10 @@ fn bare_server(config: &Config) {
     let commands = services.commands.server_builder().create().unwrap();
     let listener = services.to_bridge.listener_builder().create().unwrap();
     let notifier = services.from_bridge.notifier_builder().create().unwrap();
+    // The readiness mark, last (host_bridge::services), as the bridge's.
+    let status_service = create_status_service(&node, INSTANCE).unwrap();
+    let status = status_service.publisher_builder().create().unwrap();
+    let _ = status.send_copy(bridge_types::Status::default());
     let waitset = WaitSetBuilder::new().create::<Ipc>().unwrap();
     let guard = waitset.attach_notification(&listener).unwrap();
     let _ = waitset.wait_and_process(|id| {

@@ -25,7 +25,8 @@ use serde::Serialize;
 use crate::BridgeError;
 use crate::backend::{Backend, ModelInfo};
 use crate::convert;
-use crate::services::{Ipc, Services, node};
+use crate::services::{Ipc, Services, StatusService, create_status_service, node};
+use crate::timing::LatencyHistogram;
 
 /// A run with no valid state for this long is reported degraded (the
 /// controller's own link-silence time, on the bridge's clock).
@@ -34,14 +35,36 @@ pub const SILENCE: Duration = Duration::from_millis(decoy_controller::SILENCE_MS
 pub const TICK: Duration = Duration::from_millis(100);
 /// Status published at least this often.
 pub const STATUS_PERIOD: Duration = Duration::from_secs(1);
+/// Free-running samples the bridge processes at most between two looks at
+/// everything else (commands, lockstep requests, the stop request, SIGINT and
+/// SIGTERM, the tick's work): a command or a lockstep request waits for at most
+/// one batch however fast the free-running publishers are (docs/bridge.md,
+/// "Free-running floods").
+pub const FREE_BATCH: usize = 8;
 
 /// Service time of the answers (receive to send, in the bridge), kept for the
-/// status line and the summary.
+/// status line and the summary in fixed histograms (crate::timing): the
+/// bridge's memory does not grow with the answers it sends.
 #[derive(Clone, Debug, Default)]
 struct Timing {
-    all_us: Vec<u32>,
-    window_us: Vec<u32>,
-    window_answers: u64,
+    /// Every answer since the start (the summary).
+    all: LatencyHistogram,
+    /// The answers since the last status line.
+    window: LatencyHistogram,
+}
+
+impl Timing {
+    /// Counts one answer's service time.
+    fn record(&mut self, took: Duration) {
+        self.all.record(took);
+        self.window.record(took);
+    }
+
+    /// Heap bytes held (the histograms' counts: fixed).
+    #[cfg(test)]
+    fn heap_bytes(&self) -> usize {
+        self.all.heap_bytes() + self.window.heap_bytes()
+    }
 }
 
 /// Percentiles of a set of durations, us.
@@ -104,7 +127,9 @@ pub struct BridgeSummary {
     pub counters: Counters,
     /// States rejected, all reasons.
     pub rejected: u64,
-    /// Service time of the answers in the bridge (receive to send), us.
+    /// Service time of the answers in the bridge (receive to send), us: from
+    /// a fixed histogram (crate::timing), percentiles within 0.1 %, the
+    /// maximum exact.
     pub service_time_us: Percentiles,
     /// Health at the end.
     pub health: String,
@@ -186,6 +211,7 @@ struct Ports {
     to_bridge: Listener<Ipc>,
     from_bridge: Notifier<Ipc>,
     // The services and the node outlive the ports (fields drop in order).
+    _status_service: StatusService,
     _services: Services,
     node: Node<Ipc>,
 }
@@ -211,6 +237,8 @@ struct Engine {
     timing: Timing,
     last_status: Instant,
     last_line: Instant,
+    /// When the tick's work last ran ([`Ports::tick`]).
+    last_tick: Instant,
 }
 
 impl Engine {
@@ -235,6 +263,7 @@ impl Engine {
             timing: Timing::default(),
             last_status: now,
             last_line: now,
+            last_tick: now,
         }
     }
 
@@ -289,11 +318,8 @@ impl Engine {
                 self.reject(seq, reason::BACKEND_FAILURE)
             }
         };
-        let us = started.elapsed().as_secs_f64() * 1e6;
-        let us = us.min(f64::from(u32::MAX)) as u32;
-        self.timing.all_us.push(us);
-        self.timing.window_us.push(us);
-        self.timing.window_answers += 1;
+        let took = started.elapsed();
+        self.timing.record(took);
         answer
     }
 
@@ -396,14 +422,8 @@ impl Engine {
         if elapsed < 0.5 {
             return;
         }
-        let rate = self.timing.window_answers as f64 / elapsed;
-        let mut w: Vec<f64> = self
-            .timing
-            .window_us
-            .iter()
-            .map(|&u| f64::from(u))
-            .collect();
-        let p = Percentiles::of(&mut w);
+        let rate = self.timing.window.len() as f64 / elapsed;
+        let p = self.timing.window.percentiles();
         let c = &self.counters;
         let line = format!(
             "\r{} [{} f{} {}seg] {:>7.0} states/s  service p50 {:>6.1} us max {:>7.1} us  ok {}  rejected {}  overruns {}  lost {}  {}   ",
@@ -423,13 +443,11 @@ impl Engine {
         let mut err = std::io::stderr();
         let _ = err.write_all(line.as_bytes());
         let _ = err.flush();
-        self.timing.window_us.clear();
-        self.timing.window_answers = 0;
+        self.timing.window.clear();
         self.last_line = Instant::now();
     }
 
     fn summary(&self, ended_by: &str, cpus: String) -> BridgeSummary {
-        let mut all: Vec<f64> = self.timing.all_us.iter().map(|&u| f64::from(u)).collect();
         BridgeSummary {
             instance: self.instance.clone(),
             backend: bridge_types::backend::name(self.info.backend).to_owned(),
@@ -442,7 +460,7 @@ impl Engine {
             uptime_s: self.started.elapsed().as_secs_f64(),
             counters: self.counters,
             rejected: self.counters.rejected(),
-            service_time_us: Percentiles::of(&mut all),
+            service_time_us: self.timing.all.percentiles(),
             health: health::name(self.health).to_owned(),
         }
     }
@@ -475,11 +493,6 @@ impl Ports {
             .publisher_builder()
             .create()
             .map_err(|e| ipc("the outputs publisher", format!("{e:?}")))?;
-        let status = services
-            .status
-            .publisher_builder()
-            .create()
-            .map_err(|e| ipc("the status publisher", format!("{e:?}")))?;
         let to_bridge = services
             .to_bridge
             .listener_builder()
@@ -490,6 +503,13 @@ impl Ports {
             .notifier_builder()
             .create()
             .map_err(|e| ipc("the event notifier", format!("{e:?}")))?;
+        // Last, the readiness mark: the status service and its publisher, once
+        // every other service and port exists (crate::services).
+        let status_service = create_status_service(&node, &options.instance)?;
+        let status = status_service
+            .publisher_builder()
+            .create()
+            .map_err(|e| ipc("the status publisher", format!("{e:?}")))?;
         Ok(Ports {
             lockstep,
             commands,
@@ -498,6 +518,7 @@ impl Ports {
             status,
             to_bridge,
             from_bridge,
+            _status_service: status_service,
             _services: services,
             node,
         })
@@ -524,10 +545,63 @@ impl Ports {
         self.notify(event::STATUS);
     }
 
-    /// Everything waiting, in order: commands, lockstep requests, free-running samples.
-    fn process(&self, engine: &mut Engine) -> Result<(), BridgeError> {
-        let ipc = |e: String| BridgeError::Ipc(e);
-        while let Some(active) = self.commands.receive().map_err(|e| ipc(format!("{e:?}")))? {
+    /// The tick's work: silence supervision, the status (on a change of health
+    /// and every [`STATUS_PERIOD`]), the status line.
+    fn tick(&self, engine: &mut Engine, status_line: bool) {
+        engine.last_tick = Instant::now();
+        let changed = engine.supervise();
+        if changed || engine.last_status.elapsed() >= STATUS_PERIOD {
+            self.publish_status(engine);
+        }
+        if status_line {
+            engine.status_line();
+        }
+    }
+
+    /// Everything waiting, in rounds until the free-running queue is empty:
+    /// each round serves the waiting commands, then the waiting lockstep
+    /// requests (at most [`REQUESTS_PER_ROUND`] of each: every client's
+    /// requests in flight), then at most [`FREE_BATCH`] free-running samples,
+    /// then looks at `halt` (the stop request, SIGINT, SIGTERM) and does the
+    /// tick's work when it is due (`tick_due`, or a [`TICK`] since the last).
+    /// So however fast free-running samples arrive, a command or a lockstep
+    /// request waits for at most one batch of them, and a stop or a signal is
+    /// noticed within one round. `Some` when the bridge is to end.
+    fn serve(
+        &self,
+        engine: &mut Engine,
+        halt: &Halt<'_>,
+        mut tick_due: bool,
+        status_line: bool,
+    ) -> Result<Option<Ending>, BridgeError> {
+        loop {
+            self.serve_commands(engine)?;
+            self.serve_lockstep(engine)?;
+            let drained = self.serve_free(engine)?;
+            if let Some(ending) = halt.requested() {
+                return Ok(Some(ending));
+            }
+            if tick_due || engine.last_tick.elapsed() >= TICK {
+                self.tick(engine, status_line);
+                tick_due = false;
+            }
+            if drained {
+                return Ok(None);
+            }
+        }
+    }
+
+    /// The waiting commands (at most [`REQUESTS_PER_ROUND`]), each answered
+    /// and followed by the status.
+    fn serve_commands(&self, engine: &mut Engine) -> Result<(), BridgeError> {
+        for _ in 0..REQUESTS_PER_ROUND {
+            let Some(active) = self
+                .commands
+                .receive()
+                .map_err(|e| BridgeError::Ipc(format!("{e:?}")))?
+            else {
+                break;
+            };
             let reply = engine.on_command(active.payload());
             if let Ok(r) = active.loan_uninit() {
                 let _ = r.write_payload(reply).send();
@@ -535,7 +609,21 @@ impl Ports {
             self.notify(event::COMMAND_REPLY);
             self.publish_status(engine);
         }
-        while let Some(active) = self.lockstep.receive().map_err(|e| ipc(format!("{e:?}")))? {
+        Ok(())
+    }
+
+    /// The waiting lockstep requests (at most [`REQUESTS_PER_ROUND`]), each
+    /// answered, copied on `outputs`, then followed by the frame's look-ahead
+    /// slice.
+    fn serve_lockstep(&self, engine: &mut Engine) -> Result<(), BridgeError> {
+        for _ in 0..REQUESTS_PER_ROUND {
+            let Some(active) = self
+                .lockstep
+                .receive()
+                .map_err(|e| BridgeError::Ipc(format!("{e:?}")))?
+            else {
+                break;
+            };
             engine.counters.lockstep_requests += 1;
             let answer = engine.on_state(active.payload());
             if let Ok(r) = active.loan_uninit() {
@@ -549,9 +637,26 @@ impl Ports {
             // The frame's look-ahead slice, once its answer is out.
             engine.backend.background();
         }
-        let mut any = false;
-        while let Some(sample) = self.state.receive().map_err(|e| ipc(format!("{e:?}")))? {
-            any = true;
+        Ok(())
+    }
+
+    /// At most [`FREE_BATCH`] free-running samples, in order, each answered on
+    /// `outputs` (one `OUTPUT` notification for the batch); true when no
+    /// sample is left waiting. Counts `lost` (gaps in a publisher's numbers)
+    /// and `overruns` (a sample processed when a later one was waiting).
+    fn serve_free(&self, engine: &mut Engine) -> Result<bool, BridgeError> {
+        let mut answered = 0;
+        let mut drained = false;
+        while answered < FREE_BATCH {
+            let Some(sample) = self
+                .state
+                .receive()
+                .map_err(|e| BridgeError::Ipc(format!("{e:?}")))?
+            else {
+                drained = true;
+                break;
+            };
+            answered += 1;
             engine.counters.free_samples += 1;
             let publisher = sample.header().publisher_id();
             let seq = sample.payload().header.seq;
@@ -564,23 +669,69 @@ impl Ports {
                 }
             }
             engine.free_next.insert(publisher, seq.wrapping_add(1));
-            if self.state.has_samples().unwrap_or(false) {
+            let later_waiting = self.state.has_samples().unwrap_or(false);
+            if later_waiting {
                 engine.counters.overruns += 1;
             }
             let answer = engine.on_state(sample.payload());
             drop(sample);
             self.publish(&answer);
             engine.backend.background();
+            if !later_waiting {
+                drained = true;
+                break;
+            }
         }
-        if any {
+        if answered > 0 {
             self.notify(event::OUTPUT);
         }
-        Ok(())
+        Ok(drained)
     }
 }
 
-/// Runs a bridge until SIGINT or SIGTERM and returns its summary. The services
-/// exist from `ready` on (called once, with the status now).
+/// Requests of each request-response service served at most in one round of
+/// [`Ports::serve`]: every request the clients can have in flight.
+pub const REQUESTS_PER_ROUND: usize =
+    crate::services::MAX_CLIENTS * crate::services::MAX_ACTIVE_REQUESTS;
+
+/// Why a bridge ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ending {
+    /// SIGINT or SIGTERM.
+    Signal,
+    /// [`BridgeOptions::stop`].
+    StopRequest,
+}
+
+/// What ends a bridge, looked at between the rounds of [`Ports::serve`].
+struct Halt<'a> {
+    stop: Option<&'a AtomicBool>,
+    signals: &'a Signals,
+    node: &'a Node<Ipc>,
+}
+
+impl Halt<'_> {
+    /// The stop request, SIGINT or SIGTERM, if one came.
+    fn requested(&self) -> Option<Ending> {
+        if self.stop.is_some_and(|s| s.load(Ordering::Relaxed)) {
+            return Some(Ending::StopRequest);
+        }
+        if self.signals.received() {
+            return Some(Ending::Signal);
+        }
+        // Without both flags (registration failed) iceoryx2's own record,
+        // which this call consumes: the bridge ends at once on it.
+        if !self.signals.complete() && self.node.wait(Duration::ZERO).is_err() {
+            return Some(Ending::Signal);
+        }
+        None
+    }
+}
+
+/// Runs a bridge until SIGINT or SIGTERM (or [`BridgeOptions::stop`]) and
+/// returns its summary. Every service and port exists from `ready` on (called
+/// once, with the status now): the `status` service, created last, is the
+/// clients' readiness mark (crate::services).
 pub fn run_bridge(
     options: &BridgeOptions,
     backend: Box<dyn Backend + Send>,
@@ -603,40 +754,39 @@ pub fn run_bridge(
     ports.publish_status(&mut engine);
     ready(&engine.status());
     let status_line = options.status_line && std::io::stderr().is_terminal();
+    let halt = Halt {
+        stop: options.stop.as_deref(),
+        signals: &signals,
+        node: &ports.node,
+    };
     let mut failure = None;
+    let mut ending = None;
     let outcome = loop {
         let outcome = waitset.wait_and_process(|id| {
             if id.has_event_from(&wake) {
                 // Consume the notifications, or the WaitSet keeps waking.
                 let _ = ports.to_bridge.try_wait(|_| {});
             }
-            if let Err(e) = ports.process(&mut engine) {
-                failure = Some(e);
-                return CallbackProgression::Stop;
-            }
-            if options
-                .stop
-                .as_ref()
-                .is_some_and(|s| s.load(Ordering::Relaxed))
-            {
-                return CallbackProgression::Stop;
-            }
-            if id.has_event_from(&tick) {
-                let changed = engine.supervise();
-                if changed || engine.last_status.elapsed() >= STATUS_PERIOD {
-                    ports.publish_status(&mut engine);
+            match ports.serve(&mut engine, &halt, id.has_event_from(&tick), status_line) {
+                Ok(None) => CallbackProgression::Continue,
+                Ok(Some(e)) => {
+                    ending = Some(e);
+                    CallbackProgression::Stop
                 }
-                if status_line {
-                    engine.status_line();
+                Err(e) => {
+                    failure = Some(e);
+                    CallbackProgression::Stop
                 }
             }
-            CallbackProgression::Continue
         });
         match outcome {
             // Any signal interrupts the wait, SIGCONT after a SIGSTOP included; only
             // SIGINT and SIGTERM (which the node records) end the bridge.
             Ok(WaitSetRunResult::Interrupt)
-                if failure.is_none() && ports.node.wait(Duration::ZERO).is_ok() => {}
+                if failure.is_none()
+                    && ending.is_none()
+                    && !signals.received()
+                    && ports.node.wait(Duration::ZERO).is_ok() => {}
             outcome => break outcome,
         }
     };
@@ -646,12 +796,16 @@ pub fn run_bridge(
     if let Some(e) = failure {
         return Err(e);
     }
-    let ended_by = match outcome {
+    let ended_by = match (ending, outcome) {
+        (Some(Ending::Signal), _) => signals.which(),
+        (Some(Ending::StopRequest), _) => "stop request",
         // iceoryx2 reports SIGINT and SIGTERM alike once its handler consumed
         // the signal; the flags chained before it tell them apart.
-        Ok(WaitSetRunResult::Interrupt | WaitSetRunResult::TerminationRequest) => signals.which(),
-        Ok(_) => "stop request",
-        Err(e) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
+        (None, Ok(WaitSetRunResult::Interrupt | WaitSetRunResult::TerminationRequest)) => {
+            signals.which()
+        }
+        (None, Ok(_)) => "stop request",
+        (None, Err(e)) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
     };
     let summary = engine.summary(ended_by, crate::affinity::current_list());
     drop(tick);
@@ -688,6 +842,16 @@ impl Signals {
         }
     }
 
+    /// Whether SIGINT or SIGTERM came.
+    fn received(&self) -> bool {
+        self.interrupt.load(Ordering::Relaxed) || self.terminate.load(Ordering::Relaxed)
+    }
+
+    /// Whether both flags are registered (else [`Signals::received`] may miss one).
+    fn complete(&self) -> bool {
+        self.ids.len() == 2
+    }
+
     /// The signal that ended the run (SIGTERM if both came).
     fn which(&self) -> &'static str {
         match (
@@ -719,5 +883,27 @@ mod tests {
         let p = Percentiles::of(&mut v);
         assert_eq!((p.p50, p.p99, p.p999, p.max), (500.0, 990.0, 999.0, 1000.0));
         assert_eq!(Percentiles::of(&mut []), Percentiles::default());
+    }
+
+    /// Issue 27: the bridge's service-time record (every answer's, for the
+    /// summary and the status line) holds the same memory after a million
+    /// answers as before the first (it kept every sample, 8 B an answer, before),
+    /// and its summary percentiles stay within the histogram's 0.1 %.
+    #[test]
+    fn service_time_memory_does_not_grow_with_the_answers() {
+        let mut t = Timing::default();
+        let empty = t.heap_bytes();
+        for i in 0..1_000_000u64 {
+            t.record(Duration::from_nanos(20_000 + (i % 1000) * 97));
+        }
+        assert_eq!(t.heap_bytes(), empty, "grew with the answers");
+        assert!(empty < 1 << 20, "{empty} bytes");
+        let p = t.all.percentiles();
+        // Uniform over 20 us + k * 97 ns, k = 0..999: nearest rank p50 at
+        // k = 499, max at k = 999.
+        let p50 = (20_000.0 + 499.0 * 97.0) / 1e3;
+        assert!(p.p50 >= p50 && p.p50 <= p50 * 1.001, "{p:?}");
+        assert_eq!(p.max, (20_000.0 + 999.0 * 97.0) / 1e3);
+        assert_eq!(t.window.len(), 1_000_000);
     }
 }

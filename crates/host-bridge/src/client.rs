@@ -16,10 +16,14 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 
 use crate::BridgeError;
-use crate::services::{Ipc, Services, node};
+use crate::services::{Ipc, Services, node, wait_until_ready};
 
 /// Default deadline of one answer.
 pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(5);
+/// How long [`BridgeClient::connect`] waits for the bridge to be ready (a
+/// starting bridge takes milliseconds from its first service to its readiness
+/// mark; this leaves room for a loaded machine).
+pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// A connection to bridge `instance`.
 pub struct BridgeClient {
@@ -30,6 +34,7 @@ pub struct BridgeClient {
     status: Subscriber<Ipc, Status, ()>,
     to_bridge: Notifier<Ipc>,
     from_bridge: Listener<Ipc>,
+    _status_service: crate::services::StatusService,
     _services: Services,
     _node: Node<Ipc>,
     instance: String,
@@ -43,10 +48,27 @@ fn ipc(what: &str, e: impl std::fmt::Debug) -> BridgeError {
 }
 
 impl BridgeClient {
-    /// Connects to bridge `instance` as node `node_name`;
-    /// [`BridgeError::NoBridge`] when no bridge serves it.
+    /// Connects to bridge `instance` as node `node_name` once it is ready
+    /// (waiting up to [`CONNECT_TIMEOUT`] for its readiness mark, so that a
+    /// bridge still starting is waited for and everything it serves exists
+    /// when this returns); [`BridgeError::NoBridge`] when no bridge is ready
+    /// in that time.
     pub fn connect(instance: &str, node_name: &str, config: &Config) -> Result<Self, BridgeError> {
+        Self::connect_within(instance, node_name, config, CONNECT_TIMEOUT)
+    }
+
+    /// [`BridgeClient::connect`], waiting up to `timeout` for the bridge to be
+    /// ready.
+    pub fn connect_within(
+        instance: &str,
+        node_name: &str,
+        config: &Config,
+        timeout: Duration,
+    ) -> Result<Self, BridgeError> {
         let node = node(node_name, config)?;
+        // The readiness mark first (crate::services): every other service and
+        // the bridge's every port exist once it does.
+        let status_service = wait_until_ready(&node, instance, timeout)?;
         let services = Services::open(&node, instance)?;
         let lockstep = services
             .lockstep
@@ -69,8 +91,7 @@ impl BridgeClient {
             .buffer_size(crate::services::OUTPUTS_BUFFER)
             .create()
             .map_err(|e| ipc("the outputs subscriber", e))?;
-        let status = services
-            .status
+        let status = status_service
             .subscriber_builder()
             .create()
             .map_err(|e| ipc("the status subscriber", e))?;
@@ -92,6 +113,7 @@ impl BridgeClient {
             status,
             to_bridge,
             from_bridge,
+            _status_service: status_service,
             _services: services,
             _node: node,
             instance: instance.to_owned(),
@@ -209,16 +231,29 @@ impl BridgeClient {
     /// Publishes `state` on the free-running service (its `header.seq` as
     /// given; see [`BridgeClient::next_free_seq`]) and wakes the bridge.
     pub fn publish(&mut self, state: &AircraftState) -> Result<(), BridgeError> {
+        self.publish_quietly(state)?;
+        self.wake_for_states();
+        Ok(())
+    }
+
+    /// [`BridgeClient::publish`] without waking the bridge: a publisher of
+    /// many samples can wake it once per batch ([`BridgeClient::wake_for_states`]);
+    /// the bridge's 100 ms tick serves the samples anyway.
+    pub fn publish_quietly(&mut self, state: &AircraftState) -> Result<(), BridgeError> {
         self.state
             .loan_uninit()
             .map_err(|e| ipc("loaning a sample", e))?
             .write_payload(*state)
             .send()
             .map_err(|e| ipc("publishing a state", e))?;
+        Ok(())
+    }
+
+    /// Wakes the bridge for the free-running samples published (`STATE`).
+    pub fn wake_for_states(&self) {
         let _ = self
             .to_bridge
             .notify_with_custom_event_id(EventId::new(event::STATE));
-        Ok(())
     }
 
     /// The next sequence number of this client's free-running samples (from 0).

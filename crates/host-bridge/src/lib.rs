@@ -19,6 +19,8 @@
 //! - [`local`]: a bridge on a thread, in an iceoryx2 setup of its own (tests,
 //!   benchmarks, examples).
 //! - [`affinity`]: `--cpu`, the bridge and its clients on chosen cores.
+//! - [`timing`]: durations in a fixed histogram (the service times, the
+//!   benchmark's round trips): bounded memory however long a bridge runs.
 #![deny(missing_docs)]
 
 pub mod affinity;
@@ -29,6 +31,7 @@ pub mod convert;
 pub mod feed;
 pub mod local;
 pub mod services;
+pub mod timing;
 
 use std::fmt;
 

@@ -110,7 +110,8 @@ pub struct LocalBridge {
 
 impl LocalBridge {
     /// Starts bridge `instance` with `backend` in `config`'s setup and returns
-    /// once its services exist.
+    /// once it is ready: every service and port exists, the `status` service
+    /// (the clients' readiness mark, crate::services) last.
     pub fn start(
         instance: &str,
         system: &SystemConfig,

@@ -1,15 +1,24 @@
 //! The services of one bridge instance, opened with the same settings by the
-//! bridge and by every client (docs/bridge.md lists them), and the iceoryx2
-//! configuration: the default one, with the file prefix and root directory
-//! taken from the environment so that tests and side-by-side runs stay apart.
+//! bridge and by every client (docs/bridge.md lists them), the readiness mark,
+//! and the iceoryx2 configuration: the default one, with the file prefix and
+//! root directory taken from the environment so that tests and side-by-side
+//! runs stay apart.
+//!
+//! **Readiness.** The bridge creates the `status` service last, after every
+//! other service and every port of its own, then its publisher and its first
+//! status: a `status` service with a publisher is the mark that the bridge
+//! serves everything ([`wait_until_ready`]). A client that waits for it before
+//! it opens the rest can send at once; one that opens services half created
+//! could send a command before the commands server exists, and lose it.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use bridge_types::{
     AircraftState, Answer, Command, CommandReply, SERVICE_ROOT, Status, service, service_name,
     valid_instance,
 };
 use iceoryx2::prelude::*;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::{event, publish_subscribe, request_response};
 
 use crate::BridgeError;
@@ -43,6 +52,9 @@ pub const MAX_SUBSCRIBERS: usize = 16;
 pub const MAX_NODES: usize = 40;
 /// Largest event id (bridge_types::event).
 pub const EVENT_ID_MAX: usize = 31;
+/// How often a client looks for the readiness mark while a bridge starts (the
+/// services may not exist yet, so there is no event to wait on).
+pub const READY_POLL: Duration = Duration::from_millis(5);
 
 /// The iceoryx2 configuration: iceoryx2's defaults (no config file is read, so
 /// nothing on the machine changes the services' limits), with `prefix` and
@@ -99,7 +111,8 @@ pub fn check_instance(instance: &str) -> Result<(), BridgeError> {
     }
 }
 
-/// The port factories of one instance's services.
+/// The port factories of one instance's services but `status`, the readiness
+/// mark ([`StatusService`]).
 pub struct Services {
     /// `lockstep`: AircraftState -> Answer.
     pub lockstep: request_response::PortFactory<Ipc, AircraftState, (), Answer, ()>,
@@ -107,14 +120,26 @@ pub struct Services {
     pub state: publish_subscribe::PortFactory<Ipc, AircraftState, ()>,
     /// `outputs`: every Answer.
     pub outputs: publish_subscribe::PortFactory<Ipc, Answer, ()>,
-    /// `status`: Status, history 1.
-    pub status: publish_subscribe::PortFactory<Ipc, Status, ()>,
     /// `commands`: Command -> CommandReply.
     pub commands: request_response::PortFactory<Ipc, Command, (), CommandReply, ()>,
     /// `to-bridge` event.
     pub to_bridge: event::PortFactory<Ipc>,
     /// `from-bridge` event.
     pub from_bridge: event::PortFactory<Ipc>,
+}
+
+/// Why `service` of `instance` could not be created (the bridge) or opened (a
+/// client: [`BridgeError::NoBridge`]).
+fn failure(instance: &str, create: bool, service: &str, e: String) -> BridgeError {
+    if create {
+        BridgeError::Ipc(format!(
+            "cannot create {SERVICE_ROOT}/{instance}/{service}: {e}"
+        ))
+    } else {
+        BridgeError::NoBridge(format!(
+            "no bridge named {instance:?} is running (service {SERVICE_ROOT}/{instance}/{service}: {e}); start one with `decoy bridge --instance {instance}`"
+        ))
+    }
 }
 
 fn name(instance: &str, service: &str) -> Result<ServiceName, BridgeError> {
@@ -124,30 +149,23 @@ fn name(instance: &str, service: &str) -> Result<ServiceName, BridgeError> {
 }
 
 impl Services {
-    /// Creates (or opens, after a crash) the services of `instance`: the bridge's side.
+    /// Creates (or opens, after a crash) the services of `instance` but
+    /// `status`: the bridge's side, which creates [`StatusService`] after its
+    /// ports.
     pub fn open_or_create(node: &Node<Ipc>, instance: &str) -> Result<Self, BridgeError> {
         Self::build(node, instance, true)
     }
 
-    /// Opens the services of a running bridge `instance`: a client's side.
-    /// [`BridgeError::NoBridge`] when they do not exist.
+    /// Opens the services of a running bridge `instance`: a client's side,
+    /// after [`wait_until_ready`]. [`BridgeError::NoBridge`] when they do not
+    /// exist.
     pub fn open(node: &Node<Ipc>, instance: &str) -> Result<Self, BridgeError> {
         Self::build(node, instance, false)
     }
 
     fn build(node: &Node<Ipc>, instance: &str, create: bool) -> Result<Self, BridgeError> {
         check_instance(instance)?;
-        let failed = |what: &str, e: String| {
-            if create {
-                BridgeError::Ipc(format!(
-                    "cannot create {SERVICE_ROOT}/{instance}/{what}: {e}"
-                ))
-            } else {
-                BridgeError::NoBridge(format!(
-                    "no bridge named {instance:?} is running (service {SERVICE_ROOT}/{instance}/{what}: {e}); start one with `decoy bridge --instance {instance}`"
-                ))
-            }
-        };
+        let failed = |what: &str, e: String| failure(instance, create, what, e);
         macro_rules! finish {
             ($builder:expr, $what:expr) => {
                 if create {
@@ -205,16 +223,6 @@ impl Services {
                 .max_nodes(MAX_NODES),
             service::OUTPUTS
         );
-        let status = finish!(
-            node.service_builder(&name(instance, service::STATUS)?)
-                .publish_subscribe::<Status>()
-                .subscriber_max_buffer_size(4)
-                .history_size(1)
-                .max_publishers(1)
-                .max_subscribers(MAX_SUBSCRIBERS)
-                .max_nodes(MAX_NODES),
-            service::STATUS
-        );
         let to_bridge = finish!(
             node.service_builder(&name(instance, service::TO_BRIDGE)?)
                 .event()
@@ -237,10 +245,84 @@ impl Services {
             lockstep,
             state,
             outputs,
-            status,
             commands,
             to_bridge,
             from_bridge,
         })
+    }
+}
+
+/// The `status` service (Status, history 1), the readiness mark: the bridge
+/// creates it after every other service and port.
+pub type StatusService = publish_subscribe::PortFactory<Ipc, Status, ()>;
+
+fn status_builder(
+    node: &Node<Ipc>,
+    instance: &str,
+) -> Result<iceoryx2::service::builder::publish_subscribe::Builder<Status, (), Ipc>, BridgeError> {
+    check_instance(instance)?;
+    Ok(node
+        .service_builder(&name(instance, service::STATUS)?)
+        .publish_subscribe::<Status>()
+        .subscriber_max_buffer_size(4)
+        .history_size(1)
+        .max_publishers(1)
+        .max_subscribers(MAX_SUBSCRIBERS)
+        .max_nodes(MAX_NODES))
+}
+
+/// Creates (or opens, after a crash) the `status` service of `instance`: the
+/// bridge's side, once every other service and port of it exists.
+pub fn create_status_service(
+    node: &Node<Ipc>,
+    instance: &str,
+) -> Result<StatusService, BridgeError> {
+    status_builder(node, instance)?
+        .open_or_create()
+        .map_err(|e| failure(instance, true, service::STATUS, format!("{e:?}")))
+}
+
+/// Whether the bridge behind `status` is ready: its status publisher exists
+/// (and with it every other port of the bridge).
+pub fn is_ready(status: &StatusService) -> bool {
+    status.dynamic_config().number_of_publishers() > 0
+}
+
+/// Waits until bridge `instance` is ready (its `status` service exists with its
+/// publisher: the readiness mark), looking every [`READY_POLL`], and returns
+/// the service; [`BridgeError::NoBridge`] when it is not ready within
+/// `timeout`. A client calls it before it opens the other services.
+pub fn wait_until_ready(
+    node: &Node<Ipc>,
+    instance: &str,
+    timeout: Duration,
+) -> Result<StatusService, BridgeError> {
+    let deadline = Instant::now() + timeout;
+    loop {
+        let why = match status_builder(node, instance)?.open() {
+            Ok(status) if is_ready(&status) => return Ok(status),
+            Ok(_) => {
+                "its status service has no publisher: the bridge is starting, or died".to_owned()
+            }
+            // Not there (yet), or a stopped bridge's going away: the bridge
+            // may be starting.
+            Err(
+                e @ (PublishSubscribeOpenError::DoesNotExist
+                | PublishSubscribeOpenError::HangsInCreation
+                | PublishSubscribeOpenError::IsMarkedForDestruction
+                | PublishSubscribeOpenError::ServiceInCorruptedState),
+            ) => format!(
+                "service {SERVICE_ROOT}/{instance}/{}: {e:?}",
+                service::STATUS
+            ),
+            // Another protocol version, or settings that differ: final.
+            Err(e) => return Err(failure(instance, false, service::STATUS, format!("{e:?}"))),
+        };
+        if Instant::now() >= deadline {
+            return Err(BridgeError::NoBridge(format!(
+                "no bridge named {instance:?} is running ({why}; waited {timeout:?}); start one with `decoy bridge --instance {instance}`"
+            )));
+        }
+        std::thread::sleep(READY_POLL);
     }
 }

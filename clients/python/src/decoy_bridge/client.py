@@ -9,6 +9,12 @@ states, free-running), ``decoy/NAME/outputs`` (publish-subscribe of every answer
 :class:`~decoy_bridge.wire.CommandReply`), and the events ``to-bridge`` (the client
 notifies after sending) and ``from-bridge`` (the bridge notifies after answering).
 
+**Readiness.** The bridge creates ``status`` last, after every other service
+and port, then its publisher: a ``status`` service with a publisher means that
+everything is served (docs/bridge.md, "Readiness"). :class:`Bridge` waits for
+that mark (up to ``connect_timeout_s``) before it opens the rest, as the Rust
+client does, so a command sent at once is never lost to a bridge still starting.
+
 Every wait blocks in an iceoryx2 WaitSet on the ``from-bridge`` listener with a
 timeout: no spinning. Errors are exceptions of :mod:`decoy_bridge.errors`.
 
@@ -33,6 +39,12 @@ from .errors import BridgeError, BridgeTimeout, NoBridge, Rejected, VersionMisma
 
 DEFAULT_TIMEOUT_S = 2.0
 """How long an operation waits for the bridge by default, s."""
+CONNECT_TIMEOUT_S = 2.0
+"""How long :class:`Bridge` waits for a starting bridge to be ready by default, s
+(the Rust client's ``CONNECT_TIMEOUT``)."""
+READY_POLL_S = 0.005
+"""How often :class:`Bridge` looks for the readiness mark while a bridge starts, s
+(the services may not exist yet: there is no event to wait on)."""
 
 
 PREFIX_ENV = "DECOY_IOX_PREFIX"
@@ -70,10 +82,14 @@ class Bridge:
         root: the iceoryx2 root directory (default ``$DECOY_IOX_ROOT``, else ``/tmp/iceoryx2/``).
         timeout_s: default time limit of every wait, s.
         node_name: this client's iceoryx2 node name (default ``decoy-py-<pid>``).
+        connect_timeout_s: how long to wait for the bridge to be ready (its
+            ``status`` service with its publisher, created after everything
+            else), s.
 
     Raises:
-        NoBridge: no bridge serves ``instance`` (its services do not exist, or have
-            no server: a bridge that died).
+        NoBridge: no bridge is ready within ``connect_timeout_s`` (its services do
+            not exist, or the readiness mark is missing: a bridge still starting,
+            or one that died).
         VersionMismatch: the bridge speaks another protocol version (its type names
             differ from this package's).
     """
@@ -86,6 +102,7 @@ class Bridge:
         root: str | None = None,
         timeout_s: float = DEFAULT_TIMEOUT_S,
         node_name: str | None = None,
+        connect_timeout_s: float = CONNECT_TIMEOUT_S,
     ):
         self.instance = instance
         self.timeout_s = timeout_s
@@ -96,11 +113,12 @@ class Bridge:
             .config(make_config(prefix, root))
             .create(iox.ServiceType.Ipc)
         )
+        # The readiness mark first: every other service and port exists once it does.
+        self._status_svc = self._wait_until_ready(connect_timeout_s)
         self._lockstep_svc = self._open_rr("lockstep", wire.AircraftState, wire.Answer)
         self._commands_svc = self._open_rr("commands", wire.Command, wire.CommandReply)
         self._state_svc = self._open_ps("state", wire.AircraftState)
         self._outputs_svc = self._open_ps("outputs", wire.Answer)
-        self._status_svc = self._open_ps("status", wire.Status)
         self._to_bridge = self._open_event("to-bridge")
         self._from_bridge = self._open_event("from-bridge")
 
@@ -139,6 +157,32 @@ class Bridge:
                     f"(protocol v{wire.PROTOCOL_VERSION}); {text}"
                 ) from e
             raise BridgeError(f"cannot open decoy/{self.instance}/{service}: {text}") from e
+
+    def _wait_until_ready(self, timeout_s: float) -> Any:
+        """The ``status`` service once it has its publisher (the bridge's readiness
+        mark), looking every :data:`READY_POLL_S`; NoBridge after ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                svc = self._open_ps("status", wire.Status)
+            except NoBridge as e:
+                why = str(e)
+            except BridgeError as e:
+                # A service being created or removed: a bridge starting or stopping.
+                if not any(s in str(e) for s in ("HangsInCreation", "IsMarkedForDestruction", "CorruptedState")):
+                    raise
+                why = str(e)
+            else:
+                if svc.dynamic_config.number_of_publishers > 0:
+                    return svc
+                why = "its status service has no publisher: the bridge is starting, or died"
+                del svc
+            if time.monotonic() >= deadline:
+                raise NoBridge(
+                    f"no bridge `{self.instance}` is ready ({why}; waited {timeout_s:.3f} s); "
+                    f"start one with `decoy bridge --instance {self.instance}`"
+                )
+            time.sleep(READY_POLL_S)
 
     def _open_rr(self, service: str, req: type, resp: type) -> Any:
         return self._open(service, self._node.service_builder(self._name(service)).request_response(req, resp))

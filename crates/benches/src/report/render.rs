@@ -50,7 +50,10 @@ pub(super) fn render_into(s: &mut String, inputs: &Inputs) -> std::fmt::Result {
          segments, the envelope sweep (the firmware on the M4, the STM32F405 and the M7 \
          over the full grid of `decoy_hil::sweep`) and the optional Pinocchio reference, \
          then writes this file, `docs/figures/bench-scaling.png`/`.svg` and \
-         `docs/figures/envelope-worst-frame.png`/`.svg`."
+         `docs/figures/envelope-worst-frame.png`/`.svg`. Its last stage, the bridge's soak \
+         (`cargo xtask soak` alone: `decoy bridge` serving lockstep, a free-running flood and \
+         commands side by side for 10 minutes), writes [docs/soak.md](soak.md): the bridge's \
+         RSS, the lockstep p99.9 and the command latency."
     )?;
     writeln!(s)?;
     writeln!(s, "## Machine")?;

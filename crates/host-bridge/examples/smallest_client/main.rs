@@ -3,8 +3,11 @@
 //! in lockstep and prints the cable tension every 0.1 s. See README.md.
 
 use core::time::Duration;
+use std::time::Instant;
 
-use bridge_types::{AircraftState, Answer, Command, CommandReply, Header, command, event, kind};
+use bridge_types::{
+    AircraftState, Answer, Command, CommandReply, Header, Status, command, event, kind,
+};
 use iceoryx2::prelude::*;
 
 fn main() -> Result<(), Box<dyn core::error::Error>> {
@@ -27,6 +30,21 @@ fn main() -> Result<(), Box<dyn core::error::Error>> {
         .create::<ipc::Service>()?;
 
     let service = |name: &str| ServiceName::new(&format!("decoy/{instance}/{name}"));
+    // Ready once the `status` service has its publisher: the bridge creates it
+    // after every other service and port (docs/bridge.md, "Readiness"), so
+    // nothing sent from here on is lost to a bridge still starting.
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while !node
+        .service_builder(&service("status")?)
+        .publish_subscribe::<Status>()
+        .open()
+        .is_ok_and(|status| status.dynamic_config().number_of_publishers() > 0)
+    {
+        if Instant::now() > deadline {
+            return Err(format!("no bridge {instance:?} ready within 5 s").into());
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
     let lockstep = node
         .service_builder(&service("lockstep")?)
         .request_response::<AircraftState, Answer>()
