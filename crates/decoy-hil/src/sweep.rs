@@ -125,19 +125,6 @@ const FULL_MACHS: [f64; 5] = [0.3, 0.45, 0.62, 0.8, 0.95];
 const FULL_LIMIT_ALTITUDES_M: [f64; 6] = [0.0, 5_000.0, 9_000.0, 11_000.0, 13_000.0, 15_000.0];
 const FULL_LIMIT_MACHS: [f64; 3] = [0.3, 0.6, 0.95];
 
-/// Every manoeuvre the product ships, at its full duration: (scenario, rate),
-/// the duration the scenario file's.
-const SHIPPED: [(&str, Option<f64>); 8] = [
-    ("steady", None),
-    ("acceleration", None),
-    ("pull-up", Some(0.05)),
-    ("pull-up", Some(0.10)),
-    ("pull-up", Some(0.20)),
-    ("turn", Some(0.10)),
-    ("turn", Some(0.20)),
-    ("recorded", None),
-];
-
 /// Standard gravity of the load factors, m/s^2 (the configuration's).
 fn gravity(config: &SystemConfig) -> f64 {
     config.environment.gravity
@@ -199,7 +186,9 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
             });
         }
     }
-    for (name, rate) in SHIPPED {
+    // Every shipped manoeuvre at its full duration (the scenario file's, not
+    // the studies' shortened one).
+    for (name, rate, _) in flight::SHIPPED_MANOEUVRES {
         let (profile, t_end) = scenario(
             config,
             name,

@@ -7,24 +7,12 @@
 //! stack); the frames are the built-in scenarios' aircraft states.
 
 use decoy_config::SystemConfig;
-use decoy_hil::flight::state_frame;
+use decoy_hil::flight::{SHIPPED_MANOEUVRES, state_frame};
 use decoy_link::{Command, DeviceMessage, HostMessage, RejectReason, StatusFlags};
 use decoy_sim::options::RunOptions;
 use decoy_sim::scenario::Scenario;
 use host_bridge::backend::{BackendOptions, Precision, host_backend};
 use host_bridge::local::BRIDGE_STACK_BYTES;
-
-/// Every shipped manoeuvre: built-in scenario and rate (None: the scenario's).
-const MANOEUVRES: [(&str, Option<f64>); 8] = [
-    ("steady", None),
-    ("acceleration", None),
-    ("pull-up", Some(0.05)),
-    ("pull-up", Some(0.10)),
-    ("pull-up", Some(0.20)),
-    ("turn", Some(0.10)),
-    ("turn", Some(0.20)),
-    ("recorded", None),
-];
 
 /// Frame spacings, s: the control period, a slow client, the protocol's limit.
 const SPACINGS_S: [f64; 3] = [0.01, 0.05, 0.1];
@@ -85,7 +73,8 @@ fn the_host_model_flies_every_shipped_manoeuvre_at_every_frame_spacing() {
         .spawn(|| {
             let config = SystemConfig::builtin().unwrap();
             let mut failures = Vec::new();
-            for (name, rate) in MANOEUVRES {
+            // Every shipped manoeuvre at the scenario file's full duration.
+            for (name, rate, _) in SHIPPED_MANOEUVRES {
                 for spacing in SPACINGS_S {
                     let (rejected, flown) = fly(&config, name, rate, spacing);
                     println!(
