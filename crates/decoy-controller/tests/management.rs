@@ -282,17 +282,22 @@ fn predicted_margins_against_the_margins_reached() {
             continue;
         }
         seen = from;
-        for k in 1..4 {
+        for requirement in [
+            Requirement::Collision,
+            Requirement::Tension,
+            Requirement::Exhaust,
+        ] {
             let reached = outputs
                 .iter()
                 .filter(|p| p.time_s >= from - 1e-9 && p.time_s <= until + 1e-9)
-                .map(|p| f64::from(p.management.reports.into_array()[k].margin))
+                .map(|p| f64::from(p.management.reports[requirement].margin))
                 .fold(f64::INFINITY, f64::min);
-            let predicted = f64::from(m.reports.into_array()[k].predicted_worst_margin);
-            worst_error[phase][k] = worst_error[phase][k].max((predicted - reached).abs());
+            let predicted = f64::from(m.reports[requirement].predicted_worst_margin);
+            let error = &mut worst_error[phase][requirement.index()];
+            *error = error.max((predicted - reached).abs());
             println!(
                 "from {from:.2} s: {} predicted {predicted:.3}, reached {reached:.3}",
-                name(k)
+                requirement.name()
             );
         }
         compared += 1;

@@ -836,14 +836,102 @@ pub const CLIENT_TRAJECTORY: CsvFile = CsvFile {
     columns: &CLIENT_TRAJECTORY_COLUMNS,
 };
 
-/// Every CSV file the tools write.
-pub const CSV_FILES: [CsvFile; 5] = [
+/// A recorded flight, the input of a `recorded` scenario (docs/outputs.md,
+/// "Recorded flights"): the aircraft's state at each sample.
+pub const RECORDED_FLIGHT: CsvFile = CsvFile {
+    id: "recorded_flight",
+    file: "a recorded flight",
+    written_by: "a flight recorder (read by decoy simulate's recorded scenarios; decoy-sim's example make_recorded_example writes scenarios/recorded-example.csv)",
+    columns: &[
+        TIME.described("time, strictly increasing (simulation time 0 is the first sample)"),
+        Column::new(
+            Quantity::PositionNed(0),
+            "north_m",
+            "m",
+            "aircraft reference point, north (NED)",
+        ),
+        Column::new(
+            Quantity::PositionNed(1),
+            "east_m",
+            "m",
+            "aircraft reference point, east (NED)",
+        ),
+        Column::new(
+            Quantity::PositionNed(2),
+            "down_m",
+            "m",
+            "aircraft reference point, down (NED; altitude = -down, 0 to 20 000 m)",
+        ),
+        Column::new(
+            Quantity::VelocityNed(0),
+            "vn_mps",
+            "m/s",
+            "its velocity, north (NED)",
+        ),
+        Column::new(
+            Quantity::VelocityNed(1),
+            "ve_mps",
+            "m/s",
+            "its velocity, east (NED)",
+        ),
+        Column::new(
+            Quantity::VelocityNed(2),
+            "vd_mps",
+            "m/s",
+            "its velocity, down (NED)",
+        ),
+        Column::new(
+            Quantity::Attitude(0),
+            "qw",
+            "",
+            "attitude, Hamilton quaternion, body (FRD) to NED, unit length within 1e-3 (normalised): scalar part",
+        ),
+        Column::new(Quantity::Attitude(1), "qx", "", "attitude quaternion: x"),
+        Column::new(Quantity::Attitude(2), "qy", "", "attitude quaternion: y"),
+        Column::new(Quantity::Attitude(3), "qz", "", "attitude quaternion: z"),
+        Column::new(
+            Quantity::BodyRate(0),
+            "p_radps",
+            "rad/s",
+            "body rate about the body x axis (FRD)",
+        ),
+        Column::new(
+            Quantity::BodyRate(1),
+            "q_radps",
+            "rad/s",
+            "body rate about the body y axis (FRD)",
+        ),
+        Column::new(
+            Quantity::BodyRate(2),
+            "r_radps",
+            "rad/s",
+            "body rate about the body z axis (FRD)",
+        ),
+    ],
+};
+
+/// Every CSV file the tools write (and the recorded flights they read).
+pub const CSV_FILES: [CsvFile; 6] = [
     SIMULATE_TIMESERIES,
     SIMULATE_CABLE,
     HIL_TIMESERIES,
     CLIENT_TIMESERIES,
     CLIENT_TRAJECTORY,
+    RECORDED_FLIGHT,
 ];
+
+/// The names of `columns`, as an array of `N` (`N` their count: checked when
+/// the constant is evaluated), for a header that must be a constant.
+pub const fn column_names<const N: usize>(columns: &[Column]) -> [&'static str; N] {
+    assert!(columns.len() == N, "column_names: not N columns");
+    let mut out = [""; N];
+    let mut i = 0;
+    while i < N {
+        out[i] = columns[i].name;
+        i += 1;
+    }
+    out
+}
 
 #[cfg(test)]
 mod tests {
@@ -872,6 +960,10 @@ mod tests {
         assert_eq!(
             CLIENT_TIMESERIES.header().to_string(),
             "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,aircraft_load_factor,flags,rk4_steps,instructions,latency_us,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories"
+        );
+        assert_eq!(
+            RECORDED_FLIGHT.header().to_string(),
+            "t_s,north_m,east_m,down_m,vn_mps,ve_mps,vd_mps,qw,qx,qy,qz,p_radps,q_radps,r_radps"
         );
         assert_eq!(
             CLIENT_TRAJECTORY.header().to_string(),

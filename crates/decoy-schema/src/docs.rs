@@ -99,6 +99,18 @@ fn docs_outputs_md_shows_every_column_table() {
     });
 }
 
+/// docs/outputs.md quotes the recorded flights' header line as it is.
+#[test]
+fn docs_outputs_md_quotes_the_recorded_flight_header() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../docs/outputs.md");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let header = std::format!("\n{}\n", crate::columns::RECORDED_FLIGHT.header());
+    assert!(
+        text.contains(&header),
+        "docs/outputs.md does not quote the recorded flights' header{header}"
+    );
+}
+
 #[test]
 fn docs_management_md_shows_the_requirement_table() {
     check("docs/management.md", "requirements", &[""], |_| {

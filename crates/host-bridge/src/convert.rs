@@ -333,7 +333,6 @@ mod tests {
                 advisories: 8,
                 prediction_from_s: 0.25,
                 prediction_horizon_s: 3.0,
-                ..Management::default()
             },
         };
         let out = output_from_link(&frame);
