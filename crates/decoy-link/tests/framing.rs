@@ -440,6 +440,54 @@ fn the_documented_ping_frame() {
     );
 }
 
+/// The largest Output frame (every count and varint at its longest, one report
+/// per requirement) fits in a frame: a requirement more may need a larger
+/// `MAX_FRAME_BYTES` (a protocol change).
+#[test]
+fn the_largest_output_frame_fits() {
+    let report = MonitorReport {
+        level: MonitorLevel::Violated,
+        margin: f32::MAX,
+        worst_margin: f32::MAX,
+        cautions: u32::MAX,
+        warnings: u32::MAX,
+        violations: u32::MAX,
+        predicted_worst_margin: f32::MAX,
+        time_to_violation_s: f32::MAX,
+    };
+    let output = DeviceMessage::Output(OutputFrame {
+        seq: u32::MAX,
+        time_s: f64::MAX,
+        connection_tension_n: f32::MAX,
+        tow_tension_n: f32::MAX,
+        decoy_position_fp_m: [f32::MAX; 3],
+        decoy_euler_rel_rad: [f32::MAX; 3],
+        angle_of_attack_rad: f32::MAX,
+        cable_clearance_exhaust_m: f32::MAX,
+        decoy_clearance_aircraft_m: f32::MAX,
+        flags: u16::MAX,
+        instructions: u32::MAX,
+        step_instructions: u32::MAX,
+        steps: u16::MAX,
+        management_instructions: u32::MAX,
+        prediction_steps: u16::MAX,
+        management: Management {
+            reports: PerRequirement::splat(report),
+            advisories: u8::MAX,
+            prediction_from_s: f64::MAX,
+            prediction_horizon_s: f32::MAX,
+        },
+    });
+    let mut payload = [0u8; 1024];
+    let length = postcard::to_slice(&output, &mut payload).unwrap().len();
+    assert!(
+        length <= MAX_PAYLOAD_BYTES,
+        "the largest Output is {length} bytes, over MAX_PAYLOAD_BYTES = {MAX_PAYLOAD_BYTES}: raise MAX_FRAME_BYTES (a protocol change)"
+    );
+    let mut out = [0u8; MAX_WIRE_BYTES];
+    assert!(encode(&output, &mut out).is_ok());
+}
+
 /// Output frames (whose `management` carries one report per requirement) of the
 /// seeded generator, encoded: the bytes of protocol version 6 as they were when
 /// the four reports were four named fields of `Management` (the length and

@@ -42,7 +42,8 @@ use serde::{Deserialize, Serialize};
 ///   the prefix of its columns and its `[management.<field>]` section;
 /// - the unit of its margin on the wire and in the controller (SI);
 /// - the unit of its margin in the output files (degrees where the wire has
-///   radians; [`Requirement::to_file_unit`] converts);
+///   radians; [`Requirement::to_file_unit`] converts), which ends the margin's
+///   column name (`posture_margin_deg`): letters, digits and `_` only;
 /// - a title (one line);
 /// - the definition of its margin (negative: violated), for documents.
 ///
@@ -372,6 +373,16 @@ const _: () = {
             "a requirement's file unit must be its unit, or deg for rad"
         );
         assert!(r.index() == i, "Requirement::ALL is in declaration order");
+        // The file unit ends the margin's column name (`posture_margin_deg`).
+        let unit = r.file_unit().as_bytes();
+        let mut k = 0;
+        while k < unit.len() {
+            assert!(
+                unit[k].is_ascii_alphanumeric() || unit[k] == b'_',
+                "a requirement's file unit ends a column name: letters, digits and `_` only (`radps`, not `rad/s`)"
+            );
+            k += 1;
+        }
         i += 1;
     }
     // The advisory bits are a u8.
@@ -417,34 +428,35 @@ mod tests {
 
     #[test]
     fn the_container_indexes_maps_and_iterates_in_wire_order() {
+        let indices: Vec<usize> = Requirement::ALL.iter().map(|r| r.index()).collect();
+        assert_eq!(indices, (0..REQUIREMENT_COUNT).collect::<Vec<_>>());
         let p = PerRequirement::from_fn(|r| r.index() * 10);
-        assert_eq!(p.into_array(), [0, 10, 20, 30]);
+        let tens: Vec<usize> = indices.iter().map(|k| k * 10).collect();
+        assert_eq!(p.into_array().to_vec(), tens);
         assert_eq!(PerRequirement::from_array(p.into_array()), p);
         assert_eq!(p[Requirement::Tension], 20);
         assert_eq!(p.tension, 20);
         let mut q = p.map(|v| v + 1);
         q[Requirement::Exhaust] = 0;
-        assert_eq!(q.into_array(), [1, 11, 21, 0]);
-        let pairs: Vec<_> = p.iter().map(|(r, v)| (r.name(), *v)).collect();
-        assert_eq!(
-            pairs,
-            [
-                ("posture", 0),
-                ("collision", 10),
-                ("tension", 20),
-                ("exhaust", 30)
-            ]
-        );
+        assert_eq!((q.posture, q.tension, q.exhaust), (1, 21, 0));
+        let pairs: Vec<_> = p.iter().map(|(r, v)| (r, *v)).collect();
+        let expected: Vec<_> = Requirement::ALL
+            .iter()
+            .map(|r| (*r, r.index() * 10))
+            .collect();
+        assert_eq!(pairs, expected);
         for (r, v) in q.iter_mut() {
             *v = r.bit().into();
         }
-        assert_eq!(q.into_array(), [1, 2, 4, 8]);
-        assert_eq!(p.zip(q).map(|(a, b)| a + b).into_array(), [1, 12, 24, 38]);
-        assert_eq!(
-            p.map_with(|r, v| v + r.index()).into_array(),
-            [0, 11, 22, 33]
-        );
-        assert_eq!(PerRequirement::splat(7).into_array(), [7; 4]);
+        for r in Requirement::ALL {
+            assert_eq!(q[r], 1 << r.index());
+            assert_eq!(
+                p.zip(q).map(|(a, b)| a + b)[r],
+                10 * r.index() + (1 << r.index())
+            );
+            assert_eq!(p.map_with(|r, v| v + r.index())[r], 11 * r.index());
+            assert_eq!(PerRequirement::splat(7)[r], 7);
+        }
         assert_eq!(*p.as_ref().tension, 20);
         let mut m = p;
         *m.as_mut().posture = 5;

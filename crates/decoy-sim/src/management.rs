@@ -203,11 +203,17 @@ mod tests {
 
     #[test]
     fn the_summary_finds_first_events_and_leads() {
-        let row = |level: u8, margin: f64, advisories: u8| ManagementSample {
-            levels: PerRequirement::from_array([0, 0, 0, level]),
-            margins: PerRequirement::from_array([5.0, 3.0, 400.0, margin]),
-            advisories,
-            violation_in: PerRequirement::splat(f64::NAN),
+        let row = |level: u8, margin: f64, advisories: u8| {
+            let mut m = ManagementSample {
+                levels: PerRequirement::splat(0),
+                margins: PerRequirement::splat(5.0),
+                advisories,
+                violation_in: PerRequirement::splat(f64::NAN),
+            };
+            m.levels.exhaust = level;
+            m.margins.exhaust = margin;
+            m.margins.tension = 400.0;
+            m
         };
         let rows = [
             (0.0, row(0, 1.0, 0)),
