@@ -17,6 +17,12 @@ is what guards against that.
 Every structure has a static ``type_name()`` returning the Rust type's iceoryx2
 name (``decoy.bridge.v3.AircraftState``), which the iceoryx2 Python package uses
 when it opens a service.
+
+The same description lists the decoy management's requirements in wire order
+(:data:`REQUIREMENTS`: the ``Output`` fields holding their reports, their
+advisory bits, units) and the columns of every CSV file the tools write
+(:attr:`Layout.csv_files`, ``decoy_schema::columns``), from which
+:mod:`decoy_bridge.flight` takes its files' columns.
 """
 
 from __future__ import annotations
