@@ -6,6 +6,6 @@
 //! everything from it with the host's own conversion.
 
 // The generated constant names these types unqualified (their derived `Debug` form).
-use decoy_controller::{EnvelopeParams, ManagementParams, Thresholds};
+use decoy_controller::{EnvelopeParams, ManagementParams, PerRequirement, Thresholds};
 
 include!(concat!(env!("OUT_DIR"), "/system.rs"));

@@ -2,6 +2,7 @@
 //! layout (`size_of`, `align_of`, `offset_of!`), so a mirror in another language
 //! can be checked field by field against the real thing.
 
+use decoy_schema::{CSV_FILES, CsvFile, Requirement};
 use serde::Serialize;
 
 use crate::wire::*;
@@ -54,6 +55,43 @@ pub struct LayoutDescription {
     /// Codes of the `kind`, `reason`, `command`, `profile`, `result`, `backend`
     /// and `health` fields (field, name, value).
     pub codes: Vec<(&'static str, &'static str, u64)>,
+    /// The decoy management's requirements in wire order: the order of
+    /// `Output`'s reports and of the advisory bits.
+    pub requirements: Vec<RequirementLayout>,
+    /// The columns of every CSV file the tools write (`decoy_schema::columns`):
+    /// a client writing `decoy feed`'s files takes its column names from here.
+    pub csv_files: Vec<CsvFile>,
+}
+
+/// One requirement of the decoy management (`decoy_schema::Requirement`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct RequirementLayout {
+    /// Its name: the field of `Output` holding its report, the prefix of its
+    /// columns.
+    pub name: &'static str,
+    /// Its bit in `Output::advisories`.
+    pub bit: u8,
+    /// The unit of its margin on the wire.
+    pub unit: &'static str,
+    /// The unit of its margin in the files (`deg` where the wire has `rad`).
+    pub file_unit: &'static str,
+    /// A title.
+    pub title: &'static str,
+    /// What its margin is.
+    pub margin: &'static str,
+}
+
+impl RequirementLayout {
+    fn of(r: Requirement) -> Self {
+        RequirementLayout {
+            name: r.name(),
+            bit: r.bit(),
+            unit: r.unit(),
+            file_unit: r.file_unit(),
+            title: r.title(),
+            margin: r.margin(),
+        }
+    }
 }
 
 /// One service of an instance.
@@ -94,6 +132,41 @@ macro_rules! layout {
     };
 }
 
+/// `Output`'s layout: its fixed fields, then one report per requirement (the
+/// fields `wire.rs` generates from the requirement list).
+fn output_layout() -> TypeLayout {
+    macro_rules! output_layout {
+        ($(($variant:ident, $field:ident, $($rest:tt)*)),* $(,)?) => {
+            layout!(
+                Output,
+                [
+                    (time_s, "f64", 1),
+                    (request_seq, "u32", 1),
+                    (connection_tension_n, "f32", 1),
+                    (tow_tension_n, "f32", 1),
+                    (decoy_position_fp_m, "f32", 3),
+                    (decoy_euler_rel_rad, "f32", 3),
+                    (angle_of_attack_rad, "f32", 1),
+                    (cable_clearance_exhaust_m, "f32", 1),
+                    (decoy_clearance_aircraft_m, "f32", 1),
+                    (flags, "u16", 1),
+                    (steps, "u16", 1),
+                    (instructions, "u32", 1),
+                    (step_instructions, "u32", 1),
+                    (management_instructions, "u32", 1),
+                    (prediction_from_s, "f64", 1),
+                    (prediction_horizon_s, "f32", 1),
+                    (prediction_steps, "u16", 1),
+                    (advisories, "u8", 1),
+                    (reserved, "u8", 1),
+                    $(($field, "MonitorReport", 1),)*
+                ]
+            )
+        };
+    }
+    decoy_schema::for_each_requirement!(output_layout)
+}
+
 /// The layout of every wire type, nested types first.
 pub fn layouts() -> LayoutDescription {
     let types = vec![
@@ -132,34 +205,7 @@ pub fn layouts() -> LayoutDescription {
                 (reserved, "u8", 3),
             ]
         ),
-        layout!(
-            Output,
-            [
-                (time_s, "f64", 1),
-                (request_seq, "u32", 1),
-                (connection_tension_n, "f32", 1),
-                (tow_tension_n, "f32", 1),
-                (decoy_position_fp_m, "f32", 3),
-                (decoy_euler_rel_rad, "f32", 3),
-                (angle_of_attack_rad, "f32", 1),
-                (cable_clearance_exhaust_m, "f32", 1),
-                (decoy_clearance_aircraft_m, "f32", 1),
-                (flags, "u16", 1),
-                (steps, "u16", 1),
-                (instructions, "u32", 1),
-                (step_instructions, "u32", 1),
-                (management_instructions, "u32", 1),
-                (prediction_from_s, "f64", 1),
-                (prediction_horizon_s, "f32", 1),
-                (prediction_steps, "u16", 1),
-                (advisories, "u8", 1),
-                (reserved, "u8", 1),
-                (posture, "MonitorReport", 1),
-                (collision, "MonitorReport", 1),
-                (tension, "MonitorReport", 1),
-                (exhaust, "MonitorReport", 1),
-            ]
-        ),
+        output_layout(),
         layout!(
             Rejection,
             [
@@ -356,6 +402,8 @@ pub fn layouts() -> LayoutDescription {
         services,
         event_ids,
         codes,
+        requirements: Requirement::ALL.map(RequirementLayout::of).to_vec(),
+        csv_files: CSV_FILES.to_vec(),
     }
 }
 
@@ -428,6 +476,38 @@ mod tests {
         assert_eq!(size("Status"), 256);
         assert_eq!(size("Command"), 24);
         assert_eq!(size("CommandReply"), 280);
+    }
+
+    /// `Output` ends with one report per requirement, in the list's order, as
+    /// before the fields were generated from it (offsets 88, 120, 152, 184);
+    /// `report` and `reports` read those fields.
+    #[test]
+    fn the_reports_follow_the_requirement_list() {
+        let d = layouts();
+        let output = d.types.iter().find(|t| t.name == "Output").unwrap();
+        let reports: Vec<(&str, usize)> = output
+            .fields
+            .iter()
+            .filter(|f| f.ty == "MonitorReport")
+            .map(|f| (f.name, f.offset))
+            .collect();
+        let expected: Vec<(&str, usize)> = Requirement::ALL
+            .iter()
+            .map(|r| (r.name(), 88 + 32 * r.index()))
+            .collect();
+        assert_eq!(reports, expected);
+        let names: Vec<&str> = d.requirements.iter().map(|r| r.name).collect();
+        let expected: Vec<&str> = Requirement::ALL.iter().map(|r| r.name()).collect();
+        assert_eq!(names, expected);
+        let mut out = Output::default();
+        for r in Requirement::ALL {
+            out.report_mut(r).cautions = r.index() as u32 + 1;
+        }
+        assert_eq!(out.tension.cautions, 3);
+        for (r, report) in out.reports().iter() {
+            assert_eq!(report.cautions, r.index() as u32 + 1);
+            assert_eq!(out.report(r).cautions, r.index() as u32 + 1);
+        }
     }
 
     #[test]

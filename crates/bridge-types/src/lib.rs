@@ -30,7 +30,7 @@
 mod layout;
 mod wire;
 
-pub use layout::{FieldLayout, LayoutDescription, TypeLayout, layouts};
+pub use layout::{FieldLayout, LayoutDescription, RequirementLayout, TypeLayout, layouts};
 pub use wire::*;
 
 /// The bridge protocol version: in every [`Header`] and every type name.

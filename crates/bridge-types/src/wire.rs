@@ -6,6 +6,8 @@
 use iceoryx2_bb_derive_macros::ZeroCopySend;
 use iceoryx2_bb_elementary_traits::zero_copy_send::ZeroCopySend;
 
+use decoy_schema::{PerRequirement, Requirement};
+
 use crate::PROTOCOL_VERSION;
 
 /// The values of [`Header::kind`]: what a sample is.
@@ -129,72 +131,104 @@ pub struct AircraftState {
     pub body_angular_acceleration_radps2: [f32; 3],
 }
 
-/// The controller's outputs at a state's time (docs/protocol.md `OutputFrame`,
-/// docs/outputs.md for the quantities). Fields are only appended (with a
-/// protocol version), never moved.
-#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
-#[repr(C)]
-#[type_name("decoy.bridge.v3.Output")]
-pub struct Output {
-    /// Time of the outputs, s (the state's `time_s`).
-    pub time_s: f64,
-    /// `header.seq` of the state answered.
-    pub request_seq: u32,
-    /// Cable tension at the connection point (joint 0), N, positive pulling.
-    pub connection_tension_n: f32,
-    /// Cable tension at the towing point (joint N), N, positive pulling.
-    pub tow_tension_n: f32,
-    /// Decoy CG minus the aircraft reference point, flight-path frame (x along
-    /// the aircraft velocity, y horizontal right, z down), m.
-    pub decoy_position_fp_m: [f32; 3],
-    /// Decoy roll, pitch, yaw (ZYX) relative to the flight-path frame, rad.
-    pub decoy_euler_rel_rad: [f32; 3],
-    /// Decoy total angle of attack, rad.
-    pub angle_of_attack_rad: f32,
-    /// Smallest distance from the cable to the exhaust plume's surface, m
-    /// (negative: inside).
-    pub cable_clearance_exhaust_m: f32,
-    /// Decoy CG to the aircraft's collision capsule, m (negative: inside).
-    pub decoy_clearance_aircraft_m: f32,
-    /// Status flags ([`flag`], docs/protocol.md: TRIMMED 1, OVER_TENSION 4,
-    /// CABLE_IN_PLUME 8, DECOY_NEAR_AIRCRAFT 16, PROFILE_BUILTIN 32,
-    /// INITIALISING 128, OUTSIDE_ENVELOPE 256, STEP_LIMITED 512). The link
-    /// supervision bits (DEGRADED 2, RECOVERED 64) are never set here: the
-    /// bridge reports its clients' silence in [`Status::health`].
-    pub flags: u16,
-    /// RK4 steps taken for this state (0 for the state that trimmed).
-    pub steps: u16,
-    /// Instructions the controller spent on this state (the qemu backend, exact
-    /// under `-icount`; 0 from the host backend).
-    pub instructions: u32,
-    /// Of `instructions`, the solver's integration alone.
-    pub step_instructions: u32,
-    /// Instructions of the decoy management after the solution (the monitors
-    /// and one look-ahead slice; qemu backend, 0 from the host); not in
-    /// `instructions`.
-    pub management_instructions: u32,
-    /// Time of the state the last completed look-ahead started from, s (-1
-    /// before the first completes).
-    pub prediction_from_s: f64,
-    /// Horizon of the last completed look-ahead, s (0 before the first).
-    pub prediction_horizon_s: f32,
-    /// Look-ahead RK4 steps taken in this frame's slice.
-    pub prediction_steps: u16,
-    /// Requirements the look-ahead predicts violated within its horizon if
-    /// the aircraft holds its manoeuvre (bits: posture 1, collision 2,
-    /// tension 4, exhaust 8).
-    pub advisories: u8,
-    /// Zero.
-    pub reserved: u8,
-    /// (1) Decoy posture stable: margin in rad.
-    pub posture: MonitorReport,
-    /// (2) Decoy and cable clear of the aircraft: margin in m.
-    pub collision: MonitorReport,
-    /// (3) Cable tension within the allowable and above slack: margin in N.
-    pub tension: MonitorReport,
-    /// (4) Cable out of the exhaust plume: margin in m.
-    pub exhaust: MonitorReport,
+// `Output`, with a report field per requirement: generated from the requirement
+// list (`decoy_schema::for_each_requirement!`) rather than written out, so that
+// a requirement is added in one place. `ZeroCopySend` needs `#[repr(C)]` fields
+// of the type's own, so the generic `PerRequirement` cannot be a field here:
+// `Output::reports` gives the reports as one.
+macro_rules! output {
+    ($(($variant:ident, $field:ident, $unit:literal, $file_unit:literal,
+        $title:literal, $margin:literal)),* $(,)?) => {
+        /// The controller's outputs at a state's time (docs/protocol.md `OutputFrame`,
+        /// docs/outputs.md for the quantities), ending with one [`MonitorReport`] per
+        /// requirement, in the list's order. Fields are only appended (with a
+        /// protocol version), never moved.
+        #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+        #[repr(C)]
+        #[type_name("decoy.bridge.v3.Output")]
+        pub struct Output {
+            /// Time of the outputs, s (the state's `time_s`).
+            pub time_s: f64,
+            /// `header.seq` of the state answered.
+            pub request_seq: u32,
+            /// Cable tension at the connection point (joint 0), N, positive pulling.
+            pub connection_tension_n: f32,
+            /// Cable tension at the towing point (joint N), N, positive pulling.
+            pub tow_tension_n: f32,
+            /// Decoy CG minus the aircraft reference point, flight-path frame (x along
+            /// the aircraft velocity, y horizontal right, z down), m.
+            pub decoy_position_fp_m: [f32; 3],
+            /// Decoy roll, pitch, yaw (ZYX) relative to the flight-path frame, rad.
+            pub decoy_euler_rel_rad: [f32; 3],
+            /// Decoy total angle of attack, rad.
+            pub angle_of_attack_rad: f32,
+            /// Smallest distance from the cable to the exhaust plume's surface, m
+            /// (negative: inside).
+            pub cable_clearance_exhaust_m: f32,
+            /// Decoy CG to the aircraft's collision capsule, m (negative: inside).
+            pub decoy_clearance_aircraft_m: f32,
+            /// Status flags ([`flag`], docs/protocol.md: TRIMMED 1, OVER_TENSION 4,
+            /// CABLE_IN_PLUME 8, DECOY_NEAR_AIRCRAFT 16, PROFILE_BUILTIN 32,
+            /// INITIALISING 128, OUTSIDE_ENVELOPE 256, STEP_LIMITED 512). The link
+            /// supervision bits (DEGRADED 2, RECOVERED 64) are never set here: the
+            /// bridge reports its clients' silence in [`Status::health`].
+            pub flags: u16,
+            /// RK4 steps taken for this state (0 for the state that trimmed).
+            pub steps: u16,
+            /// Instructions the controller spent on this state (the qemu backend, exact
+            /// under `-icount`; 0 from the host backend).
+            pub instructions: u32,
+            /// Of `instructions`, the solver's integration alone.
+            pub step_instructions: u32,
+            /// Instructions of the decoy management after the solution (the monitors
+            /// and one look-ahead slice; qemu backend, 0 from the host); not in
+            /// `instructions`.
+            pub management_instructions: u32,
+            /// Time of the state the last completed look-ahead started from, s (-1
+            /// before the first completes).
+            pub prediction_from_s: f64,
+            /// Horizon of the last completed look-ahead, s (0 before the first).
+            pub prediction_horizon_s: f32,
+            /// Look-ahead RK4 steps taken in this frame's slice.
+            pub prediction_steps: u16,
+            /// Requirements the look-ahead predicts violated within its horizon if
+            /// the aircraft holds its manoeuvre (bit k: the k-th requirement of the
+            /// list, `decoy_schema::Requirement::bit`).
+            pub advisories: u8,
+            /// Zero.
+            pub reserved: u8,
+            $(
+                #[doc = concat!($title, ": the monitor's report, margin in ", $unit, ".")]
+                pub $field: MonitorReport,
+            )*
+        }
+
+        impl Output {
+            /// The report of `requirement`.
+            pub fn report(&self, requirement: Requirement) -> &MonitorReport {
+                match requirement {
+                    $(Requirement::$variant => &self.$field,)*
+                }
+            }
+
+            /// The report of `requirement`, mutable.
+            pub fn report_mut(&mut self, requirement: Requirement) -> &mut MonitorReport {
+                match requirement {
+                    $(Requirement::$variant => &mut self.$field,)*
+                }
+            }
+
+            /// Every requirement's report.
+            pub fn reports(&self) -> PerRequirement<MonitorReport> {
+                PerRequirement {
+                    $($field: self.$field,)*
+                }
+            }
+        }
+    };
 }
+
+decoy_schema::for_each_requirement!(output);
 
 /// One requirement's monitor and prediction in an [`Output`] (docs/outputs.md,
 /// "Decoy management"): the margin in the requirement's own unit, negative

@@ -597,8 +597,8 @@ fn write_management(s: &mut String, m: &decoy_sim::ManagementSummary) {
         s,
         "Decoy management (worst margin; first violation; first advisory; lead)"
     );
-    let units = decoy_sim::management::MARGIN_UNITS;
-    for ((name, r), unit) in m.entries().into_iter().zip(units) {
+    for (requirement, r) in m.requirements.iter() {
+        let (name, unit) = (requirement.name(), requirement.file_unit());
         let time = |t: Option<f64>| t.map_or_else(|| "none".to_owned(), |t| format!("t = {t} s"));
         let worst = r
             .worst_margin

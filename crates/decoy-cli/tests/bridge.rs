@@ -482,7 +482,7 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
         let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
         assert_eq!(
             csv.lines().next().unwrap(),
-            decoy_hil::hil_run::HIL_TIMESERIES_HEADER
+            decoy_schema::columns::HIL_TIMESERIES.header().to_string()
         );
         assert_eq!(csv.lines().count(), 302);
         for plot in [
@@ -497,7 +497,7 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
         }
         // The decoy management crosses the bridge: one entry per requirement
         // (the turn at Mach 0.8 violates nothing), and its columns in the file.
-        for r in ["posture", "collision", "tension", "exhaust"] {
+        for r in decoy_schema::Requirement::ALL.map(|r| r.name()) {
             let m = &v["management"][r];
             assert!(m["worst_margin"].as_f64().unwrap() > 0.0, "{mode} {r}: {m}");
             assert!(m["first_violation_s"].is_null(), "{mode} {r}: {m}");

@@ -543,7 +543,7 @@ fn simulate_json_is_the_summary_and_the_files_are_written() {
     assert_eq!(keys(&v), expected);
     // One entry per requirement of the paper, each with the four keys of
     // docs/outputs.md; steady flight violates and advises nothing.
-    for r in ["posture", "collision", "tension", "exhaust"] {
+    for r in decoy_schema::Requirement::ALL.map(|r| r.name()) {
         let m = &v["management"][r];
         let entry: BTreeSet<&str> = m.as_object().unwrap().keys().map(|k| k.as_str()).collect();
         assert_eq!(

@@ -27,7 +27,7 @@
 use std::path::{Path, PathBuf};
 
 pub use decoy_controller::{
-    AeroRows, ControllerConfig, ManagementParams, SystemParams, Thresholds,
+    AeroRows, ControllerConfig, ManagementParams, PerRequirement, SystemParams, Thresholds,
 };
 use serde::{Deserialize, Serialize};
 use solver_core::aero::AERO_TABLE_CAPACITY;
@@ -224,8 +224,9 @@ pub struct SolverConfig {
     pub time_step_host: f64,
 }
 
-/// `[management]`: the decoy-management monitors and the look-ahead. Optional in
-/// a file: without it, the reference values ([`ManagementSection::default`],
+/// `[management]`: the decoy-management monitors and the look-ahead, with one
+/// table per requirement (`[management.<name>]`, `decoy_schema::Requirement`).
+/// Optional in a file: without it, the reference values ([`ManagementSection::default`],
 /// the same as `config/reference-system.toml`'s).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -449,35 +450,39 @@ impl ManagementSection {
     pub fn params(&self) -> ManagementParams {
         let (p, c, t, e) = (&self.posture, &self.collision, &self.tension, &self.exhaust);
         ManagementParams {
-            posture: Thresholds {
-                caution: p.caution_deg.to_radians(),
-                warning: p.warning_deg.to_radians(),
-                hysteresis: p.hysteresis_deg.to_radians(),
+            // Each requirement's section (in its unit; the margins' units are
+            // `Requirement::unit`: radians for the posture's degrees).
+            thresholds: PerRequirement {
+                posture: Thresholds {
+                    caution: p.caution_deg.to_radians(),
+                    warning: p.warning_deg.to_radians(),
+                    hysteresis: p.hysteresis_deg.to_radians(),
+                },
+                collision: Thresholds {
+                    caution: c.caution_m,
+                    warning: c.warning_m,
+                    hysteresis: c.hysteresis_m,
+                },
+                tension: Thresholds {
+                    caution: t.caution_n,
+                    warning: t.warning_n,
+                    hysteresis: t.hysteresis_n,
+                },
+                exhaust: Thresholds {
+                    caution: e.caution_m,
+                    warning: e.warning_m,
+                    hysteresis: e.hysteresis_m,
+                },
             },
             posture_amplitude_limit: p.amplitude_limit_deg.to_radians(),
             posture_window_s: p.window_s,
-            collision: Thresholds {
-                caution: c.caution_m,
-                warning: c.warning_m,
-                hysteresis: c.hysteresis_m,
-            },
             collision_min_clearance: c.min_clearance_m,
             collision_cable_exclusion: c.cable_exclusion_m,
-            tension: Thresholds {
-                caution: t.caution_n,
-                warning: t.warning_n,
-                hysteresis: t.hysteresis_n,
-            },
             slack_tension: t.slack_n,
             slack: Thresholds {
                 caution: t.slack_caution_n,
                 warning: t.slack_warning_n,
                 hysteresis: t.slack_hysteresis_n,
-            },
-            exhaust: Thresholds {
-                caution: e.caution_m,
-                warning: e.warning_m,
-                hysteresis: e.hysteresis_m,
             },
             exhaust_min_clearance: e.min_clearance_m,
             horizon_s: self.horizon_s,
@@ -1216,6 +1221,28 @@ mod tests {
         // moment stops growing, 40 degrees.
         let params = config.params().unwrap();
         assert!((params.usable_angle_of_attack().to_degrees() - 40.0).abs() < 1e-9);
+    }
+
+    /// `[management]` has one table per requirement, named as it
+    /// (`[management.posture]`, ...), and no other.
+    #[test]
+    fn the_management_tables_are_the_requirements() {
+        let section = toml::Value::try_from(ManagementSection::default()).unwrap();
+        let tables: Vec<&str> = section
+            .as_table()
+            .unwrap()
+            .iter()
+            .filter(|(_, v)| v.is_table())
+            .map(|(k, _)| k.as_str())
+            .collect();
+        let mut names: Vec<&str> = decoy_controller::Requirement::ALL
+            .iter()
+            .map(|r| r.name())
+            .collect();
+        names.sort_unstable();
+        let mut tables = tables;
+        tables.sort_unstable();
+        assert_eq!(tables, names);
     }
 
     #[test]

@@ -1174,15 +1174,17 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             report.prediction_horizon_s = p.horizon as f32;
         }
         let mut advisories = 0;
-        for (k, r) in report.reports_mut().into_iter().enumerate() {
+        for (requirement, r) in report.reports.iter_mut() {
             if let Some(p) = last {
-                r.predicted_worst_margin = p.worst[k].to_f64() as f32;
+                r.predicted_worst_margin = p.worst[requirement].to_f64() as f32;
             }
             // The prediction under way, from a later state, first; else the
             // last completed one.
-            if let Some(at) = running[k].or(last.and_then(|p| p.violation_at[k])) {
+            if let Some(at) =
+                running[requirement].or(last.and_then(|p| p.violation_at[requirement]))
+            {
                 r.time_to_violation_s = (at - now).max(0.0) as f32;
-                advisories |= Advisories::bit(k);
+                advisories |= Advisories::bit(requirement);
             }
         }
         report.advisories = advisories;

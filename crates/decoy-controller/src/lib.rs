@@ -49,6 +49,9 @@ pub use controller::{
     MAX_PROFILE_RATE_MILLI_RADPS, MAX_STEP_S, MAX_TIME_JUMP_S, NoCounter, PREDICTION_CAPACITY,
     SILENCE_MS, TIME_TOLERANCE_S, TRIM_SLICE_UNITS, TRIM_SLICE_UNITS_F64, trim_slice_units,
 };
+/// The requirements' list and container (`ManagementParams::thresholds` is a
+/// [`PerRequirement`]; the firmware's generated `SYSTEM` names it).
+pub use decoy_schema::{PerRequirement, Requirement};
 pub use envelope::{EnvelopeParams, OperatingEnvelope};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
 pub use lookahead::{HeldManoeuvre, Lookahead, Prediction};

@@ -49,6 +49,7 @@ use solver_core::{
 use crate::controller::WAVE_STEP_FACTOR;
 use crate::geometry::Geometry;
 use crate::monitor::{ManagementConfig, Measures, tension_margin_of};
+use decoy_schema::{PerRequirement, Requirement};
 
 /// The shortest look-ahead step, s: a step that fails at this length ends the
 /// prediction at the time reached.
@@ -191,11 +192,10 @@ pub struct Prediction<T: Real> {
     pub from: f64,
     /// Horizon reached, s (the configured one unless a step failed).
     pub horizon: f64,
-    /// Smallest margin over the horizon, per requirement (posture, collision,
-    /// tension, exhaust; units of [`crate::monitor`]).
-    pub worst: [T; 4],
+    /// Smallest margin over the horizon, per requirement (in its unit).
+    pub worst: PerRequirement<T>,
     /// Time at which each margin first falls below zero, s (absolute).
-    pub violation_at: [Option<f64>; 4],
+    pub violation_at: PerRequirement<Option<f64>>,
 }
 
 /// A prediction under way.
@@ -203,8 +203,8 @@ pub struct Prediction<T: Real> {
 struct Running<T: Real> {
     path: HeldManoeuvre<T>,
     from: f64,
-    worst: [T; 4],
-    violation_at: [Option<f64>; 4],
+    worst: PerRequirement<T>,
+    violation_at: PerRequirement<Option<f64>>,
     /// Pitch and yaw ranges over the prediction, rad: [min, max] per axis.
     ranges: [[T; 2]; 2],
     /// Wave-speed rate of the copy's last evaluation, 1/s.
@@ -247,8 +247,8 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
         running: Some(Running {
             path: HeldManoeuvre::ZERO,
             from: 0.0,
-            worst: [T::ZERO; 4],
-            violation_at: [None; 4],
+            worst: PerRequirement::splat(T::ZERO),
+            violation_at: PerRequirement::splat(None),
             ranges: [[T::ZERO; 2]; 2],
             wave_rate: T::ZERO,
             accepted: 0,
@@ -256,8 +256,8 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
         last: Some(Prediction {
             from: 0.0,
             horizon: 0.0,
-            worst: [T::ZERO; 4],
-            violation_at: [None; 4],
+            worst: PerRequirement::splat(T::ZERO),
+            violation_at: PerRequirement::splat(None),
         }),
     };
 
@@ -308,8 +308,9 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
 
     /// The violations the prediction under way has found so far (absolute
     /// times): an advisory need not wait for the whole horizon.
-    pub fn running_violations(&self) -> [Option<f64>; 4] {
-        self.running.map_or([None; 4], |r| r.violation_at)
+    pub fn running_violations(&self) -> PerRequirement<Option<f64>> {
+        self.running
+            .map_or(PerRequirement::splat(None), |r| r.violation_at)
     }
 
     /// The first, cheap part of a frame's slice, at the accepted frame: starts
@@ -344,8 +345,8 @@ impl<T: Real, const P: usize> Lookahead<T, P> {
         let mut r = Running {
             path: HeldManoeuvre::new(state.time, aircraft),
             from: state.time,
-            worst: [T::lit(f64::INFINITY); 4],
-            violation_at: [None; 4],
+            worst: PerRequirement::splat(T::lit(f64::INFINITY)),
+            violation_at: PerRequirement::splat(None),
             ranges: [[p, p], [y, y]],
             wave_rate,
             accepted: 0,
@@ -458,9 +459,9 @@ impl<T: Real> Running<T> {
     /// not taken: its lowest and highest joint `tensions` at `time`.
     fn take_tensions(&mut self, tensions: [T; 2], time: f64, config: &ManagementConfig<T>) {
         let (margin, _) = tension_margin_of(tensions, config);
-        self.worst[2] = self.worst[2].min(margin);
-        if margin < T::zero() && self.violation_at[2].is_none() {
-            self.violation_at[2] = Some(time);
+        self.worst.tension = self.worst.tension.min(margin);
+        if margin < T::zero() && self.violation_at.tension.is_none() {
+            self.violation_at.tension = Some(time);
         }
     }
 
@@ -474,11 +475,14 @@ impl<T: Real> Running<T> {
             range[1] = range[1].max(m.pitch_yaw[axis]);
             amplitude = amplitude.max((range[1] - range[0]) * half);
         }
-        margins[0] = margins[0].min(config.amplitude_limit - amplitude);
-        for (k, margin) in margins.into_iter().enumerate() {
-            self.worst[k] = self.worst[k].min(margin);
-            if margin < T::zero() && self.violation_at[k].is_none() {
-                self.violation_at[k] = Some(m.time);
+        margins.posture = margins.posture.min(config.amplitude_limit - amplitude);
+        for requirement in Requirement::ALL {
+            let margin = margins[requirement];
+            let worst = &mut self.worst[requirement];
+            *worst = worst.min(margin);
+            let at = &mut self.violation_at[requirement];
+            if margin < T::zero() && at.is_none() {
+                *at = Some(m.time);
             }
         }
     }

@@ -1,6 +1,8 @@
 //! Decoy management: one monitor per requirement of the paper (decoy posture
 //! stable, no collision with the aircraft, cable tension within its allowable
-//! value, cable out of the hot exhaust jet).
+//! value, cable out of the hot exhaust jet; the list is
+//! [`decoy_schema::Requirement`], and every per-requirement value here is a
+//! [`PerRequirement`]).
 //!
 //! Every monitor turns one measured state into a **margin** in its own unit
 //! (negative: the requirement is violated) and a **level** against the thresholds
@@ -51,6 +53,7 @@
 
 use core::marker::PhantomData;
 use decoy_link::{Management, MonitorLevel, MonitorReport};
+use decoy_schema::{PerRequirement, Requirement};
 
 use solver_core::{AircraftState, Outputs, Real, Vec3};
 
@@ -97,26 +100,21 @@ pub struct Thresholds {
 /// `config/reference-system.toml` for the reference values and their reasons).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ManagementParams {
-    /// Posture thresholds, rad.
-    pub posture: Thresholds,
+    /// Each requirement's thresholds, in its unit ([`Requirement::unit`]; the
+    /// tension's are those of its over-tension side).
+    pub thresholds: PerRequirement<Thresholds>,
     /// Largest acceptable pitch/yaw oscillation amplitude, rad.
     pub posture_amplitude_limit: f64,
     /// Length of the posture window, s (at most [`MAX_POSTURE_WINDOW_S`]).
     pub posture_window_s: f64,
-    /// Collision thresholds, m.
-    pub collision: Thresholds,
     /// Required clearance of the decoy and the cable to the aircraft's capsule, m.
     pub collision_min_clearance: f64,
     /// Cable length from the connection point not checked for collision, m.
     pub collision_cable_exclusion: f64,
-    /// Tension thresholds, N.
-    pub tension: Thresholds,
     /// Tension below which the cable counts as slack, N.
     pub slack_tension: f64,
     /// Thresholds of the slack side of the tension margin, N.
     pub slack: Thresholds,
-    /// Exhaust thresholds, m.
-    pub exhaust: Thresholds,
     /// Required clearance of the cable to the plume, m.
     pub exhaust_min_clearance: f64,
     /// Look-ahead horizon, s.
@@ -178,8 +176,8 @@ impl<T: Real> LevelThresholds<T> {
 /// from the system (allowable tension, usable angle of attack, cable stations).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ManagementConfig<T: Real> {
-    /// Posture, collision, tension, exhaust thresholds.
-    pub thresholds: [LevelThresholds<T>; 4],
+    /// Each requirement's thresholds (the tension's: its over-tension side).
+    pub thresholds: PerRequirement<LevelThresholds<T>>,
     /// Oscillation amplitude limit, rad.
     pub amplitude_limit: T,
     /// Posture window, samples of [`POSTURE_SAMPLE_S`] (2 to the capacity).
@@ -221,7 +219,7 @@ impl<T: Real> ManagementConfig<T> {
             hysteresis: T::ZERO,
         };
         ManagementConfig {
-            thresholds: [t; 4],
+            thresholds: PerRequirement::splat(t),
             amplitude_limit: T::ZERO,
             window_samples: 0,
             usable_aoa: T::ZERO,
@@ -250,8 +248,7 @@ impl<T: Real> ManagementConfig<T> {
     pub fn new(p: &ManagementParams, allowable_tension: f64, usable_aoa: f64) -> Self {
         let samples = libm::round(p.posture_window_s / POSTURE_SAMPLE_S) as usize;
         ManagementConfig {
-            thresholds: [p.posture, p.collision, p.tension, p.exhaust]
-                .map(|t| LevelThresholds::of(&t)),
+            thresholds: p.thresholds.map(|t| LevelThresholds::of(&t)),
             amplitude_limit: T::lit(p.posture_amplitude_limit),
             window_samples: samples.clamp(2, POSTURE_WINDOW_CAPACITY),
             usable_aoa: T::lit(usable_aoa),
@@ -391,6 +388,7 @@ impl<T: Real> Measures<T> {
     /// an accepted frame never carries anything else.
     pub fn is_finite(&self, config: &ManagementConfig<T>) -> bool {
         self.instant_margins(config)
+            .into_array()
             .iter()
             .chain(&self.pitch_yaw)
             .all(|m| m.finite() && m.abs() < T::lit(1e30))
@@ -403,16 +401,17 @@ impl<T: Real> Measures<T> {
         tension_margin_of([self.tension_min, self.tension_max], config)
     }
 
-    /// The collision, tension and exhaust margins (m, N, m) and the angle-of-attack
-    /// part of the posture margin (rad).
-    pub fn instant_margins(&self, config: &ManagementConfig<T>) -> [T; 4] {
+    /// The margins of this state alone, each in its requirement's unit: the
+    /// collision, tension and exhaust margins (m, N, m) and the angle-of-attack
+    /// part of the posture margin (rad; the oscillation's part needs the window).
+    pub fn instant_margins(&self, config: &ManagementConfig<T>) -> PerRequirement<T> {
         let (tension, _) = self.tension_margin(config);
-        [
-            config.usable_aoa - self.aoa.abs(),
-            self.aircraft_clearance - config.collision_min_clearance,
-            tension,
-            self.exhaust_clearance - config.exhaust_min_clearance,
-        ]
+        PerRequirement::from_fn(|requirement| match requirement {
+            Requirement::Posture => config.usable_aoa - self.aoa.abs(),
+            Requirement::Collision => self.aircraft_clearance - config.collision_min_clearance,
+            Requirement::Tension => tension,
+            Requirement::Exhaust => self.exhaust_clearance - config.exhaust_min_clearance,
+        })
     }
 }
 
@@ -422,7 +421,10 @@ pub fn tension_margin_of<T: Real>(
     tensions: [T; 2],
     config: &ManagementConfig<T>,
 ) -> (T, LevelThresholds<T>) {
-    let over = (config.allowable_tension - tensions[1], config.thresholds[2]);
+    let over = (
+        config.allowable_tension - tensions[1],
+        config.thresholds.tension,
+    );
     let slack = (tensions[0] - config.slack_tension, config.slack_thresholds);
     let (lo, ls) = (over.1.level_of(over.0), slack.1.level_of(slack.0));
     let relative = |(m, t): (T, LevelThresholds<T>)| {
@@ -685,11 +687,11 @@ impl<T: Real> PostureWindow<T> {
     }
 }
 
-/// The four monitors and the posture window.
+/// The monitors, one per requirement, and the posture window.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct Monitors<T: Real> {
-    /// Posture, collision, tension, exhaust.
-    pub monitors: [Monitor<T>; 4],
+    /// One monitor per requirement.
+    pub monitors: PerRequirement<Monitor<T>>,
     window: PostureWindow<T>,
 }
 
@@ -698,7 +700,7 @@ impl<T: Real> Monitors<T> {
     pub const NEW: Self = {
         let m = Monitor::NEW;
         Monitors {
-            monitors: [m; 4],
+            monitors: PerRequirement::splat(m),
             window: PostureWindow {
                 samples: SampleRing::EMPTY,
                 last_time: None,
@@ -710,27 +712,30 @@ impl<T: Real> Monitors<T> {
     /// Back to the state of a new run (in place: no monitors-sized temporary
     /// on the stack).
     pub fn reset(&mut self) {
-        for m in &mut self.monitors {
+        for (_, m) in self.monitors.iter_mut() {
             *m = Monitor::NEW;
         }
         self.window.clear();
     }
 
-    /// Takes one accepted state's measures; returns the four margins.
-    pub fn update(&mut self, measures: &Measures<T>, config: &ManagementConfig<T>) -> [T; 4] {
+    /// Takes one accepted state's measures; returns the margins.
+    pub fn update(
+        &mut self,
+        measures: &Measures<T>,
+        config: &ManagementConfig<T>,
+    ) -> PerRequirement<T> {
         self.window.push(measures.time, measures.pitch_yaw);
         let oscillation = self
             .window
             .oscillation(config.window_samples, config.growth_floor());
         let mut margins = measures.instant_margins(config);
-        margins[0] = margins[0]
+        margins.posture = margins
+            .posture
             .min(config.amplitude_limit - oscillation.amplitude.max(oscillation.projected));
         let mut thresholds = config.thresholds;
-        thresholds[2] = measures.tension_margin(config).1;
-        for ((monitor, margin), thresholds) in
-            self.monitors.iter_mut().zip(margins).zip(&thresholds)
-        {
-            monitor.update(margin, thresholds);
+        thresholds.tension = measures.tension_margin(config).1;
+        for (requirement, monitor) in self.monitors.iter_mut() {
+            monitor.update(margins[requirement], &thresholds[requirement]);
         }
         margins
     }
@@ -741,14 +746,10 @@ impl<T: Real> Monitors<T> {
             .oscillation(config.window_samples, config.growth_floor())
     }
 
-    /// The report of the four monitors (no prediction filled in).
+    /// The report of the monitors (no prediction filled in).
     pub fn report(&self) -> Management {
-        let [posture, collision, tension, exhaust] = self.monitors.map(|m| m.report());
         Management {
-            posture,
-            collision,
-            tension,
-            exhaust,
+            reports: self.monitors.map(|m| m.report()),
             advisories: 0,
             prediction_from_s: -1.0,
             prediction_horizon_s: 0.0,

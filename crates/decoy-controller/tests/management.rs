@@ -12,7 +12,10 @@ mod common;
 use decoy_config::SystemConfig;
 use decoy_controller::path::state_frame;
 use decoy_controller::{Controller, NoCounter, SystemParams};
-use decoy_link::{Command, DeviceMessage, HostMessage, MonitorLevel, OutputFrame, Profile};
+use decoy_link::{
+    Command, DeviceMessage, HostMessage, MonitorLevel, OutputFrame, Profile, Requirement,
+};
+use decoy_schema::REQUIREMENT_COUNT;
 use solver_core::profiles::LevelAcceleration;
 use solver_core::{AircraftState, FlightPath, Real};
 
@@ -69,14 +72,15 @@ fn fly_path<T: Real, P: FlightPath<f64>>(
 }
 
 /// Per requirement: the first violation (level violated) and the first advisory.
-fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); 4] {
-    let mut e = [(None, None); 4];
+fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); REQUIREMENT_COUNT] {
+    let mut e = [(None, None); REQUIREMENT_COUNT];
     for o in outputs {
-        for (k, r) in o.management.reports().iter().enumerate() {
+        for (requirement, r) in o.management.reports.iter() {
+            let k = requirement.index();
             if e[k].0.is_none() && r.level == MonitorLevel::Violated {
                 e[k].0 = Some(o.time_s);
             }
-            if e[k].1.is_none() && o.management.advisories & (1 << k) != 0 {
+            if e[k].1.is_none() && o.management.advisories & requirement.bit() != 0 {
                 e[k].1 = Some(o.time_s);
             }
         }
@@ -84,7 +88,10 @@ fn events(outputs: &[OutputFrame]) -> [(Option<f64>, Option<f64>); 4] {
     e
 }
 
-const NAMES: [&str; 4] = decoy_link::REQUIREMENTS;
+/// The name of the requirement at index `k`.
+fn name(k: usize) -> &'static str {
+    Requirement::ALL[k].name()
+}
 
 /// The least advisory lead asserted, s: the 1 s. The look-ahead flies
 /// a 12-segment model (`[management] prediction_segments`, graded as the
@@ -123,20 +130,20 @@ fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
             for (k, (violation, advisory)) in events.iter().enumerate() {
                 println!(
                     "{label} {profile:?} {}: violated {violation:?}, advised {advisory:?}",
-                    NAMES[k]
+                    name(k)
                 );
                 if let Some(v) = violation {
                     violated += 1;
                     let a = advisory.unwrap_or_else(|| {
                         panic!(
                             "{label} {profile:?}: {} violated at {v} s, never advised",
-                            NAMES[k]
+                            name(k)
                         )
                     });
                     assert!(
                         v - a >= LEAST_LEAD_S - 1e-9,
                         "{label} {profile:?}: {} advised at {a} s, violated at {v} s",
-                        NAMES[k]
+                        name(k)
                     );
                 }
             }
@@ -170,8 +177,8 @@ fn steady_flight_gives_no_advisory_anywhere_in_the_envelope() {
         let m = &last.management;
         println!(
             "steady {altitude} m Mach {mach}: margins {:?}, predicted {:?}",
-            m.reports().map(|r| r.margin),
-            m.reports().map(|r| r.predicted_worst_margin)
+            m.reports.map(|r| r.margin),
+            m.reports.map(|r| r.predicted_worst_margin)
         );
         assert!(m.prediction_from_s >= 0.0, "no prediction completed");
         for o in &outputs {
@@ -275,17 +282,22 @@ fn predicted_margins_against_the_margins_reached() {
             continue;
         }
         seen = from;
-        for k in 1..4 {
+        for requirement in [
+            Requirement::Collision,
+            Requirement::Tension,
+            Requirement::Exhaust,
+        ] {
             let reached = outputs
                 .iter()
                 .filter(|p| p.time_s >= from - 1e-9 && p.time_s <= until + 1e-9)
-                .map(|p| f64::from(p.management.reports()[k].margin))
+                .map(|p| f64::from(p.management.reports[requirement].margin))
                 .fold(f64::INFINITY, f64::min);
-            let predicted = f64::from(m.reports()[k].predicted_worst_margin);
-            worst_error[phase][k] = worst_error[phase][k].max((predicted - reached).abs());
+            let predicted = f64::from(m.reports[requirement].predicted_worst_margin);
+            let error = &mut worst_error[phase][requirement.index()];
+            *error = error.max((predicted - reached).abs());
             println!(
                 "from {from:.2} s: {} predicted {predicted:.3}, reached {reached:.3}",
-                NAMES[k]
+                requirement.name()
             );
         }
         compared += 1;

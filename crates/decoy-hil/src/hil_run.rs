@@ -17,10 +17,12 @@ use std::time::{Duration, Instant};
 
 use decoy_config::SystemConfig;
 use decoy_link::{AircraftStateFrame, DeviceMessage, HostMessage, OutputFrame};
+use decoy_schema::Quantity;
+use decoy_schema::columns::HIL_TIMESERIES;
 use decoy_sim::atomic::write_atomically;
 use decoy_sim::{
-    FIRMWARE_LOG, RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary, clear_output_dir,
-    format_time, format_value, summarize, write_comparison_plots,
+    Cell, FIRMWARE_LOG, RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary,
+    clear_output_dir, csv_row, format_time, summarize, write_comparison_plots,
 };
 use serde::Serialize;
 
@@ -35,9 +37,6 @@ pub const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
 
 /// The RK4 step the controller takes at most (`decoy_link`'s stepping rule).
 pub const MAX_STEP_S: f64 = decoy_controller::MAX_STEP_S;
-
-/// The header of `decoy hil`'s `timeseries.csv` (see `docs/outputs.md`).
-pub const HIL_TIMESERIES_HEADER: &str = "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N,prediction_steps,management_instructions,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories,posture_violation_in_s,collision_violation_in_s,tension_violation_in_s,exhaust_violation_in_s";
 
 /// What `decoy hil` runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -708,9 +707,42 @@ fn predictions_completed(answers: &[DeviceMessage]) -> usize {
     count
 }
 
-/// Writes `decoy hil`'s `timeseries.csv` ([`HIL_TIMESERIES_HEADER`]): the
-/// controller's outputs (`firmware`), the host's (`host`) and their differences,
-/// one row per element of `rows` (also `decoy feed`'s file).
+/// The cell of the column holding `quantity` in `decoy hil`'s `timeseries.csv`
+/// (`decoy_schema::columns::HIL_TIMESERIES`) for the frame whose controller's
+/// Output is `controller`, measured as `sample`, beside the host's `host`
+/// (`None`: not a column of the file).
+pub fn timeseries_cell(
+    controller: &OutputFrame,
+    sample: &Sample,
+    host: &Sample,
+    quantity: Quantity,
+) -> Option<Cell> {
+    Some(match quantity {
+        Quantity::Seq => Cell::Count(u64::from(controller.seq)),
+        Quantity::Flags => Cell::Count(u64::from(controller.flags)),
+        Quantity::Rk4Steps => Cell::Count(u64::from(controller.steps)),
+        Quantity::Instructions => Cell::Count(u64::from(controller.instructions)),
+        Quantity::HostTensionConnection => Cell::Value(host.tension_connection),
+        Quantity::HostTensionTow => Cell::Value(host.tension_tow),
+        Quantity::HostDecoyPitch => Cell::Value(host.euler_deg[1]),
+        Quantity::HostDecoyAoa => Cell::Value(host.aoa_deg),
+        Quantity::TensionConnectionDiff => {
+            Cell::Value(sample.tension_connection - host.tension_connection)
+        }
+        Quantity::TensionTowDiff => Cell::Value(sample.tension_tow - host.tension_tow),
+        Quantity::PredictionSteps => Cell::Count(u64::from(controller.prediction_steps)),
+        Quantity::ManagementInstructions => {
+            Cell::Count(u64::from(controller.management_instructions))
+        }
+        // The closest point along the cable is not in the controller's Output.
+        Quantity::CableExhaustClosestAlong => return None,
+        other => return sample.cell(other),
+    })
+}
+
+/// Writes `decoy hil`'s `timeseries.csv` (`decoy_schema::columns::HIL_TIMESERIES`):
+/// the controller's outputs (`firmware`), the host's (`host`) and their
+/// differences, one row per element of `rows` (also `decoy feed`'s file).
 pub fn write_timeseries(
     path: &Path,
     rows: &[(AircraftStateFrame, OutputFrame, OutputFrame)],
@@ -718,55 +750,10 @@ pub fn write_timeseries(
     host: &[Sample],
 ) -> Result<(), HilError> {
     let mut text = String::with_capacity(rows.len() * 256);
-    text.push_str(HIL_TIMESERIES_HEADER);
+    text.push_str(&HIL_TIMESERIES.header().to_string());
     text.push('\n');
     for (((_, fw, _), s), h) in rows.iter().zip(firmware).zip(host) {
-        text.push_str(&format_time(s.t));
-        text.push_str(&format!(",{}", fw.seq));
-        for v in [
-            s.tension_connection,
-            s.tension_tow,
-            s.cg[0],
-            s.cg[1],
-            s.cg[2],
-            s.euler_deg[0],
-            s.euler_deg[1],
-            s.euler_deg[2],
-            s.aoa_deg,
-            s.exhaust_clearance,
-            s.decoy_clearance,
-            s.speed,
-            s.altitude,
-        ] {
-            text.push(',');
-            text.push_str(&format_value(v));
-        }
-        text.push_str(&format!(",{},{},{}", fw.flags, fw.steps, fw.instructions));
-        for v in [
-            h.tension_connection,
-            h.tension_tow,
-            h.euler_deg[1],
-            h.aoa_deg,
-            s.tension_connection - h.tension_connection,
-            s.tension_tow - h.tension_tow,
-        ] {
-            text.push(',');
-            text.push_str(&format_value(v));
-        }
-        text.push_str(&format!(
-            ",{},{}",
-            fw.prediction_steps, fw.management_instructions
-        ));
-        let m = &s.management;
-        for k in 0..4 {
-            text.push_str(&format!(",{},{}", m.levels[k], format_value(m.margins[k])));
-        }
-        text.push_str(&format!(",{}", m.advisories));
-        for v in m.violation_in {
-            text.push(',');
-            text.push_str(&format_value(if v.is_finite() { v } else { -1.0 }));
-        }
-        text.push('\n');
+        text.push_str(&csv_row(&HIL_TIMESERIES, |q| timeseries_cell(fw, s, h, q)));
     }
     write_atomically(path, text.as_bytes())
         .map_err(|e| HilError::Output(format!("cannot write {}: {e}", path.display())))
@@ -776,11 +763,88 @@ pub fn write_timeseries(
 mod tests {
     use super::*;
 
+    /// A row has a cell for every column of the schema, in its order: the
+    /// controller's values where the file has them, the host's beside them.
     #[test]
-    fn the_header_has_a_column_per_value() {
+    fn rows_have_every_column_of_the_schema() {
+        let mut fw = OutputFrame {
+            seq: 17,
+            time_s: 1.5,
+            connection_tension_n: 0.0,
+            tow_tension_n: 0.0,
+            decoy_position_fp_m: [0.0; 3],
+            decoy_euler_rel_rad: [0.0; 3],
+            angle_of_attack_rad: 0.0,
+            cable_clearance_exhaust_m: 0.0,
+            decoy_clearance_aircraft_m: 0.0,
+            flags: 3,
+            instructions: 88_000,
+            step_instructions: 80_000,
+            steps: 4,
+            management_instructions: 250_000,
+            prediction_steps: 5,
+            management: decoy_link::Management::default(),
+        };
+        fw.management.advisories = 8;
+        let mut s = Sample {
+            t: 1.5,
+            tension_connection: 900.25,
+            tension_tow: 40.5,
+            ..Sample::default()
+        };
+        s.management.margins.exhaust = -0.5;
+        s.management.levels.exhaust = 3;
+        s.management.advisories = 8;
+        s.management.violation_in.exhaust = 0.25;
+        let h = Sample {
+            tension_connection: 900.0,
+            tension_tow: 40.0,
+            ..Sample::default()
+        };
+        assert!(
+            decoy_sim::missing_cells(&HIL_TIMESERIES, |q| timeseries_cell(&fw, &s, &h, q))
+                .is_empty()
+        );
+        let row = csv_row(&HIL_TIMESERIES, |q| timeseries_cell(&fw, &s, &h, q));
+        let cells: Vec<&str> = row.trim_end().split(',').collect();
+        assert_eq!(cells.len(), HIL_TIMESERIES.columns.len());
+        let at = |name: &str| {
+            let k = HIL_TIMESERIES.names().position(|n| n == name).unwrap();
+            cells[k]
+        };
         assert_eq!(
-            HIL_TIMESERIES_HEADER.split(',').count(),
-            2 + 13 + 3 + 6 + 2 + 13
+            [
+                at("t_s"),
+                at("seq"),
+                at("tension_connection_N"),
+                at("flags"),
+                at("instructions"),
+                at("host_tension_connection_N"),
+                at("tension_connection_diff_N"),
+                at("tension_tow_diff_N"),
+                at("management_instructions"),
+                at("exhaust_level"),
+                at("exhaust_margin_m"),
+                at("advisories"),
+                at("exhaust_violation_in_s"),
+                at("posture_violation_in_s"),
+            ],
+            [
+                "1.5",
+                "17",
+                "900.250000",
+                "3",
+                "88000",
+                "900.000000",
+                "0.250000",
+                "0.500000",
+                "250000",
+                "3",
+                "-0.500000",
+                "8",
+                "0.250000",
+                "-1.000000",
+            ]
         );
     }
 }

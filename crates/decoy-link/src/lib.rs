@@ -33,6 +33,9 @@
 pub mod framing;
 pub mod messages;
 
+/// The requirements' list and container, from `decoy-schema` (the reports of
+/// [`Management`] are a [`PerRequirement`]).
+pub use decoy_schema::{PerRequirement, Requirement};
 #[cfg(feature = "std")]
 pub use framing::encode_vec;
 pub use framing::{
@@ -41,5 +44,5 @@ pub use framing::{
 pub use messages::{
     Advisories, AircraftStateFrame, BOARD_NAME_CAPACITY, BoardInfo, BoardName, Command, Counters,
     DeviceMessage, Hello, HostMessage, Management, MonitorLevel, MonitorReport, OutputFrame,
-    PROTOCOL_VERSION, Profile, REQUIREMENTS, RejectReason, Rejected, StatusFlags, StatusFrame,
+    PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };

@@ -4,6 +4,7 @@
 //! quaternions Hamilton, scalar first, body to NED. docs/protocol.md documents
 //! every field; the field comments here are the short form.
 
+use decoy_schema::{PerRequirement, Requirement};
 use serde::{Deserialize, Serialize};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
@@ -184,8 +185,8 @@ impl MonitorLevel {
 
 /// One requirement's monitor and prediction, as reported in every Output.
 ///
-/// The margin is in the requirement's own unit (posture rad, collision m,
-/// tension N, exhaust m); negative means violated.
+/// The margin is in the requirement's own unit ([`Requirement::unit`]);
+/// negative means violated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MonitorReport {
     /// The level now.
@@ -209,18 +210,13 @@ pub struct MonitorReport {
     pub time_to_violation_s: f32,
 }
 
-/// The four monitors of the paper's decoy-management requirements and the state
-/// of the look-ahead.
+/// The monitors of the decoy-management requirements and the state of the
+/// look-ahead.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Management {
-    /// (1) Decoy posture: margin in rad.
-    pub posture: MonitorReport,
-    /// (2) Decoy and cable clear of the aircraft: margin in m.
-    pub collision: MonitorReport,
-    /// (3) Cable tension within the allowable and above slack: margin in N.
-    pub tension: MonitorReport,
-    /// (4) Cable out of the exhaust plume: margin in m.
-    pub exhaust: MonitorReport,
+    /// One report per requirement ([`Requirement`], in its order; each margin in
+    /// its [`Requirement::unit`]). On the wire the reports one after the other.
+    pub reports: PerRequirement<MonitorReport>,
     /// [`Advisories`] bits: requirements the look-ahead predicts violated within
     /// its horizon if the aircraft holds its current manoeuvre.
     pub advisories: u8,
@@ -234,8 +230,8 @@ pub struct Management {
 impl Management {
     /// Every field zero (the `Default`), as a constant: a controller's report
     /// before it is configured.
-    pub const ZERO: Self = {
-        let r = MonitorReport {
+    pub const ZERO: Self = Management {
+        reports: PerRequirement::splat(MonitorReport {
             level: MonitorLevel::Normal,
             margin: 0.0,
             worst_margin: 0.0,
@@ -244,38 +240,17 @@ impl Management {
             violations: 0,
             predicted_worst_margin: 0.0,
             time_to_violation_s: 0.0,
-        };
-        Management {
-            posture: r,
-            collision: r,
-            tension: r,
-            exhaust: r,
-            advisories: 0,
-            prediction_from_s: 0.0,
-            prediction_horizon_s: 0.0,
-        }
+        }),
+        advisories: 0,
+        prediction_from_s: 0.0,
+        prediction_horizon_s: 0.0,
     };
 
-    /// The four reports in the order posture, collision, tension, exhaust.
-    pub fn reports(&self) -> [&MonitorReport; 4] {
-        [&self.posture, &self.collision, &self.tension, &self.exhaust]
-    }
-
-    /// The four reports, mutable, in the same order.
-    pub fn reports_mut(&mut self) -> [&mut MonitorReport; 4] {
-        [
-            &mut self.posture,
-            &mut self.collision,
-            &mut self.tension,
-            &mut self.exhaust,
-        ]
-    }
-
-    /// The highest level of the four.
+    /// The highest level of the reports.
     pub fn worst_level(&self) -> MonitorLevel {
-        self.reports()
+        self.reports
             .iter()
-            .map(|r| r.level)
+            .map(|(_, r)| r.level)
             .max()
             .unwrap_or(MonitorLevel::Normal)
     }
@@ -288,27 +263,22 @@ impl Management {
     }
 }
 
-/// The bits of [`Management::advisories`].
+/// The bits of [`Management::advisories`]: bit k for the requirement at index
+/// k of [`Requirement::ALL`] ([`Requirement::bit`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Advisories(pub u8);
 
 impl Advisories {
-    /// Continuing the manoeuvre violates the posture requirement.
-    pub const POSTURE: u8 = 1;
-    /// ... the collision requirement.
-    pub const COLLISION: u8 = 2;
-    /// ... the tension requirement.
-    pub const TENSION: u8 = 4;
-    /// ... the exhaust requirement.
-    pub const EXHAUST: u8 = 8;
-    /// The bit of the requirement at `index` (0 posture, 1 collision, 2 tension, 3 exhaust).
-    pub const fn bit(index: usize) -> u8 {
-        1 << index
+    /// The bit of `requirement`: continuing the manoeuvre violates it.
+    pub const fn bit(requirement: Requirement) -> u8 {
+        requirement.bit()
+    }
+
+    /// Whether the bit of `requirement` is set.
+    pub const fn contains(self, requirement: Requirement) -> bool {
+        self.0 & requirement.bit() != 0
     }
 }
-
-/// The requirements' names in report order (for logs and files).
-pub const REQUIREMENTS: [&str; 4] = ["posture", "collision", "tension", "exhaust"];
 
 /// A rejected frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -5,7 +5,7 @@ use decoy_link::framing::{CRC_BYTES, MAX_PAYLOAD_BYTES};
 use decoy_link::{
     AircraftStateFrame, BoardName, Command, Counters, DeviceMessage, FrameDecoder, FrameError,
     Hello, HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, Management, MonitorLevel, MonitorReport,
-    OutputFrame, Profile, RejectReason, Rejected, StatusFrame, crc32, encode,
+    OutputFrame, PerRequirement, Profile, RejectReason, Rejected, StatusFrame, crc32, encode,
 };
 
 /// A small deterministic generator (SplitMix64), so failures reproduce.
@@ -125,10 +125,9 @@ fn monitor(r: &mut Rng) -> MonitorReport {
 
 fn management(r: &mut Rng) -> Management {
     Management {
-        posture: monitor(r),
-        collision: monitor(r),
-        tension: monitor(r),
-        exhaust: monitor(r),
+        // In wire order: the generator's draws are those of the four named
+        // fields before the reports were a `PerRequirement`.
+        reports: PerRequirement::from_fn(|_| monitor(r)),
         advisories: r.byte(),
         prediction_from_s: r.f64(),
         prediction_horizon_s: r.f32(),
@@ -438,5 +437,121 @@ fn the_documented_ping_frame() {
     assert_eq!(
         wire(&pong),
         [0x00, 0x08, 0x03, 0x07, 0x06, 0xb9, 0x54, 0x25, 0x5b, 0x00]
+    );
+}
+
+/// The largest Output frame (every count and varint at its longest, one report
+/// per requirement) fits in a frame: a requirement more may need a larger
+/// `MAX_FRAME_BYTES` (a protocol change).
+#[test]
+fn the_largest_output_frame_fits() {
+    let report = MonitorReport {
+        level: MonitorLevel::Violated,
+        margin: f32::MAX,
+        worst_margin: f32::MAX,
+        cautions: u32::MAX,
+        warnings: u32::MAX,
+        violations: u32::MAX,
+        predicted_worst_margin: f32::MAX,
+        time_to_violation_s: f32::MAX,
+    };
+    let output = DeviceMessage::Output(OutputFrame {
+        seq: u32::MAX,
+        time_s: f64::MAX,
+        connection_tension_n: f32::MAX,
+        tow_tension_n: f32::MAX,
+        decoy_position_fp_m: [f32::MAX; 3],
+        decoy_euler_rel_rad: [f32::MAX; 3],
+        angle_of_attack_rad: f32::MAX,
+        cable_clearance_exhaust_m: f32::MAX,
+        decoy_clearance_aircraft_m: f32::MAX,
+        flags: u16::MAX,
+        instructions: u32::MAX,
+        step_instructions: u32::MAX,
+        steps: u16::MAX,
+        management_instructions: u32::MAX,
+        prediction_steps: u16::MAX,
+        management: Management {
+            reports: PerRequirement::splat(report),
+            advisories: u8::MAX,
+            prediction_from_s: f64::MAX,
+            prediction_horizon_s: f32::MAX,
+        },
+    });
+    let mut payload = [0u8; 1024];
+    let length = postcard::to_slice(&output, &mut payload).unwrap().len();
+    assert!(
+        length <= MAX_PAYLOAD_BYTES,
+        "the largest Output is {length} bytes, over MAX_PAYLOAD_BYTES = {MAX_PAYLOAD_BYTES}: raise MAX_FRAME_BYTES (a protocol change)"
+    );
+    let mut out = [0u8; MAX_WIRE_BYTES];
+    assert!(encode(&output, &mut out).is_ok());
+}
+
+/// Output frames (whose `management` carries one report per requirement) of the
+/// seeded generator, encoded: the bytes of protocol version 6 as they were when
+/// the four reports were four named fields of `Management` (the length and
+/// CRC-32 of the whole stream, and one `Management` byte for byte, recorded
+/// then), so that gathering them into `decoy_schema::PerRequirement` moved no
+/// byte: postcard writes a struct as its fields one after the other, nested or
+/// not.
+#[test]
+fn output_frames_encode_as_they_did_with_four_named_reports() {
+    let mut r = Rng(0x0123_4567);
+    let mut stream = Vec::new();
+    let mut outputs = 0;
+    while outputs < 400 {
+        let message = device_message(&mut r);
+        if let DeviceMessage::Output(_) = message {
+            stream.extend(wire(&message));
+            outputs += 1;
+        }
+    }
+    assert_eq!((stream.len(), crc32(&stream)), (91_300, 0xe505_e62c));
+
+    let levels = [
+        MonitorLevel::Normal,
+        MonitorLevel::Caution,
+        MonitorLevel::Warning,
+        MonitorLevel::Violated,
+    ];
+    let report = |k: usize| MonitorReport {
+        level: levels[k],
+        margin: 1.0 + k as f32,
+        worst_margin: -2.0,
+        cautions: 10 + k as u32,
+        warnings: 20 + k as u32,
+        violations: 30 + k as u32,
+        predicted_worst_margin: 0.5,
+        time_to_violation_s: -1.0,
+    };
+    let management = Management {
+        reports: PerRequirement::from_fn(|req| report(req.index())),
+        advisories: 0b1010,
+        prediction_from_s: 2.5,
+        prediction_horizon_s: 3.0,
+    };
+    let mut buf = [0u8; 256];
+    let bytes = postcard::to_slice(&management, &mut buf).unwrap();
+    // Per report: level (varint), margin, worst margin (f32 LE), the three
+    // counts (varints), predicted worst margin, time to violation (f32 LE);
+    // posture, collision, tension, exhaust; then advisories, the prediction's
+    // start (f64 LE) and horizon (f32 LE).
+    let golden = "00\
+        0000803f000000c00a141e0000003f000080bf\
+        01\
+        00000040000000c00b151f0000003f000080bf\
+        02\
+        00004040000000c00c16200000003f000080bf\
+        03\
+        00008040000000c00d17210000003f000080bf\
+        0a\
+        0000000000000440\
+        00004040";
+    let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
+    assert_eq!(hex, golden);
+    assert_eq!(
+        postcard::from_bytes::<Management>(bytes).unwrap(),
+        management
     );
 }

@@ -8,3 +8,12 @@
 //! the solver, so that every layer may depend on it.
 #![no_std]
 #![deny(missing_docs)]
+
+pub mod requirement;
+pub use requirement::{PerRequirement, REQUIREMENT_COUNT, Requirement};
+
+pub mod columns;
+pub use columns::{CSV_FILES, Column, CsvFile, Quantity};
+
+#[cfg(test)]
+mod docs;

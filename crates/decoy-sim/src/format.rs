@@ -75,3 +75,59 @@ mod tests {
         assert_eq!(format_value(1.5), "1.500000");
     }
 }
+
+/// One value of a CSV row, formatted as its kind needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cell {
+    /// A time: [`format_time`].
+    Time(f64),
+    /// A measured value: [`format_value`].
+    Value(f64),
+    /// A count, a code or a bit set: as an integer.
+    Count(u64),
+}
+
+impl std::fmt::Display for Cell {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Cell::Time(t) => f.write_str(&format_time(t)),
+            Cell::Value(v) => f.write_str(&format_value(v)),
+            Cell::Count(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+/// One row of `file` (with its newline): each column's cell from `cell`, in the
+/// schema's order (`decoy_schema::columns`), so that a row cannot disagree with
+/// the header. `cell` answers `None` for a quantity the writer does not have:
+/// its tests check that it has every column of its file ([`missing_cells`]);
+/// such a cell would be empty.
+pub fn csv_row(
+    file: &decoy_schema::CsvFile,
+    mut cell: impl FnMut(decoy_schema::Quantity) -> Option<Cell>,
+) -> String {
+    use std::fmt::Write as _;
+    let mut row = String::with_capacity(16 * file.columns.len());
+    for (k, column) in file.columns.iter().enumerate() {
+        if k > 0 {
+            row.push(',');
+        }
+        if let Some(c) = cell(column.quantity) {
+            let _ = write!(row, "{c}");
+        }
+    }
+    row.push('\n');
+    row
+}
+
+/// The columns of `file` for which `cell` has no value (a writer's test: none).
+pub fn missing_cells(
+    file: &decoy_schema::CsvFile,
+    mut cell: impl FnMut(decoy_schema::Quantity) -> Option<Cell>,
+) -> Vec<&'static str> {
+    file.columns
+        .iter()
+        .filter(|c| cell(c.quantity).is_none())
+        .map(|c| c.name)
+        .collect()
+}

@@ -91,7 +91,7 @@ pub mod trim;
 /// output file of a run goes through).
 pub use decoy_plots::atomic;
 pub use error::SimError;
-pub use format::{describe_layout, format_time, format_value};
+pub use format::{Cell, csv_row, describe_layout, format_time, format_value, missing_cells};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
 pub use management::{ManagementSample, ManagementSummary, RequirementSummary};
 pub use options::{InitialState, RunOptions};
@@ -100,7 +100,7 @@ pub use plots::{
     write_management_plot,
 };
 pub use profile::FlightProfile;
-pub use record::{CABLE_HEADER, Sample, Snapshot, TIMESERIES_HEADER};
+pub use record::{Sample, Snapshot};
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
 pub use run::{
     FIRMWARE_LOG, INSTRUCTIONS_PLOT, RunOutput, clear_output_dir, known_output_file_names,

@@ -1,4 +1,4 @@
-//! Decoy management in a run's files: the monitors of the four requirements on
+//! Decoy management in a run's files: the monitors of the requirements on
 //! the run's own solution, and the advisories of the onboard controller flown
 //! alongside.
 //!
@@ -21,7 +21,8 @@ use decoy_config::SystemConfig;
 use decoy_controller::monitor::{ManagementConfig, Measures, Monitors};
 use decoy_controller::path::state_frame;
 use decoy_controller::{Controller, Geometry, NoCounter};
-use decoy_link::{DeviceMessage, HostMessage, Management, MonitorLevel, REQUIREMENTS};
+use decoy_link::{DeviceMessage, HostMessage, Management, MonitorLevel};
+use decoy_schema::{PerRequirement, Requirement};
 use serde::{Deserialize, Serialize};
 use solver_core::{AircraftState, FlightPath, Outputs};
 
@@ -34,24 +35,24 @@ const ONBOARD_CAPACITY: usize = 32;
 /// The management columns of one row of `timeseries.csv`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ManagementSample {
-    /// Levels (0 normal, 1 caution, 2 warning, 3 violated): posture, collision,
-    /// tension, exhaust.
-    pub levels: [u8; 4],
-    /// Margins: posture deg, collision m, tension N, exhaust m.
-    pub margins: [f64; 4],
-    /// Advisory bits (1 posture, 2 collision, 4 tension, 8 exhaust).
+    /// Levels (0 normal, 1 caution, 2 warning, 3 violated).
+    pub levels: PerRequirement<u8>,
+    /// Margins, each in its requirement's file unit ([`Requirement::file_unit`]:
+    /// the posture's in degrees).
+    pub margins: PerRequirement<f64>,
+    /// Advisory bits ([`Requirement::bit`]).
     pub advisories: u8,
     /// Predicted time to violation, s, per requirement (NaN: none predicted).
-    pub violation_in: [f64; 4],
+    pub violation_in: PerRequirement<f64>,
 }
 
 impl Default for ManagementSample {
     fn default() -> Self {
         ManagementSample {
-            levels: [0; 4],
-            margins: [f64::NAN; 4],
+            levels: PerRequirement::splat(0),
+            margins: PerRequirement::splat(f64::NAN),
             advisories: 0,
-            violation_in: [f64::NAN; 4],
+            violation_in: PerRequirement::splat(f64::NAN),
         }
     }
 }
@@ -60,17 +61,13 @@ impl ManagementSample {
     /// The columns of an Output's management report (margins in the files'
     /// units: posture in degrees).
     pub fn of_report(m: &Management) -> Self {
-        let reports = m.reports();
         ManagementSample {
-            levels: reports.map(|r| r.level.index()),
-            margins: [
-                f64::from(reports[0].margin).to_degrees(),
-                f64::from(reports[1].margin),
-                f64::from(reports[2].margin),
-                f64::from(reports[3].margin),
-            ],
+            levels: m.reports.map(|r| r.level.index()),
+            margins: m
+                .reports
+                .map_with(|requirement, r| requirement.to_file_unit(f64::from(r.margin))),
             advisories: m.advisories,
-            violation_in: reports.map(|r| {
+            violation_in: m.reports.map(|r| {
                 if r.time_to_violation_s >= 0.0 {
                     f64::from(r.time_to_violation_s)
                 } else {
@@ -78,20 +75,6 @@ impl ManagementSample {
                 }
             }),
         }
-    }
-
-    /// The CSV header of these columns.
-    pub fn header() -> String {
-        let units = ["deg", "m", "N", "m"];
-        let mut h = String::new();
-        for (name, unit) in REQUIREMENTS.iter().zip(units) {
-            h.push_str(&format!(",{name}_level,{name}_margin_{unit}"));
-        }
-        h.push_str(",advisories");
-        for name in REQUIREMENTS {
-            h.push_str(&format!(",{name}_violation_in_s"));
-        }
-        h
     }
 }
 
@@ -138,7 +121,7 @@ impl ManagementTrack {
         let t = out.time();
         let mut sample = ManagementSample {
             levels: self.monitors.monitors.map(|m| m.level.index()),
-            margins: [margins[0].to_degrees(), margins[1], margins[2], margins[3]],
+            margins: margins.map_with(Requirement::to_file_unit),
             ..ManagementSample::default()
         };
         if let Some(onboard) = &mut self.onboard
@@ -162,8 +145,8 @@ impl ManagementTrack {
 /// `summary.json`'s `"management"` entry of one requirement.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RequirementSummary {
-    /// Smallest margin over the run (posture deg, collision m, tension N,
-    /// exhaust m); null if never measured.
+    /// Smallest margin over the run (in the requirement's file unit: the
+    /// posture's in degrees); null if never measured.
     pub worst_margin: Option<f64>,
     /// First time the requirement was violated (level violated), s; null if never.
     pub first_violation_s: Option<f64>,
@@ -175,64 +158,44 @@ pub struct RequirementSummary {
     pub advisory_lead_s: Option<f64>,
 }
 
-/// `summary.json`'s `"management"`.
+/// `summary.json`'s `"management"`: an entry per requirement, keyed by its name.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
 pub struct ManagementSummary {
-    /// Decoy posture, margin in deg.
-    pub posture: RequirementSummary,
-    /// Collision with the aircraft, margin in m.
-    pub collision: RequirementSummary,
-    /// Cable tension, margin in N.
-    pub tension: RequirementSummary,
-    /// Cable in the exhaust plume, margin in m.
-    pub exhaust: RequirementSummary,
+    /// Each requirement's entry.
+    pub requirements: PerRequirement<RequirementSummary>,
 }
 
 impl ManagementSummary {
     /// From the rows (time, management columns) in time order.
     pub fn of_rows<'a>(rows: impl IntoIterator<Item = (f64, &'a ManagementSample)>) -> Self {
-        let mut summary = [RequirementSummary::default(); 4];
+        let mut summary = PerRequirement::<RequirementSummary>::default();
         for (t, m) in rows {
-            for (k, s) in summary.iter_mut().enumerate() {
-                let margin = m.margins[k];
+            for (requirement, s) in summary.iter_mut() {
+                let margin = m.margins[requirement];
                 if margin.is_finite() {
                     s.worst_margin = Some(s.worst_margin.map_or(margin, |w| w.min(margin)));
                 }
-                if s.first_violation_s.is_none() && m.levels[k] == MonitorLevel::Violated.index() {
+                if s.first_violation_s.is_none()
+                    && m.levels[requirement] == MonitorLevel::Violated.index()
+                {
                     s.first_violation_s = Some(round_time(t));
                 }
-                if s.first_advisory_s.is_none() && m.advisories & (1 << k) != 0 {
+                if s.first_advisory_s.is_none() && m.advisories & requirement.bit() != 0 {
                     s.first_advisory_s = Some(round_time(t));
                 }
             }
         }
-        for s in &mut summary {
+        for (_, s) in summary.iter_mut() {
             if let (Some(v), Some(a)) = (s.first_violation_s, s.first_advisory_s) {
                 s.advisory_lead_s = Some(round_time(v - a));
             }
         }
-        let [posture, collision, tension, exhaust] = summary;
         ManagementSummary {
-            posture,
-            collision,
-            tension,
-            exhaust,
+            requirements: summary,
         }
     }
-
-    /// The four entries in report order.
-    pub fn entries(&self) -> [(&'static str, &RequirementSummary); 4] {
-        [
-            (REQUIREMENTS[0], &self.posture),
-            (REQUIREMENTS[1], &self.collision),
-            (REQUIREMENTS[2], &self.tension),
-            (REQUIREMENTS[3], &self.exhaust),
-        ]
-    }
 }
-
-/// The units of the four margins in the files.
-pub const MARGIN_UNITS: [&str; 4] = ["deg", "m", "N", "m"];
 
 #[cfg(test)]
 mod tests {
@@ -240,11 +203,17 @@ mod tests {
 
     #[test]
     fn the_summary_finds_first_events_and_leads() {
-        let row = |level: u8, margin: f64, advisories: u8| ManagementSample {
-            levels: [0, 0, 0, level],
-            margins: [5.0, 3.0, 400.0, margin],
-            advisories,
-            violation_in: [f64::NAN; 4],
+        let row = |level: u8, margin: f64, advisories: u8| {
+            let mut m = ManagementSample {
+                levels: PerRequirement::splat(0),
+                margins: PerRequirement::splat(5.0),
+                advisories,
+                violation_in: PerRequirement::splat(f64::NAN),
+            };
+            m.levels.exhaust = level;
+            m.margins.exhaust = margin;
+            m.margins.tension = 400.0;
+            m
         };
         let rows = [
             (0.0, row(0, 1.0, 0)),
@@ -253,7 +222,7 @@ mod tests {
             (3.0, row(3, -0.5, 8)),
             (4.0, row(0, 0.8, 0)),
         ];
-        let s = ManagementSummary::of_rows(rows.iter().map(|(t, m)| (*t, m)));
+        let s = ManagementSummary::of_rows(rows.iter().map(|(t, m)| (*t, m))).requirements;
         assert_eq!(s.exhaust.worst_margin, Some(-0.5));
         assert_eq!(s.exhaust.first_violation_s, Some(2.5));
         assert_eq!(s.exhaust.first_advisory_s, Some(1.0));

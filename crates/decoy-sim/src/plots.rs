@@ -3,10 +3,11 @@
 use std::path::{Path, PathBuf};
 
 use decoy_config::SystemConfig;
-use decoy_link::{MonitorLevel, REQUIREMENTS};
+use decoy_link::MonitorLevel;
 use decoy_plots::{
     Aspect, Plot, PlotError, Series, write_plot, write_stacked, write_stacked_shaded,
 };
+use decoy_schema::Requirement;
 
 use crate::geometry::{Envelope, ExhaustPlume, envelope_from_config, plume_from_config};
 
@@ -197,17 +198,22 @@ pub fn write_management_plot(
 pub fn management_panels(name: &str, samples: &[Sample]) -> (Vec<Plot>, Vec<Vec<(f64, f64)>>) {
     let mut panels = Vec::new();
     let mut shaded = Vec::new();
-    for (k, requirement) in REQUIREMENTS.iter().enumerate() {
-        let level = series("level", samples, |s| f64::from(s.management.levels[k]));
+    for requirement in Requirement::ALL {
+        let level = series("level", samples, |s| {
+            f64::from(s.management.levels[requirement])
+        });
         let advisory = series("advisory (look-ahead: continuing violates)", samples, |s| {
-            if s.management.advisories & (1 << k) != 0 {
+            if s.management.advisories & requirement.bit() != 0 {
                 3.5
             } else {
                 f64::NAN
             }
         });
         let panel = plot(
-            format!("{name}: {requirement} (0 normal, 1 caution, 2 warning, 3 violated)"),
+            format!(
+                "{name}: {} (0 normal, 1 caution, 2 warning, 3 violated)",
+                requirement.name()
+            ),
             "t [s]",
             "level",
             vec![level, advisory],
@@ -217,7 +223,7 @@ pub fn management_panels(name: &str, samples: &[Sample]) -> (Vec<Plot>, Vec<Vec<
         let mut intervals = Vec::new();
         let mut start: Option<f64> = None;
         for s in samples {
-            match (s.management.levels[k] == violated, start) {
+            match (s.management.levels[requirement] == violated, start) {
                 (true, None) => start = Some(s.t),
                 (false, Some(t0)) => {
                     intervals.push((t0, s.t));

@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use solver_core::{AircraftState, Model, Outputs, SolveError};
 
 use crate::error::SimError;
-use crate::format::{format_time, format_value};
+use crate::format::{Cell, csv_row, format_time};
 use crate::geometry::{
     Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance, envelope_from_config,
     plume_from_config,
@@ -17,6 +17,8 @@ use crate::geometry::{
 use crate::management::{ManagementSample, ManagementTrack};
 use crate::profile::FlightProfile;
 use crate::scenario::RunPlan;
+use decoy_schema::Quantity;
+use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
 
 /// Interval between the rows of `timeseries.csv`, s (every step when `dt` is longer).
 pub const SAMPLE_INTERVAL_S: f64 = 0.01;
@@ -31,11 +33,6 @@ pub const SETTLING_HOLD_S: f64 = 1.0;
 /// Most cable snapshots drawn in the `cable-*` and `tension-profile` plots (evenly
 /// chosen among those in `cable.csv`, always with the first and the last).
 pub const PLOTTED_SNAPSHOTS: usize = 6;
-
-/// The header of `timeseries.csv` (units in the names; see `docs/outputs.md`).
-pub const TIMESERIES_HEADER: &str = "t_s,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,cable_exhaust_closest_along_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories,posture_violation_in_s,collision_violation_in_s,tension_violation_in_s,exhaust_violation_in_s";
-/// The header of `cable.csv`.
-pub const CABLE_HEADER: &str = "t_s,joint,along_m,behind_m,lateral_m,below_m,tension_N";
 
 /// The quantities measured at every step (one row of `timeseries.csv`; frames and
 /// signs in `docs/outputs.md`).
@@ -89,40 +86,42 @@ impl Sample {
         }
     }
 
-    fn csv_row(&self) -> String {
-        let values = [
-            self.tension_connection,
-            self.tension_tow,
-            self.cg[0],
-            self.cg[1],
-            self.cg[2],
-            self.euler_deg[0],
-            self.euler_deg[1],
-            self.euler_deg[2],
-            self.aoa_deg,
-            self.exhaust_clearance,
-            self.exhaust_along,
-            self.decoy_clearance,
-            self.speed,
-            self.altitude,
-        ];
-        let mut row = format_time(self.t);
-        for v in values {
-            row.push(',');
-            row.push_str(&format_value(v));
-        }
+    /// The sample's cell of the column holding `quantity` (`None`: the sample
+    /// does not measure it): what `timeseries.csv` writes, and `decoy hil`'s
+    /// file for the columns the two share.
+    pub fn cell(&self, quantity: Quantity) -> Option<Cell> {
         let m = &self.management;
-        for k in 0..4 {
-            row.push_str(&format!(",{},{}", m.levels[k], format_value(m.margins[k])));
-        }
-        row.push_str(&format!(",{}", m.advisories));
-        for v in m.violation_in {
-            row.push(',');
-            // -1 where no violation is predicted (as on the wire).
-            row.push_str(&format_value(if v.is_finite() { v } else { -1.0 }));
-        }
-        row.push('\n');
-        row
+        Some(match quantity {
+            Quantity::Time => Cell::Time(self.t),
+            Quantity::TensionConnection => Cell::Value(self.tension_connection),
+            Quantity::TensionTow => Cell::Value(self.tension_tow),
+            Quantity::DecoyCgBehind => Cell::Value(self.cg[0]),
+            Quantity::DecoyCgLateral => Cell::Value(self.cg[1]),
+            Quantity::DecoyCgBelow => Cell::Value(self.cg[2]),
+            Quantity::DecoyRoll => Cell::Value(self.euler_deg[0]),
+            Quantity::DecoyPitch => Cell::Value(self.euler_deg[1]),
+            Quantity::DecoyYaw => Cell::Value(self.euler_deg[2]),
+            Quantity::DecoyAoa => Cell::Value(self.aoa_deg),
+            Quantity::CableExhaustClearance => Cell::Value(self.exhaust_clearance),
+            Quantity::CableExhaustClosestAlong => Cell::Value(self.exhaust_along),
+            Quantity::DecoyAircraftClearance => Cell::Value(self.decoy_clearance),
+            Quantity::AircraftSpeed => Cell::Value(self.speed),
+            Quantity::AircraftAltitude => Cell::Value(self.altitude),
+            Quantity::Level(r) => Cell::Count(u64::from(m.levels[r])),
+            Quantity::Margin(r) => Cell::Value(m.margins[r]),
+            Quantity::Advisories => Cell::Count(u64::from(m.advisories)),
+            Quantity::ViolationIn(r) => {
+                // -1 where no violation is predicted (as on the wire).
+                let v = m.violation_in[r];
+                Cell::Value(if v.is_finite() { v } else { -1.0 })
+            }
+            _ => return None,
+        })
+    }
+
+    /// The sample's row of `timeseries.csv`.
+    fn csv_row(&self) -> String {
+        csv_row(&SIMULATE_TIMESERIES, |q| self.cell(q))
     }
 }
 
@@ -290,7 +289,9 @@ pub(crate) struct CsvFile {
 }
 
 impl CsvFile {
-    pub(crate) fn create(path: PathBuf, header: &str) -> Result<Self, SimError> {
+    /// Creates `path` (under its partial name) with the header of `file`.
+    pub(crate) fn create(path: PathBuf, file: &decoy_schema::CsvFile) -> Result<Self, SimError> {
+        let header = file.header();
         let file = AtomicFile::create(&path).map_err(|source| SimError::Io {
             action: "create",
             path: path.clone(),
@@ -338,19 +339,29 @@ pub(crate) fn settling_time(samples: &[Sample]) -> Option<f64> {
     (last.t - settled >= SETTLING_HOLD_S - 1e-9).then_some(settled)
 }
 
+impl Snapshot {
+    /// The cell of joint `j`'s row of `cable.csv` in the column holding
+    /// `quantity` (`None`: not a column of the snapshot).
+    pub fn cell(&self, j: usize, quantity: Quantity) -> Option<Cell> {
+        let [along, behind, lateral, below, tension] = *self.joints.get(j)?;
+        Some(match quantity {
+            Quantity::Time => Cell::Time(self.t),
+            Quantity::Joint => Cell::Count(j as u64),
+            Quantity::Along => Cell::Value(along),
+            Quantity::Behind => Cell::Value(behind),
+            Quantity::Lateral => Cell::Value(lateral),
+            Quantity::Below => Cell::Value(below),
+            Quantity::Tension => Cell::Value(tension),
+            _ => return None,
+        })
+    }
+}
+
 /// Writes the snapshot's rows to `cable.csv` (one write).
 fn write_snapshot(csv: &mut CsvFile, snapshot: &Snapshot) -> Result<(), SimError> {
-    let t = format_time(snapshot.t);
     let mut text = String::with_capacity(snapshot.joints.len() * 64);
-    for (j, [along, behind, lateral, below, tension]) in snapshot.joints.iter().enumerate() {
-        text.push_str(&format!(
-            "{t},{j},{},{},{},{},{}\n",
-            format_value(*along),
-            format_value(*behind),
-            format_value(*lateral),
-            format_value(*below),
-            format_value(*tension)
-        ));
+    for j in 0..snapshot.joints.len() {
+        text.push_str(&csv_row(&SIMULATE_CABLE, |q| snapshot.cell(j, q)));
     }
     csv.write(&text)
 }
@@ -560,6 +571,76 @@ pub(crate) fn probe<const N: usize>(
 mod tests {
     use super::*;
     use solver_core::{Solver, trim};
+
+    /// A row of `timeseries.csv` and of `cable.csv` has a cell for every
+    /// column of the schema, in its order: the values land under their names.
+    #[test]
+    fn rows_have_every_column_of_the_schema_in_order() {
+        let mut sample = Sample {
+            t: 2.5,
+            tension_connection: 1000.5,
+            tension_tow: 40.25,
+            cg: [100.0, -0.0, 12.0],
+            euler_deg: [0.5, 2.0, -3.0],
+            aoa_deg: 2.0625,
+            exhaust_clearance: 1.5,
+            exhaust_along: 5.25,
+            decoy_clearance: 90.0,
+            speed: 180.0,
+            altitude: 9000.0,
+            ..Sample::default()
+        };
+        sample.management.levels.collision = 2;
+        sample.management.margins.posture = 7.5;
+        sample.management.advisories = 0b0100;
+        sample.management.violation_in.tension = 1.25;
+        assert!(crate::format::missing_cells(&SIMULATE_TIMESERIES, |q| sample.cell(q)).is_empty());
+        let row = sample.csv_row();
+        let cells: Vec<&str> = row.trim_end().split(',').collect();
+        assert_eq!(cells.len(), SIMULATE_TIMESERIES.columns.len());
+        let at = |name: &str| cells[SIMULATE_TIMESERIES.names().position(|n| n == name).unwrap()];
+        assert_eq!(
+            [
+                "t_s",
+                "tension_connection_N",
+                "tension_tow_N",
+                "decoy_cg_lateral_m",
+                "decoy_pitch_deg",
+                "decoy_aoa_deg",
+                "cable_exhaust_closest_along_m",
+                "collision_level",
+                "posture_margin_deg",
+                "advisories",
+                "tension_violation_in_s",
+                "exhaust_violation_in_s",
+            ]
+            .map(at),
+            [
+                "2.5",
+                "1000.500000",
+                "40.250000",
+                "0.000000",
+                "2.000000",
+                "2.062500",
+                "5.250000",
+                "2",
+                "7.500000",
+                "4",
+                "1.250000",
+                "-1.000000",
+            ]
+        );
+
+        let snapshot = Snapshot {
+            t: 1.0,
+            joints: vec![[0.0, 4.0, 0.0, 1.0, 900.0], [10.0, 13.5, 0.25, 2.0, 880.5]],
+        };
+        assert!(crate::format::missing_cells(&SIMULATE_CABLE, |q| snapshot.cell(1, q)).is_empty());
+        assert_eq!(
+            csv_row(&SIMULATE_CABLE, |q| snapshot.cell(1, q)),
+            "1,1,10.000000,13.500000,0.250000,2.000000,880.500000\n"
+        );
+    }
 
     #[test]
     fn settling_needs_the_hold() {

@@ -4,12 +4,8 @@
 //! # The CSV
 //!
 //! `#` comment lines and blank lines are skipped; the first other line is the
-//! header, exactly the columns [`RECORDED_COLUMNS`] in that order:
-//!
-//! ```text
-//! t_s,north_m,east_m,down_m,vn_mps,ve_mps,vd_mps,qw,qx,qy,qz,p_radps,q_radps,r_radps
-//! ```
-//!
+//! header, exactly the columns [`RECORDED_COLUMNS`] in that order (the column
+//! schema's `recorded_flight`, docs/outputs.md):
 //! time (s, strictly increasing), position of the aircraft reference point (NED,
 //! m), velocity (NED, m/s), attitude (Hamilton quaternion, scalar first, body FRD
 //! to NED, unit length within 1e-3; it is normalised) and body rates (FRD, rad/s).
@@ -44,14 +40,15 @@ use solver_core::{AircraftState, FlightPath, Real};
 
 use decoy_config::SystemConfig;
 
+use decoy_schema::columns::{RECORDED_FLIGHT, column_names};
+
 use crate::error::SimError;
 use crate::format::format_number;
 
-/// The recorded-flight CSV header, in order.
-pub const RECORDED_COLUMNS: [&str; 14] = [
-    "t_s", "north_m", "east_m", "down_m", "vn_mps", "ve_mps", "vd_mps", "qw", "qx", "qy", "qz",
-    "p_radps", "q_radps", "r_radps",
-];
+/// The recorded-flight CSV header, in order (the column schema's
+/// `decoy_schema::columns::RECORDED_FLIGHT`).
+pub const RECORDED_COLUMNS: [&str; RECORDED_FLIGHT.columns.len()] =
+    column_names(RECORDED_FLIGHT.columns);
 
 /// How far a recorded attitude quaternion's norm may be from 1.
 const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use decoy_config::SystemConfig;
 use decoy_plots::atomic::{partial_path, write_atomically};
+use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use solver_core::{AircraftState, Model, SolveError, Solver, State, trim};
 
@@ -15,8 +16,7 @@ use crate::management::ManagementTrack;
 use crate::options::{InitialState, RunOptions};
 use crate::plots::PLOT_NAMES;
 use crate::record::{
-    CABLE_HEADER, CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample,
-    Stop, TIMESERIES_HEADER, probe,
+    CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample, Stop, probe,
 };
 use crate::scenario::{RunPlan, Scenario};
 use crate::summary::{RunIdentity, Summary, measured};
@@ -189,8 +189,8 @@ fn simulate_with<const N: usize>(
     let timeseries_path = out_dir.join("timeseries.csv");
     let cable_path = out_dir.join("cable.csv");
     let files = (
-        CsvFile::create(timeseries_path.clone(), TIMESERIES_HEADER)?,
-        CsvFile::create(cable_path.clone(), CABLE_HEADER)?,
+        CsvFile::create(timeseries_path.clone(), &SIMULATE_TIMESERIES)?,
+        CsvFile::create(cable_path.clone(), &SIMULATE_CABLE)?,
     );
     let mut recorder = Recorder::new(
         &plan,

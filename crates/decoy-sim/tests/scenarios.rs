@@ -5,9 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use decoy_config::SystemConfig;
+use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
 use decoy_sim::{
     BUILTIN_SCENARIOS, InitialState, RECORDED_COLUMNS, RecordedFlight, RecordedSample, RunOptions,
-    RunOutput, Scenario, ScenarioKind, SimError, Summary, TIMESERIES_HEADER, simulate,
+    RunOutput, Scenario, ScenarioKind, SimError, Summary, simulate,
 };
 use solver_core::FlightPath;
 use solver_core::profiles::{LevelTurn, PullUp};
@@ -48,8 +49,9 @@ fn run(scenario: &str, options: &RunOptions) -> RunOutput {
 fn timeseries(dir: &Path) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(dir.join("timeseries.csv")).expect("timeseries.csv");
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some(TIMESERIES_HEADER));
-    let columns = TIMESERIES_HEADER.split(',').count();
+    let header = SIMULATE_TIMESERIES.header().to_string();
+    assert_eq!(lines.next(), Some(header.as_str()));
+    let columns = SIMULATE_TIMESERIES.columns.len();
     assert!(text.ends_with('\n'), "the last row is complete");
     lines
         .map(|line| {
@@ -64,8 +66,8 @@ fn timeseries(dir: &Path) -> Vec<Vec<f64>> {
 }
 
 fn column(name: &str) -> usize {
-    TIMESERIES_HEADER
-        .split(',')
+    SIMULATE_TIMESERIES
+        .names()
         .position(|c| c == name)
         .unwrap_or_else(|| panic!("no column {name}"))
 }
@@ -682,7 +684,10 @@ fn outputs_have_their_documented_shape() {
     // cable.csv: snapshots at 0, 1, 2 and 2.5 s, joints 0..=16 each.
     let cable = std::fs::read_to_string(dir.join("cable.csv")).unwrap();
     let mut lines = cable.lines();
-    assert_eq!(lines.next(), Some(decoy_sim::CABLE_HEADER));
+    assert_eq!(
+        lines.next(),
+        Some(SIMULATE_CABLE.header().to_string().as_str())
+    );
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
@@ -731,7 +736,10 @@ fn straight_initial_state_trails_behind_the_connection_point() {
 fn cable_rows(dir: &Path) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(dir.join("cable.csv")).expect("cable.csv");
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some(decoy_sim::CABLE_HEADER));
+    assert_eq!(
+        lines.next(),
+        Some(SIMULATE_CABLE.header().to_string().as_str())
+    );
     lines
         .map(|line| line.split(',').map(|v| v.parse().unwrap()).collect())
         .collect()

@@ -59,7 +59,7 @@ const _: () = {
 
 /// The wire output of a link output frame (the supervision bits cleared).
 pub fn output_from_link(out: &OutputFrame) -> Output {
-    Output {
+    let mut wire = Output {
         time_s: out.time_s,
         request_seq: out.seq,
         connection_tension_n: out.connection_tension_n,
@@ -79,11 +79,13 @@ pub fn output_from_link(out: &OutputFrame) -> Output {
         prediction_steps: out.prediction_steps,
         advisories: out.management.advisories,
         reserved: 0,
-        posture: report_from_link(&out.management.posture),
-        collision: report_from_link(&out.management.collision),
-        tension: report_from_link(&out.management.tension),
-        exhaust: report_from_link(&out.management.exhaust),
+        // The reports, one field per requirement, below.
+        ..Output::default()
+    };
+    for (requirement, report) in out.management.reports.iter() {
+        *wire.report_mut(requirement) = report_from_link(report);
     }
+    wire
 }
 
 /// The wire form of one monitor's report (the level as its index).
@@ -139,10 +141,7 @@ pub fn output_to_link(out: &Output) -> OutputFrame {
         management_instructions: out.management_instructions,
         prediction_steps: out.prediction_steps,
         management: Management {
-            posture: report_to_link(&out.posture),
-            collision: report_to_link(&out.collision),
-            tension: report_to_link(&out.tension),
-            exhaust: report_to_link(&out.exhaust),
+            reports: out.reports().map(|r| report_to_link(&r)),
             advisories: out.advisories,
             prediction_from_s: out.prediction_from_s,
             prediction_horizon_s: out.prediction_horizon_s,
@@ -255,6 +254,7 @@ pub fn command(seq: u32, code: u16) -> bridge_types::Command {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use decoy_link::{PerRequirement, Requirement};
 
     #[test]
     fn states_map_field_for_field_both_ways() {
@@ -316,27 +316,31 @@ mod tests {
             management_instructions: 7,
             prediction_steps: 3,
             management: Management {
-                exhaust: LinkMonitorReport {
-                    level: MonitorLevel::Warning,
-                    margin: 0.4,
+                reports: PerRequirement::from_fn(|r| LinkMonitorReport {
+                    level: if r == Requirement::Exhaust {
+                        MonitorLevel::Warning
+                    } else {
+                        MonitorLevel::Caution
+                    },
+                    margin: 0.4 + r.index() as f32,
                     worst_margin: 0.3,
                     cautions: 2,
                     warnings: 1,
-                    violations: 0,
+                    violations: r.index() as u32,
                     predicted_worst_margin: -0.2,
                     time_to_violation_s: 1.5,
-                },
+                }),
                 advisories: 8,
                 prediction_from_s: 0.25,
                 prediction_horizon_s: 3.0,
-                ..Management::default()
             },
         };
         let out = output_from_link(&frame);
         assert_eq!(
             (out.exhaust.level, out.advisories, out.tension.level),
-            (2, 8, 0)
+            (2, 8, 1)
         );
+        assert_eq!((out.posture.margin, out.collision.violations), (0.4, 1));
         assert_eq!(out.flags, StatusFlags::TRIMMED | StatusFlags::OVER_TENSION);
         let mut back = frame;
         back.flags = out.flags;

@@ -40,6 +40,7 @@ from typing import Protocol
 
 import numpy as np
 
+from . import wire
 from .frames import FT, FlatEarth, central_difference, quat_from_dcm
 
 G0 = 9.80665
@@ -84,21 +85,11 @@ class AircraftState:
     extra: dict[str, float] = field(default_factory=dict)
 
 
-EXTRA_COLUMNS = (
-    "mach",
-    "altitude_m",
-    "airspeed_mps",
-    "load_factor",
-    "roll_deg",
-    "pitch_deg",
-    "heading_deg",
-    "flight_path_deg",
-    "alpha_deg",
-    "throttle",
-    "elevator_cmd",
-    "aileron_cmd",
+EXTRA_COLUMNS = tuple(
+    c.name for c in wire.LAYOUT.csv_files["client_trajectory"].columns if c.quantity == "flight_test"
 )
-"""Keys of :attr:`AircraftState.extra`: Mach number, altitude (m), true airspeed
+"""Keys of :attr:`AircraftState.extra`, the trajectory's flight-test columns of the
+layout description (docs/outputs.md): Mach number, altitude (m), true airspeed
 (m/s), load factor ``accelerations/Nz`` (g, 1 in level flight), JSBSim's Euler
 angles (deg), flight-path angle (deg, positive climbing), angle of attack (deg),
 and the normalised commands the loops set."""

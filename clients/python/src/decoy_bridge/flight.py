@@ -20,75 +20,29 @@ from . import wire
 from .affinity import current_cpus
 from .client import Bridge, make_state
 from .errors import Rejected
-from .f16 import EXTRA_COLUMNS, AircraftState
+from .f16 import AircraftState
 
-TRAJECTORY_COLUMNS = (
-    "t_s",
-    "north_m",
-    "east_m",
-    "down_m",
-    "vn_mps",
-    "ve_mps",
-    "vd_mps",
-    "an_mps2",
-    "ae_mps2",
-    "ad_mps2",
-    "qw",
-    "qx",
-    "qy",
-    "qz",
-    "p_radps",
-    "q_radps",
-    "r_radps",
-    "pdot_radps2",
-    "qdot_radps2",
-    "rdot_radps2",
-) + EXTRA_COLUMNS
-"""Columns of ``trajectory.csv``: the state sent (as the solver takes it), then the
-flight-test quantities of :data:`decoy_bridge.f16.EXTRA_COLUMNS`."""
+TRAJECTORY = wire.LAYOUT.csv_files["client_trajectory"]
+"""``trajectory.csv``'s columns, from the layout description (``decoy_schema::columns``,
+docs/outputs.md): the state sent (as the solver takes it), then the flight
+simulation's own quantities (:data:`decoy_bridge.f16.EXTRA_COLUMNS`)."""
+TRAJECTORY_COLUMNS = TRAJECTORY.names
+"""The names of :data:`TRAJECTORY`'s columns (the header)."""
 
-OUTPUT_COLUMNS = (
-    "t_s",
-    "seq",
-    "tension_connection_N",
-    "tension_tow_N",
-    "decoy_cg_behind_m",
-    "decoy_cg_lateral_m",
-    "decoy_cg_below_m",
-    "decoy_roll_deg",
-    "decoy_pitch_deg",
-    "decoy_yaw_deg",
-    "decoy_aoa_deg",
-    "cable_exhaust_clearance_m",
-    "decoy_aircraft_clearance_m",
-    "aircraft_speed_mps",
-    "aircraft_altitude_m",
-    "aircraft_load_factor",
-    "flags",
-    "rk4_steps",
-    "instructions",
-    "latency_us",
-    "posture_level",
-    "posture_margin_deg",
-    "collision_level",
-    "collision_margin_m",
-    "tension_level",
-    "tension_margin_N",
-    "exhaust_level",
-    "exhaust_margin_m",
-    "advisories",
-)
-"""Columns of ``timeseries.csv``: ``decoy feed``'s (docs/outputs.md: position in the
-flight-path frame from the aircraft reference point, ``lateral`` positive to the
-left, angles relative to the flight-path frame), then the F-16's load factor and
-the round trip of each frame from Python, µs, then the decoy management
-(docs/management.md): each requirement's level (0 normal, 1 caution, 2 warning,
-3 violated) and margin, and the advisory bits (posture 1, collision 2, tension 4,
-exhaust 8)."""
+OUTPUTS = wire.LAYOUT.csv_files["client_timeseries"]
+"""``timeseries.csv``'s columns, from the layout description: ``decoy feed``'s
+(docs/outputs.md: position in the flight-path frame from the aircraft reference
+point, ``lateral`` positive to the left, angles relative to the flight-path
+frame), then the flight simulation's load factor and the round trip of each frame
+from Python, µs, then the decoy management (docs/management.md): each
+requirement's level (0 normal, 1 caution, 2 warning, 3 violated) and margin, and
+the advisory bits."""
+OUTPUT_COLUMNS = OUTPUTS.names
+"""The names of :data:`OUTPUTS`' columns (the header)."""
 
-REQUIREMENTS = ("posture", "collision", "tension", "exhaust")
-"""The paper's four decoy-management requirements, in the wire order."""
-MARGIN_UNITS = ("deg", "m", "N", "m")
+REQUIREMENTS = tuple(r.name for r in wire.REQUIREMENTS)
+"""The decoy-management requirements, in the wire order."""
+MARGIN_UNITS = tuple(r.file_unit for r in wire.REQUIREMENTS)
 """Units of their margins in the files (the wire's posture margin is in rad)."""
 
 
@@ -188,45 +142,62 @@ def percentiles(values: list[float]) -> dict[str, float]:
 
 
 def output_row(rec: Record) -> dict[str, Any]:
-    """One ``timeseries.csv`` row of an answered frame."""
+    """One ``timeseries.csv`` row of an answered frame: each column of
+    :data:`OUTPUTS` by name."""
     o = rec.output
     x, y, z = (float(v) for v in o.decoy_position_fp_m)
     roll, pitch, yaw = (math.degrees(float(v)) for v in o.decoy_euler_rel_rad)
-    return {
-        "t_s": o.time_s,
+    values: dict[str, Any] = {
+        "time": o.time_s,
         "seq": o.request_seq,
-        "tension_connection_N": float(o.connection_tension_n),
-        "tension_tow_N": float(o.tow_tension_n),
-        "decoy_cg_behind_m": -x,
-        "decoy_cg_lateral_m": -y,
-        "decoy_cg_below_m": z,
-        "decoy_roll_deg": roll,
-        "decoy_pitch_deg": pitch,
-        "decoy_yaw_deg": yaw,
-        "decoy_aoa_deg": math.degrees(float(o.angle_of_attack_rad)),
-        "cable_exhaust_clearance_m": float(o.cable_clearance_exhaust_m),
-        "decoy_aircraft_clearance_m": float(o.decoy_clearance_aircraft_m),
-        "aircraft_speed_mps": float(np.linalg.norm(rec.state.velocity_ned_mps)),
-        "aircraft_altitude_m": float(-rec.state.position_ned_m[2]),
+        "tension_connection": float(o.connection_tension_n),
+        "tension_tow": float(o.tow_tension_n),
+        "decoy_cg_behind": -x,
+        "decoy_cg_lateral": -y,
+        "decoy_cg_below": z,
+        "decoy_roll": roll,
+        "decoy_pitch": pitch,
+        "decoy_yaw": yaw,
+        "decoy_aoa": math.degrees(float(o.angle_of_attack_rad)),
+        "cable_exhaust_clearance": float(o.cable_clearance_exhaust_m),
+        "decoy_aircraft_clearance": float(o.decoy_clearance_aircraft_m),
+        "aircraft_speed": float(np.linalg.norm(rec.state.velocity_ned_mps)),
+        "aircraft_altitude": float(-rec.state.position_ned_m[2]),
         "aircraft_load_factor": rec.state.extra.get("load_factor", math.nan),
         "flags": o.flags,
         "rk4_steps": o.steps,
         "instructions": o.instructions,
-        "latency_us": rec.latency_us,
-        **management_columns(o),
+        "latency": rec.latency_us,
+        "advisories": int(o.advisories),
     }
+    return {c.name: _requirement_value(o, c) if c.requirement else values[c.quantity] for c in OUTPUTS.columns}
+
+
+def _requirement_value(o: Any, column: wire.Column) -> Any:
+    """A per-requirement column's value of an Output: its report's level, its
+    margin in the file unit, or its time to violation (-1 for none)."""
+    requirement = next(r for r in wire.REQUIREMENTS if r.name == column.requirement)
+    report = getattr(o, requirement.name)
+    if column.quantity == "level":
+        return int(report.level)
+    if column.quantity == "margin":
+        return requirement.to_file_unit(float(report.margin))
+    if column.quantity == "violation_in":
+        return float(report.time_to_violation_s)
+    raise KeyError(f"{column.name}: no value for the quantity {column.quantity!r}")
 
 
 def management_columns(o: Any) -> dict[str, Any]:
-    """The management columns of an Output (:data:`OUTPUT_COLUMNS`)."""
-    cols: dict[str, Any] = {}
-    for name, unit in zip(REQUIREMENTS, MARGIN_UNITS):
-        r = getattr(o, name)
-        margin = float(r.margin)
-        cols[f"{name}_level"] = int(r.level)
-        cols[f"{name}_margin_{unit}"] = math.degrees(margin) if name == "posture" else margin
+    """The management columns of an Output (those of :data:`OUTPUTS` holding a
+    requirement's value, and the advisory bits)."""
+    cols = {c.name: _requirement_value(o, c) for c in OUTPUTS.columns if c.requirement}
     cols["advisories"] = int(o.advisories)
     return cols
+
+
+def _column(quantity: str, requirement: str) -> str:
+    """The name of :data:`OUTPUTS`' column of ``requirement``'s ``quantity``."""
+    return next(c.name for c in OUTPUTS.columns if c.quantity == quantity and c.requirement == requirement)
 
 
 def management_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -234,10 +205,12 @@ def management_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     requirement the worst margin, the first violation and the first advisory (s)
     and the advisory's lead (null where none)."""
     out: dict[str, Any] = {}
-    for k, (name, unit) in enumerate(zip(REQUIREMENTS, MARGIN_UNITS)):
-        margins = [r[f"{name}_margin_{unit}"] for r in rows if math.isfinite(r[f"{name}_margin_{unit}"])]
-        violation = next((round(r["t_s"], 9) for r in rows if r[f"{name}_level"] == 3), None)
-        advisory = next((round(r["t_s"], 9) for r in rows if r["advisories"] & (1 << k)), None)
+    for requirement in wire.REQUIREMENTS:
+        name = requirement.name
+        margin, level = _column("margin", name), _column("level", name)
+        margins = [r[margin] for r in rows if math.isfinite(r[margin])]
+        violation = next((round(r["t_s"], 9) for r in rows if r[level] == 3), None)
+        advisory = next((round(r["t_s"], 9) for r in rows if r["advisories"] & requirement.bit), None)
         out[name] = {
             "worst_margin": min(margins) if margins else None,
             "first_violation_s": violation,
@@ -255,18 +228,37 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+def trajectory_row(s: AircraftState) -> list[str]:
+    """One ``trajectory.csv`` row: each column of :data:`TRAJECTORY` (times with 9
+    decimals; a flight-test quantity the state lacks is NaN)."""
+    vectors = {
+        "position_ned": s.position_ned_m,
+        "velocity_ned": s.velocity_ned_mps,
+        "acceleration_ned": s.acceleration_ned_mps2,
+        "attitude": s.attitude_wxyz,
+        "body_rate": s.body_rate_radps,
+        "body_angular_acceleration": s.body_angular_acceleration_radps2,
+    }
+    row = []
+    for c in TRAJECTORY.columns:
+        if c.quantity == "time":
+            row.append(f"{s.time_s:.9f}")
+        elif c.quantity == "flight_test":
+            row.append(_fmt(float(s.extra.get(c.name, math.nan))))
+        elif c.index is not None:
+            row.append(_fmt(float(vectors[c.quantity][c.index])))
+        else:
+            raise KeyError(f"trajectory.csv: no value for the column {c.name!r}")
+    return row
+
+
 def write_trajectory(path: Path, states: Iterable[AircraftState]) -> None:
     """``trajectory.csv``: one row per frame (:data:`TRAJECTORY_COLUMNS`), times with 9 decimals."""
     with path.open("w", newline="") as f:
         w = csv.writer(f)
         w.writerow(TRAJECTORY_COLUMNS)
         for s in states:
-            row = [f"{s.time_s:.9f}"]
-            for arr in (s.position_ned_m, s.velocity_ned_mps, s.acceleration_ned_mps2, s.attitude_wxyz,
-                        s.body_rate_radps, s.body_angular_acceleration_radps2):
-                row.extend(_fmt(float(v)) for v in arr)
-            row.extend(_fmt(float(s.extra.get(k, math.nan))) for k in EXTRA_COLUMNS)
-            w.writerow(row)
+            w.writerow(trajectory_row(s))
 
 
 def write_outputs(path: Path, run: Run) -> list[dict[str, Any]]:
@@ -276,7 +268,7 @@ def write_outputs(path: Path, run: Run) -> list[dict[str, Any]]:
         w = csv.writer(f)
         w.writerow(OUTPUT_COLUMNS)
         for r in rows:
-            w.writerow([f"{r['t_s']:.9f}"] + [_fmt(r[k]) for k in OUTPUT_COLUMNS[1:]])
+            w.writerow([f"{r[c.name]:.9f}" if c.quantity == "time" else _fmt(r[c.name]) for c in OUTPUTS.columns])
     return rows
 
 

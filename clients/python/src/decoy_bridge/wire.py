@@ -17,12 +17,19 @@ is what guards against that.
 Every structure has a static ``type_name()`` returning the Rust type's iceoryx2
 name (``decoy.bridge.v3.AircraftState``), which the iceoryx2 Python package uses
 when it opens a service.
+
+The same description lists the decoy management's requirements in wire order
+(:data:`REQUIREMENTS`: the ``Output`` fields holding their reports, their
+advisory bits, units) and the columns of every CSV file the tools write
+(:attr:`Layout.csv_files`, ``decoy_schema::columns``), from which
+:mod:`decoy_bridge.flight` takes its files' columns.
 """
 
 from __future__ import annotations
 
 import ctypes
 import json
+import math
 from dataclasses import dataclass
 from importlib import resources
 from typing import Any
@@ -47,6 +54,71 @@ class LayoutError(ValueError):
 
 
 @dataclass(frozen=True)
+class Requirement:
+    """One requirement of the decoy management (``decoy_schema::Requirement``).
+
+    Attributes:
+        name: its name: the :class:`Output` field holding its report, the prefix
+            of its columns (``"posture"``).
+        bit: its bit in ``Output.advisories``.
+        unit: the unit of its margin on the wire (``"rad"``).
+        file_unit: the unit of its margin in the files (``"deg"``).
+        title: a title.
+        margin: what its margin is.
+    """
+
+    name: str
+    bit: int
+    unit: str
+    file_unit: str
+    title: str
+    margin: str
+
+    def to_file_unit(self, margin: float) -> float:
+        """``margin`` (in :attr:`unit`) in :attr:`file_unit`: radians to degrees."""
+        if self.unit == "rad" and self.file_unit == "deg":
+            return math.degrees(margin)
+        return margin
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a CSV file (``decoy_schema::columns``).
+
+    Attributes:
+        name: its name in the header (``"posture_margin_deg"``).
+        unit: its unit (``""`` for a count or a code).
+        quantity: what it holds (``"margin"``, ``"tension_connection"``, ...).
+        requirement: the requirement of a per-requirement quantity, else ``None``.
+        index: the component of a vector quantity, else ``None``.
+        description: what it means.
+    """
+
+    name: str
+    unit: str
+    quantity: str
+    requirement: str | None
+    index: int | None
+    description: str
+
+
+@dataclass(frozen=True)
+class CsvFile:
+    """A CSV file the tools write: ``id`` (``"client_timeseries"``), its ``file``
+    name, what writes it and its :class:`Column` s in file order."""
+
+    id: str
+    file: str
+    written_by: str
+    columns: tuple[Column, ...]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The column names, in file order (the header)."""
+        return tuple(c.name for c in self.columns)
+
+
+@dataclass(frozen=True)
 class Layout:
     """A parsed layout description.
 
@@ -57,6 +129,9 @@ class Layout:
             response type name)``.
         event_ids: event id by name (``"REQUEST"`` → 1).
         codes: per field (``"reason"``, ``"command"``, ...) the name → value map.
+        requirements: the decoy management's requirements, in wire order (the
+            order of ``Output``'s reports and of the advisory bits).
+        csv_files: the columns of every CSV file the tools write, by id.
         raw: the description as parsed from JSON.
     """
 
@@ -65,6 +140,8 @@ class Layout:
     services: dict[str, tuple[str, str | None, str | None]]
     event_ids: dict[str, int]
     codes: dict[str, dict[str, int]]
+    requirements: tuple[Requirement, ...]
+    csv_files: dict[str, CsvFile]
     raw: dict[str, Any]
 
     def code_name(self, field: str, value: int) -> str:
@@ -143,7 +220,21 @@ def build_types(description: dict[str, Any]) -> Layout:
         codes: dict[str, dict[str, int]] = {}
         for field, n, v in description["codes"]:
             codes.setdefault(str(field), {})[str(n)] = int(v)
-        return Layout(int(description["protocol_version"]), known, services, event_ids, codes, description)
+        requirements = tuple(Requirement(**r) for r in description["requirements"])
+        csv_files = {
+            f["id"]: CsvFile(f["id"], f["file"], f["written_by"], tuple(Column(**c) for c in f["columns"]))
+            for f in description["csv_files"]
+        }
+        return Layout(
+            int(description["protocol_version"]),
+            known,
+            services,
+            event_ids,
+            codes,
+            requirements,
+            csv_files,
+            description,
+        )
     except (KeyError, TypeError) as e:
         raise LayoutError(f"malformed layout description: {e!r}") from e
 
@@ -168,6 +259,9 @@ Counters = LAYOUT.types["Counters"]
 Status = LAYOUT.types["Status"]
 Command = LAYOUT.types["Command"]
 CommandReply = LAYOUT.types["CommandReply"]
+
+REQUIREMENTS = LAYOUT.requirements
+"""The decoy management's requirements, in wire order (:class:`Requirement`)."""
 
 
 def to_dict(value: ctypes.Structure) -> dict[str, Any]:
