@@ -196,8 +196,8 @@ pub struct Output {
     pub exhaust: MonitorReport,
 }
 
-/// One requirement's monitor and prediction in an [`Output`] (docs/outputs.md,
-/// "Decoy management"): the margin in the requirement's own unit, negative
+/// One requirement's monitor and prediction in an [`Output`] (docs/management.md,
+/// "Margins"): the margin in the requirement's own unit, negative
 /// when violated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]

@@ -84,9 +84,8 @@ impl SystemConfig {
                 name: env.atmosphere.clone(),
             });
         }
-        // Physical ranges (docs/configuration in config/reference-system.toml's
-        // header): a value outside one is a typing error or a unit slip, never a
-        // flight condition, and would trim to nonsense rather than fail.
+        // Physical ranges: a value outside one is a typing error or a unit slip,
+        // never a flight condition, and would trim to nonsense rather than fail.
         c.positive("environment.gravity", env.gravity)?;
         c.range("environment.gravity", env.gravity, 9.7, 9.9)?;
         c.positive("environment.gas_constant", env.gas_constant)?;
