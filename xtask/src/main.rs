@@ -494,3 +494,36 @@ fn bench_report(root: &Path) -> Result<()> {
         ],
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The main job's second trim flies exactly the configuration's embedded
+    /// model; the first, the host model (no layout flags).
+    #[test]
+    fn the_second_trim_is_the_configured_embedded_model() {
+        let jobs = main_job().unwrap();
+        let flag = |job: &str, name: &str| -> Option<String> {
+            let words: Vec<&str> = job.split_whitespace().collect();
+            words
+                .iter()
+                .position(|w| *w == name)
+                .map(|i| words[i + 1].to_owned())
+        };
+        let solver = decoy_config::SystemConfig::builtin().unwrap().solver;
+        assert!(jobs[0].starts_with("trim ") && flag(&jobs[0], "--segments").is_none());
+        assert!(jobs[1].starts_with("trim "));
+        assert_eq!(
+            flag(&jobs[1], "--segments")
+                .unwrap()
+                .parse::<usize>()
+                .unwrap(),
+            solver.segments_embedded
+        );
+        assert_eq!(
+            flag(&jobs[1], "--grading").unwrap().parse::<f64>().unwrap(),
+            solver.grading_ratio_embedded
+        );
+    }
+}
