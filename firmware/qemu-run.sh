@@ -29,7 +29,7 @@
 #
 # -icount shift=0,align=off,sleep=off: virtual time advances exactly 1 ns per
 # executed instruction, so SysTick counts instructions deterministically
-# (/work/shared/TOOLCHAIN.md). Semihosting carries the defmt logs and the exit code.
+# (docs/toolchain.md §3). Semihosting carries the defmt logs and the exit code.
 set -euo pipefail
 
 if [[ $# -lt 1 ]]; then

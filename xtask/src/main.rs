@@ -5,16 +5,19 @@
 //!   installed.
 //! - `test`: `setup`, then every test stage (fmt, clippy, host tests, the solver's
 //!   no_std cross build, the firmware build), failing fast.
-//! - `run`: the main job on the built-in reference system (see [`MAIN_JOB`]).
+//! - `run`: the main job on the built-in reference system (see [`main_job`]).
 //! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
 //!   [`bench_report`]), then the bridge's soak.
 //! - `soak`: the bridge's soak alone (see [`soak`]): `docs/soak.md`, `docs/soak.json`.
+//! - `check-refs`: the references stage alone ([`refs`]): every repository file
+//!   and section the text cites exists.
 
 mod apt;
 mod layering;
 mod process;
 mod python;
 mod qemu;
+mod refs;
 mod setup;
 
 use std::path::{Path, PathBuf};
@@ -27,15 +30,26 @@ use process::Result;
 use setup::{Scope, TARGET, Toolchain};
 
 /// The main job: `decoy` invocations on the built-in reference system, run in
-/// order by `cargo xtask run`. Each entry is the command line after `decoy`,
-/// split on whitespace (so no argument may contain a space).
-const MAIN_JOB: &[&str] = &[
-    "trim --altitude 9000 --mach 0.8",
-    "trim --altitude 9000 --mach 0.8 --segments 16 --grading 1.3",
-    "simulate --scenario acceleration --out out/acceleration",
-];
+/// order by `cargo xtask run`: its trim at 9 km and Mach 0.8 with the host model
+/// and with the embedded model (the configuration's `solver.segments_embedded`
+/// graded by `solver.grading_ratio_embedded`, read from it), then the paper's
+/// acceleration. Each entry is the command line after `decoy`, split on
+/// whitespace (so no argument may contain a space).
+fn main_job() -> Result<Vec<String>> {
+    let solver = decoy_config::SystemConfig::builtin()
+        .map_err(|e| format!("the built-in configuration: {e}"))?
+        .solver;
+    Ok(vec![
+        "trim --altitude 9000 --mach 0.8".to_owned(),
+        format!(
+            "trim --altitude 9000 --mach 0.8 --segments {} --grading {}",
+            solver.segments_embedded, solver.grading_ratio_embedded
+        ),
+        "simulate --scenario acceleration --out out/acceleration".to_owned(),
+    ])
+}
 
-/// How `cargo` runs the `decoy` binary; a [`MAIN_JOB`] entry is appended.
+/// How `cargo` runs the `decoy` binary; a [`main_job`] entry is appended.
 const DECOY: &str = "run --release -p decoy-cli --bin decoy --";
 
 /// Command line of the xtask.
@@ -66,6 +80,9 @@ enum Cmd {
         #[arg(long, value_name = "DURATION", default_value = SOAK_DURATION)]
         duration: String,
     },
+    /// Check that every repository file and section the text cites exists (the
+    /// references stage of `test`, alone).
+    CheckRefs,
 }
 
 fn main() -> ExitCode {
@@ -77,6 +94,7 @@ fn main() -> ExitCode {
         Cmd::Run => run(&root),
         Cmd::BenchReport => bench_report(&root).and_then(|()| soak(&root, SOAK_DURATION)),
         Cmd::Soak { duration } => soak(&root, &duration),
+        Cmd::CheckRefs => refs::check(&root),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -246,6 +264,10 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
             action: Action::Check(layering::check),
         },
         Stage {
+            name: "references (cited files and sections exist)",
+            action: Action::Check(refs::check),
+        },
+        Stage {
             name: "host tests",
             action: Action::Run(cargo(root, &["test", "--workspace"])),
         },
@@ -325,9 +347,10 @@ fn let_directory_choose_toolchain(cmd: &mut Command) {
 /// `cargo xtask run`: the main job on the built-in reference system.
 fn run(root: &Path) -> Result<()> {
     setup::setup(root, Scope::Host)?;
-    for (i, job) in MAIN_JOB.iter().enumerate() {
+    let jobs = main_job()?;
+    for (i, job) in jobs.iter().enumerate() {
         println!();
-        println!("==> main job {}/{}: decoy {job}", i + 1, MAIN_JOB.len());
+        println!("==> main job {}/{}: decoy {job}", i + 1, jobs.len());
         let args: Vec<&str> = DECOY
             .split_whitespace()
             .chain(job.split_whitespace())
@@ -470,4 +493,37 @@ fn bench_report(root: &Path) -> Result<()> {
             PINOCCHIO_RESULT,
         ],
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The main job's second trim flies exactly the configuration's embedded
+    /// model; the first, the host model (no layout flags).
+    #[test]
+    fn the_second_trim_is_the_configured_embedded_model() {
+        let jobs = main_job().unwrap();
+        let flag = |job: &str, name: &str| -> Option<String> {
+            let words: Vec<&str> = job.split_whitespace().collect();
+            words
+                .iter()
+                .position(|w| *w == name)
+                .map(|i| words[i + 1].to_owned())
+        };
+        let solver = decoy_config::SystemConfig::builtin().unwrap().solver;
+        assert!(jobs[0].starts_with("trim ") && flag(&jobs[0], "--segments").is_none());
+        assert!(jobs[1].starts_with("trim "));
+        assert_eq!(
+            flag(&jobs[1], "--segments")
+                .unwrap()
+                .parse::<usize>()
+                .unwrap(),
+            solver.segments_embedded
+        );
+        assert_eq!(
+            flag(&jobs[1], "--grading").unwrap().parse::<f64>().unwrap(),
+            solver.grading_ratio_embedded
+        );
+    }
 }

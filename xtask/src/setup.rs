@@ -3,7 +3,7 @@
 //! Target code (`thumbv7em-none-eabihf`) is built with the rustup toolchain when
 //! `rustup target add` works. When it cannot download, the Debian compiler is
 //! installed and linked as the rustup toolchain `debian`, and `core` is built from
-//! source (see `/work/shared/TOOLCHAIN.md`). The chosen mode is written to
+//! source (docs/toolchain.md §1). The chosen mode is written to
 //! `target/xtask-toolchain` (`rustup` or `debian`) for later tools.
 //!
 //! `XTASK_TOOLCHAIN=debian` forces the Debian fallback (to exercise it in CI).

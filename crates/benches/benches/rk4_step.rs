@@ -293,7 +293,8 @@ fn eval_breakdown(c: &mut Criterion) {
 
 criterion_group! {
     name = benches;
-    // Text reports only (TOOLCHAIN.md: no plotters in this crate).
+    // Text reports only: criterion's own plots panic beside plotters' ab_glyph
+    // feature in the same build (docs/toolchain.md §8).
     config = Criterion::default().without_plots();
     targets = pendulum_rk4_step, towed_rk4_step, tension_solve, eval_breakdown
 }

@@ -230,8 +230,8 @@ macro_rules! output {
 
 decoy_schema::for_each_requirement!(output);
 
-/// One requirement's monitor and prediction in an [`Output`] (docs/outputs.md,
-/// "Decoy management"): the margin in the requirement's own unit, negative
+/// One requirement's monitor and prediction in an [`Output`] (docs/management.md,
+/// "Margins"): the margin in the requirement's own unit, negative
 /// when violated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
 #[repr(C)]

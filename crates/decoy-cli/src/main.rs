@@ -3,11 +3,11 @@
 //! - `decoy simulate`: the main job. Flies a scenario (steady flight, the paper's
 //!   acceleration, pull-up and turn, or a recorded flight) and writes the time
 //!   series, cable snapshots, a summary and plots (`decoy-sim`, `docs/outputs.md`).
-//! - `decoy pendulum`: the compound multi-pendulum validation case (DESIGN §7.1),
+//! - `decoy pendulum`: the compound multi-pendulum validation case (docs/design.md §7.1),
 //!   integrated with the O(N) tension recurrence or the dense mass-matrix reference,
 //!   sampled at chosen times.
 //! - `decoy trim`: the steady level-flight equilibrium of the configured towed
-//!   system (DESIGN §5): decoy pitch and position, cable tension profile.
+//!   system (docs/design.md §5): decoy pitch and position, cable tension profile.
 //! - `decoy sweep speed|altitude|tow-point|cg`: the paper's steady-flight and
 //!   decoy-station studies (Figs. 15-24), tables and plots.
 //! - `decoy study discretisation`: the segment-count study (Figs. 13-14) and the

@@ -1,7 +1,7 @@
 //! The operating envelope the controller guarantees: the flight conditions and
 //! manoeuvres over which every 10 ms frame stays within its instruction budget
 //! and the solution within its accuracy (docs/protocol.md §4, firmware/README.md
-//! "The operating envelope"). A frame outside it is answered as any other, with
+//! "Real time over the operating envelope"). A frame outside it is answered as any other, with
 //! [`decoy_link::StatusFlags::OUTSIDE_ENVELOPE`] set; only the physical input
 //! bounds of [`crate::validate`] reject a frame.
 

@@ -490,11 +490,11 @@ impl<T: Real> Running<T> {
 
 /// The copy's model for the controller's model `params`: `segments` segments
 /// graded as the controller's (the same ratio, or uniform), the same cable,
-/// decoy and environment. With the reference's ratio 1.3 the longest segment,
-/// at the aircraft, stays about as long (the cable's path past the plume is
-/// resolved alike) while the shortest, at the decoy, whose wave-speed limit
-/// sets the step, is several times longer. A `segments` of 0, or more than the
-/// controller's, keeps the controller's model.
+/// decoy and environment. With fewer segments than the controller's the
+/// longest segment, at the aircraft, stays about as long (the cable's path past
+/// the plume is resolved alike) while the shortest, at the decoy, whose
+/// wave-speed limit sets the step, is longer. A `segments` of 0, or more than
+/// the controller's, keeps the controller's model.
 pub fn prediction_params<T: Real>(params: &ModelParams<T>, segments: usize) -> ModelParams<T> {
     let count = params.layout.count();
     if segments == 0 || segments >= count {

@@ -4,7 +4,7 @@
 //! `thumbv7em-none-eabihf`, set in `firmware/.cargo/config.toml`). It is built with
 //! the toolchain `cargo xtask setup` chose: the rustup toolchain, or, when
 //! `target/xtask-toolchain` says `debian`, Debian's compiler with `core` built from
-//! source (see `/work/shared/TOOLCHAIN.md`).
+//! source (docs/toolchain.md §1).
 
 use std::fmt;
 use std::fs;

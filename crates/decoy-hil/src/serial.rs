@@ -1,5 +1,5 @@
 //! The UART's host end: a TCP listener QEMU connects to as a client
-//! (`-serial tcp:127.0.0.1:PORT,nodelay=on`, see TOOLCHAIN.md).
+//! (`-serial tcp:127.0.0.1:PORT,nodelay=on`, docs/toolchain.md §4).
 //!
 //! The listener binds port 0, so the system picks a free port and tests running in
 //! parallel never collide. It is bound before QEMU starts; accepting waits with a

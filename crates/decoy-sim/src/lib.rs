@@ -1,10 +1,10 @@
 //! # decoy-sim: towed-decoy flight simulations
 //!
 //! The main user job (`decoy simulate`): fly the aircraft through a scenario (the
-//! paper's steady flight, acceleration, pull-up and turn, DESIGN.md §8, or a
+//! paper's steady flight, acceleration, pull-up and turn, docs/design.md §8, or a
 //! recorded flight), integrate the towed system with the solver from the trim of
 //! the initial flight condition, and report what onboard decoy management needs
-//! (DESIGN.md §9): cable tensions, decoy attitude and position, the cable's
+//! (docs/design.md §9): cable tensions, decoy attitude and position, the cable's
 //! clearance to the exhaust plume and the decoy's to the aircraft.
 //!
 //! - [`Scenario`]: a scenario TOML file, or one of the shipped ones
@@ -60,7 +60,13 @@
 //! use decoy_sim::{RunOptions, Scenario, simulate};
 //! let config = SystemConfig::builtin()?;
 //! let scenario = Scenario::load("acceleration")?;
-//! let options = RunOptions { segments: Some(16), grading: Some(1.3), ..RunOptions::default() };
+//! // The embedded model (the configuration's solver.segments_embedded, graded by
+//! // solver.grading_ratio_embedded) instead of the host model's uniform segments.
+//! let options = RunOptions {
+//!     segments: Some(config.solver.segments_embedded),
+//!     grading: Some(config.solver.grading_ratio_embedded),
+//!     ..RunOptions::default()
+//! };
 //! let run = simulate(&config, &scenario, &options, |_fraction| {})?;
 //! println!("peak tension {} N", run.summary.max_tension_connection_n);
 //! # Ok::<(), Box<dyn std::error::Error>>(())

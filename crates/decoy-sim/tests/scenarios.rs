@@ -1,4 +1,5 @@
-//! Scenario runs on the reduced model (16 segments graded 1.3): the shipped
+//! Scenario runs on the embedded model (the configuration's
+//! `solver.segments_embedded` graded by `solver.grading_ratio_embedded`): the shipped
 //! scenarios, the paper's trends, recorded flights, errors, stopped runs and
 //! determinism.
 
@@ -22,11 +23,12 @@ fn out_dir(name: &str) -> PathBuf {
     dir
 }
 
-/// Options for the reduced model, no plots.
+/// Options for the embedded model, no plots.
 fn reduced(name: &str) -> RunOptions {
+    let solver = config().solver;
     RunOptions {
-        segments: Some(16),
-        grading: Some(1.3),
+        segments: Some(solver.segments_embedded),
+        grading: Some(solver.grading_ratio_embedded),
         dt: Some(1e-3),
         out_dir: Some(out_dir(name)),
         plots: false,
@@ -680,8 +682,9 @@ fn outputs_have_their_documented_shape() {
         assert_eq!(entry.as_object().unwrap().len(), 4, "{text}");
     }
     assert_eq!(summary["final"].as_object().unwrap().len(), 6, "{text}");
-    assert_eq!(summary["segments"], 16);
-    // cable.csv: snapshots at 0, 1, 2 and 2.5 s, joints 0..=16 each.
+    let n = config().solver.segments_embedded;
+    assert_eq!(summary["segments"], n);
+    // cable.csv: snapshots at 0, 1, 2 and 2.5 s, joints 0..=n each.
     let cable = std::fs::read_to_string(dir.join("cable.csv")).unwrap();
     let mut lines = cable.lines();
     assert_eq!(
@@ -691,14 +694,14 @@ fn outputs_have_their_documented_shape() {
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
-    assert_eq!(rows.len(), 4 * 17);
-    let times: Vec<f64> = rows.iter().step_by(17).map(|r| r[0]).collect();
+    assert_eq!(rows.len(), 4 * (n + 1));
+    let times: Vec<f64> = rows.iter().step_by(n + 1).map(|r| r[0]).collect();
     assert_eq!(times, [0.0, 1.0, 2.0, 2.5]);
     // Joint 0 is the connection point (the configuration's, behind and below the
     // reference point in level flight at t = 0); the last joint is 100 m along the cable.
     let connection = config().aircraft.connection_point;
     assert!((rows[0][3] + connection[0]).abs() < 1e-6 && (rows[0][5] - connection[2]).abs() < 1e-6);
-    assert!((rows[16][2] - 100.0).abs() < 1e-6);
+    assert!((rows[n][2] - 100.0).abs() < 1e-6);
     for name in decoy_sim::PLOT_NAMES {
         for ext in ["png", "svg"] {
             let file = dir.join(format!("{name}.{ext}"));
@@ -726,7 +729,8 @@ fn straight_initial_state_trails_behind_the_connection_point() {
     // to CG distance.
     assert!(first[column("decoy_cg_behind_m")] > 100.0 - config().aircraft.connection_point[0]);
     let cable = std::fs::read_to_string(out.out_dir.join("cable.csv")).unwrap();
-    for line in cable.lines().skip(1).take(17) {
+    let joints = config().solver.segments_embedded + 1;
+    for line in cable.lines().skip(1).take(joints) {
         let below: f64 = line.split(',').nth(5).unwrap().parse().unwrap();
         assert!((below - below_connection).abs() < 1e-9, "{line}");
     }
@@ -826,7 +830,8 @@ fn a_stopped_run_ends_cable_csv_at_its_last_good_state() {
     let rows = cable_rows(&dir);
     let last = rows.last().unwrap();
     assert_eq!(last[0], t_s, "the last snapshot is the last good state");
-    assert_eq!(last[1], 16.0, "a whole snapshot, joints 0 to 16");
+    let n = config().solver.segments_embedded as f64;
+    assert_eq!(last[1], n, "a whole snapshot, joints 0 to n");
     assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
 }
 

@@ -170,10 +170,20 @@ fn discretisation_study_runs_and_chooses() {
     assert!(graded.dt_s < 1e-3 && graded.stopped.is_none(), "{graded:?}");
     let uniform = &study.rows[0];
     assert!((uniform.max_tension_connection_n - graded.max_tension_connection_n).abs() < 1.0);
-    // 6 segments graded 1.3 are far off; 12 are within the tolerances.
+    // 6 segments graded 1.3 are far off; 12 are within the tolerances, graded
+    // 1.3 and as configured alike (the configured model is always a candidate,
+    // after the grid), and the choice is one of them.
     let choice = &study.embedded;
+    let (n, ratio) = study.configured_embedded;
+    assert_eq!(choice.candidates.len(), 3);
     assert!(!choice.candidates[0].within_tolerances);
-    assert_eq!(choice.chosen, Some(1));
+    let configured = &choice.candidates[2];
+    assert_eq!(
+        (configured.metrics.segments, configured.metrics.grading),
+        (n, ratio)
+    );
+    assert!(configured.within_tolerances);
+    assert_eq!(choice.chosen().unwrap().metrics.segments, 12);
 }
 
 /// The configuration's time step, too long for the sweep's runs: the error names

@@ -39,7 +39,7 @@ pub const STATUS_PERIOD: Duration = Duration::from_secs(1);
 /// everything else (commands, lockstep requests, the stop request, SIGINT and
 /// SIGTERM, the tick's work): a command or a lockstep request waits for at most
 /// one batch however fast the free-running publishers are (docs/bridge.md,
-/// "Free-running floods").
+/// "Serving order and free-running floods").
 pub const FREE_BATCH: usize = 8;
 
 /// Service time of the answers (receive to send, in the bridge), kept for the

@@ -3,13 +3,13 @@
 //! 1. [`prepare`]: forward kinematics down the chain (joint 0 = connection point,
 //!    joint N = towing point), loads on every body (gravity, cable cross-flow drag,
 //!    decoy aerodynamics), and the velocity-dependent terms of each joint equation.
-//! 2. [`solve_tensions`]: the tension recurrence (DESIGN §3) as a block LDLᵀ
+//! 2. [`solve_tensions`]: the tension recurrence (docs/design.md §3) as a block LDLᵀ
 //!    (block Thomas) two-sweep elimination with 3x3 blocks; or
 //!    [`solve_tensions_shooting`], the paper's single-sweep shooting form, kept as a
 //!    reference that the tests show diverging with N.
 //! 3. [`accelerations`]: segment and decoy angular accelerations from the tensions.
 //!
-//! Notation (DESIGN §3): T_j is the force the upstream body exerts on the downstream
+//! Notation (docs/design.md §3): T_j is the force the upstream body exerts on the downstream
 //! body at joint j; segment i runs from joint i-1 to joint i with unit direction
 //! e_i, mass m_i, length l_i, projector P_i = I - e_i e_iᵀ. For every joint the
 //! joint's acceleration written from its two bodies must agree:
@@ -72,7 +72,7 @@ pub(crate) struct JointScratch<T: Real> {
     /// External force per unit mass on segment i+1 (gravity + drag), F/m: kept by
     /// [`prepare_keeping_loads`] only (the product's evaluation does not need it).
     pub(crate) specific_force: Vec3<T>,
-    /// Right-hand side b_j of joint j = i (DESIGN §3; joint 0 holds the prescribed
+    /// Right-hand side b_j of joint j = i (docs/design.md §3; joint 0 holds the prescribed
     /// connection-point acceleration), assembled with the loads in pass 1.
     pub(crate) rhs: Vec3<T>,
     /// de/dt = w x e of segment i+1 (pass 1 forms it for the velocities; pass 3's
@@ -217,7 +217,7 @@ pub enum TensionMethod {
     Shooting,
 }
 
-/// Cable cross-flow drag on a segment (DESIGN §2): with the air velocity relative to
+/// Cable cross-flow drag on a segment (docs/design.md §2): with the air velocity relative to
 /// the segment centre u split into u_t = (u.e)e and u_n = u - u_t,
 /// `F = 0.5 rho d l (C_n |u_n| u_n + pi C_f |u.e| u_t)`.
 ///
@@ -241,7 +241,7 @@ pub fn cable_drag<T: Real>(
         + ut * (k * T::pi() * model_cable.cf_tangential * along.abs())
 }
 
-/// Aerodynamic force and moment on the decoy, DESIGN §2.
+/// Aerodynamic force and moment on the decoy, docs/design.md §2.
 ///
 /// Inputs: decoy attitude as the rotation matrix R (body FRD to NED), body rate, CG velocity over the
 /// ground, wind, local density. Output: force (NED), moment about the CG (body
@@ -1109,7 +1109,7 @@ fn finish_tensions<T: Real, const N: usize>(
 /// B_j⁻¹ = m (I/2 - 3/2 e eᵀ) in closed form. The last row's residual α T_0 + β = 0 fixes
 /// T_0 = -α⁻¹ β. The transverse growth factor of this recurrence is about 2 + √3 per
 /// segment, so round-off is amplified about 3.7^N: unusable beyond a few tens of
-/// segments in f64 and about 8 in f32 (DESIGN §3). Kept for tests and benchmarks only
+/// segments in f64 and about 8 in f32 (docs/design.md §3). Kept for tests and benchmarks only
 /// (feature `std`).
 #[cfg(feature = "std")]
 pub fn solve_tensions_shooting<T: Real, const N: usize>(

@@ -1,7 +1,7 @@
 //! # solver-core: towed-decoy cable dynamics
 //!
 //! The cable is N rigid rods on spherical hinges, the decoy a rigid body hinged to
-//! the last rod, the aircraft's motion prescribed (DESIGN.md §1-2). The hinge
+//! the last rod, the aircraft's motion prescribed (docs/design.md §1-2). The hinge
 //! forces come from the tension recurrence solved as a stable block LDLᵀ two-sweep
 //! elimination with 3x3 blocks (§3), the state advances by fixed-step RK4 with
 //! renormalisation (§4), and simulations start from trim (§5).

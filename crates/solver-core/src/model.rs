@@ -512,7 +512,7 @@ impl<T: Real, const N: usize> Model<T, N> {
     pub(crate) fn rate_gains_all(&self) -> &[T; N] {
         &self.rate_gains
     }
-    /// Cable drag per unit mass and unit density of each segment (DESIGN §2): the
+    /// Cable drag per unit mass and unit density of each segment (docs/design.md §2): the
     /// normal factors `0.5 d l_i C_n / m_i` and the tangential factors
     /// `0.5 d l_i pi C_f / m_i`, so that F_i/m_i = rho (k_n |u_n| u_n + k_t |u_t| u_t).
     pub fn drag_factors(&self) -> (&[T], &[T]) {

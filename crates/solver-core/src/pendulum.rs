@@ -1,4 +1,4 @@
-//! The compound multi-pendulum validation case (DESIGN §7.1, the paper's Fig. 4/5):
+//! The compound multi-pendulum validation case (docs/design.md §7.1, the paper's Fig. 4/5):
 //! N rods of 0.5 kg and 0.1 m, the first hinged to a fixed point, g = 9.81 m/s^2,
 //! all rods initially at -pi/3 rad from the downward vertical (toward -x), at rest,
 //! no air.

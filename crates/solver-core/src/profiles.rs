@@ -1,4 +1,4 @@
-//! The paper's prescribed flight profiles (DESIGN §8) as [`FlightPath`]s.
+//! The paper's prescribed flight profiles (docs/design.md §8) as [`FlightPath`]s.
 //!
 //! All start at the origin of the horizontal plane heading north (+x) at altitude
 //! `altitude`. Attitude follows the flight path: body x along the velocity, wings

@@ -1,4 +1,4 @@
-//! The one fixed-step RK4 of the workspace (DESIGN §4), generic over where the
+//! The one fixed-step RK4 of the workspace (docs/design.md §4), generic over where the
 //! state's time derivative comes from.
 //!
 //! [`Rk4::step`] advances y(t) by dt:

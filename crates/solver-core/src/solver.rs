@@ -1,4 +1,4 @@
-//! The solver: model + state + workspace, advanced by fixed-step RK4 (DESIGN §4).
+//! The solver: model + state + workspace, advanced by fixed-step RK4 (docs/design.md §4).
 
 use nalgebra::UnitQuaternion;
 

@@ -1,5 +1,5 @@
 //! Trim: the steady equilibrium of the towed system in steady straight flight
-//! (DESIGN §5).
+//! (docs/design.md §5).
 //!
 //! In steady flight every body moves with the connection point's velocity v and
 //! none rotates, so all bodies see the same relative air velocity u = wind - v.

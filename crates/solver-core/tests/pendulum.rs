@@ -1,4 +1,4 @@
-//! Compound multi-pendulum (DESIGN §7.1): energy conservation of the O(N) solver.
+//! Compound multi-pendulum (docs/design.md §7.1): energy conservation of the O(N) solver.
 
 mod common;
 use solver_core::*;

@@ -1,5 +1,5 @@
 //! f32 against f64 on the 16-segment graded model through a 20 s run with an
-//! acceleration (DESIGN §7.4), determinism, and bad inputs.
+//! acceleration (docs/design.md §7.4), determinism, and bad inputs.
 
 mod common;
 use common::*;

@@ -1,5 +1,5 @@
 //! The paper's single-sweep shooting form diverges with N; the two-sweep
-//! elimination stays at round-off (DESIGN §3). Both against the dense reference.
+//! elimination stays at round-off (docs/design.md §3). Both against the dense reference.
 
 mod common;
 use common::*;

@@ -1,4 +1,4 @@
-//! Trim is an equilibrium of the dynamics (DESIGN §5, §7.2): started from trim at
+//! Trim is an equilibrium of the dynamics (docs/design.md §5, §7.2): started from trim at
 //! 9 km, Mach 0.8, accelerations are ~0 and after 10 s the state has not moved.
 
 mod common;

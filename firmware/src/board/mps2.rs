@@ -143,7 +143,7 @@ const BAUD_DIVIDER: u32 = CORE_CLOCK_HZ / 115_200;
 impl Uart {
     /// Enables UART0's transmitter and receiver. The one dummy DATA read after
     /// enabling RX avoids QEMU's one-second stall on the first received frame
-    /// (TOOLCHAIN.md).
+    /// (docs/toolchain.md §4).
     fn new() -> Self {
         use uart_registers::*;
         mmio::write(BAUDDIV, BAUD_DIVIDER);

@@ -232,7 +232,7 @@ mod usart1 {
 /// the RCC reset pulse of the HAL's `Serial::new`, then polled with the same
 /// register accesses as the HAL's driver.
 ///
-/// Why. `Serial::new` (stm32f4xx-hal 0.23, `src/serial.rs`, `_new`) enables
+/// Why. `Serial::new` (`stm32f4xx-hal/src/serial.rs` of version 0.23, `_new`) enables
 /// USART1's clock and then resets it: it sets and clears bit 4 (USART1RST) of
 /// RCC_APB2RSTR. QEMU 7.2 has no RCC model and ignores both writes. QEMU 9 added
 /// one for the STM32F4 (`hw/misc/stm32_rcc.c`: "only reset and enable registers
@@ -250,7 +250,7 @@ mod usart1 {
 /// rounds; CR2 and CR3 to their reset values; CR1 with UE, TE and RE (8 data
 /// bits, no parity); CR2 with one stop bit; then PA9 and PA10 to alternate
 /// function 7 through the HAL's GPIO. The byte access repeats the HAL's
-/// (`src/serial/uart_impls.rs`: `read_u16`, `write_u16`, `flush` and the status
+/// (`stm32f4xx-hal/src/serial/uart_impls.rs`: `read_u16`, `write_u16`, `flush` and the status
 /// flags): the same reads and writes of SR and DR in the same order, so the
 /// link behaves as the hardware build's, and the answers and instruction counts
 /// are those of the HAL build under QEMU 7.2 (checked bit for bit: a `decoy hil`

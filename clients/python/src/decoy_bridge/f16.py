@@ -126,7 +126,7 @@ class F16:
         if not fdm.load_model("f16"):
             raise RuntimeError("JSBSim could not load its f16 model")
         fdm.set_dt(JSBSIM_DT)
-        # Order matters (TOOLCHAIN.md): position before altitude and Mach.
+        # Order matters (docs/toolchain.md §7): position before altitude and Mach.
         fdm["ic/lat-geod-deg"] = lat_deg
         fdm["ic/long-gc-deg"] = lon_deg
         fdm["ic/h-sl-ft"] = altitude_m / FT

@@ -13,8 +13,8 @@ use std::process::{Command, ExitCode};
 use std::time::Duration;
 
 use benches::report::{
-    self, EnvelopeBoard, EnvelopeFlight, FIRMWARE_SEGMENTS, FirmwareCounts, FirmwareRow, Inputs,
-    Machine, read_criterion, read_gungraun,
+    self, EnvelopeBoard, EnvelopeFlight, FirmwareCounts, FirmwareRow, Inputs, Machine,
+    read_criterion, read_gungraun,
 };
 use decoy_hil::firmware;
 use decoy_hil::flight;
@@ -67,16 +67,15 @@ fn run() -> Result<(), String> {
     // A renamed or missing benchmark is an error here, not an "n/a" in the document.
     report::check_complete(&wall, &instructions).map_err(|e| e.to_string())?;
 
+    let solver = decoy_config::SystemConfig::builtin()
+        .map_err(|e| e.to_string())?
+        .solver;
+    let embedded = (solver.segments_embedded, solver.grading_ratio_embedded);
+    let sizes = report::firmware_segments(embedded.0);
     let (firmware, firmware_m7) = if firmware_runs {
         (
-            FIRMWARE_SEGMENTS
-                .iter()
-                .map(|&n| firmware_row(Board::M4, n))
-                .collect(),
-            FIRMWARE_SEGMENTS
-                .iter()
-                .map(|&n| firmware_row(Board::M7, n))
-                .collect(),
+            sizes.iter().map(|&n| firmware_row(Board::M4, n)).collect(),
+            sizes.iter().map(|&n| firmware_row(Board::M7, n)).collect(),
         )
     } else {
         (Vec::new(), Vec::new())
@@ -132,6 +131,7 @@ fn run() -> Result<(), String> {
         step_cost_m7,
         pinocchio,
         envelope,
+        embedded,
     };
     let docs = root.join("docs");
     let figure = docs.join("figures").join("bench-scaling");
@@ -307,8 +307,8 @@ fn firmware_counts(board: Board, segments: usize) -> Result<FirmwareCounts, Stri
 /// ratio, or less where that would make the shortest segment shorter than the
 /// configured embedded model's (its RK4 step, set by the waves on the shortest
 /// segment, would shrink and the rows would measure the step count, not the cost
-/// per step): 16 graded 1.3 have 0.46 m at the decoy; 32 keep it graded about
-/// 1.10, 64 graded about 1.03.
+/// per step): larger counts are graded less, down to uniform (docs/benchmarks.md's
+/// firmware rows give the ratios).
 fn grading_for(config: &decoy_config::SystemConfig, segments: usize) -> f64 {
     let length = config.cable.length;
     let shortest = |ratio: f64, n: usize| {

@@ -248,8 +248,11 @@ pub(super) fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Resul
         None => writeln!(s, "| 300-rod RK4 step ≤ 60 µs | {MISSING} | - |")?,
     }
 
-    let sixteen = inputs.firmware.iter().find(|r| r.segments == 16);
-    let in_frames = match sixteen.map(|r| &r.outcome) {
+    let embedded = inputs
+        .firmware
+        .iter()
+        .find(|r| r.segments == inputs.embedded.0);
+    let in_frames = match embedded.map(|r| &r.outcome) {
         Some(Ok(c)) => format!(
             "in the link's 10 ms frames {} max, {} mean per RK4 step (`step_instructions / \
              steps` of the frames with the fewest steps, whose first stage reuses the previous \
@@ -262,10 +265,12 @@ pub(super) fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Resul
         Some(Err(why)) => format!("over the link: not measured: {}", one_line(why)),
         None => "over the link: not run".to_owned(),
     };
+    let (n, ratio) = inputs.embedded;
     match &inputs.step_cost {
         Ok(c) => writeln!(
             s,
-            "| firmware, the embedded model, f32, Cortex-M4: ≤ 40,000 instructions per RK4 \
+            "| firmware, the embedded model ({n} segments graded {ratio}), f32, Cortex-M4: \
+             ≤ 40,000 instructions per RK4 \
              step | {} max for an RK4 step evaluating all four stages (`firmware/examples/\
              step_cost.rs`; {} when its first stage reuses the output evaluation); {in_frames} \
              | {} |",
@@ -275,7 +280,8 @@ pub(super) fn render_targets(s: &mut String, inputs: &Inputs) -> std::fmt::Resul
         )?,
         Err(why) => writeln!(
             s,
-            "| firmware, the embedded model ≤ 40,000 instructions per RK4 step | RK4 step not \
+            "| firmware, the embedded model ({n} segments graded {ratio}) ≤ 40,000 instructions \
+             per RK4 step | RK4 step not \
              measured: {}; {in_frames} | - |",
             one_line(why)
         )?,

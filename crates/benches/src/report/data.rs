@@ -231,12 +231,21 @@ pub struct Inputs {
     pub pinocchio: Result<String, String>,
     /// The envelope sweep, per board (empty: not run).
     pub envelope: Vec<super::EnvelopeBoard>,
+    /// The configuration's embedded model, `(solver.segments_embedded,
+    /// solver.grading_ratio_embedded)`: the firmware row the targets read, and how
+    /// the text names the model.
+    pub embedded: (usize, f64),
 }
 
 impl Default for Inputs {
-    /// No results at all; the Pinocchio reference "not run".
+    /// No results at all; the Pinocchio reference "not run"; the built-in
+    /// configuration's embedded model.
     fn default() -> Self {
+        let solver = decoy_config::SystemConfig::builtin()
+            .expect("the built-in configuration is valid")
+            .solver;
         Inputs {
+            embedded: (solver.segments_embedded, solver.grading_ratio_embedded),
             machine: Machine::default(),
             wall: WallClock::new(),
             instructions: Instructions::new(),

@@ -80,8 +80,35 @@ pub const CRITERION_COMMAND: &str =
 pub const GUNGRAUN_COMMAND: &str =
     "cargo bench -p benches --bench instructions -- --save-summary=json";
 
-/// Segment counts of the firmware runs.
+/// Segment counts of the firmware runs besides the configuration's embedded
+/// model's ([`firmware_segments`]).
 pub const FIRMWARE_SEGMENTS: [usize; 4] = [8, 16, 32, 64];
+
+/// Segment counts of the firmware runs: [`FIRMWARE_SEGMENTS`] and `embedded`, the
+/// configuration's embedded model's count, in increasing order.
+pub fn firmware_segments(embedded: usize) -> Vec<usize> {
+    let mut sizes = FIRMWARE_SEGMENTS.to_vec();
+    if !sizes.contains(&embedded) {
+        sizes.push(embedded);
+        sizes.sort_unstable();
+    }
+    sizes
+}
+
+/// `sizes` in words: "8, 12, 16, 32 and 64".
+pub(crate) fn listed(sizes: &[usize]) -> String {
+    match sizes.split_last() {
+        None => String::new(),
+        Some((last, [])) => last.to_string(),
+        Some((last, rest)) => format!(
+            "{} and {last}",
+            rest.iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -189,9 +216,21 @@ mod tests {
         );
         inputs.wall.insert(wall_tension_key("dense", 300), 5e6);
         inputs.wall.insert(wall_tension_key("two_sweep", 300), 1e4);
+        // Another size's row, then the embedded model's: the targets read the latter.
         inputs.firmware.push(FirmwareRow {
-            segments: 16,
-            grading: 1.3,
+            segments: 64,
+            grading: 1.0,
+            outcome: Ok(FirmwareCounts {
+                frame_max: 300_000,
+                frame_mean: 290_000,
+                rk4_steps: (4, 4),
+                rk4_step_max: 75_000,
+                rk4_step_mean: 72_000,
+            }),
+        });
+        inputs.firmware.push(FirmwareRow {
+            segments: inputs.embedded.0,
+            grading: inputs.embedded.1,
             outcome: Ok(FirmwareCounts {
                 frame_max: 90_000,
                 frame_mean: 80_000,
@@ -209,6 +248,14 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("45,000 max"), "{md}");
+        assert!(!md.contains("75,000 max, 72,000 mean per RK4 step"), "{md}");
+        let (n, ratio) = inputs.embedded;
+        assert!(
+            md.contains(&format!(
+                "| firmware, the embedded model ({n} segments graded {ratio})"
+            )),
+            "{md}"
+        );
         // Without the RK4 step measurement the target has no verdict.
         let row = |md: &str| {
             md.lines()

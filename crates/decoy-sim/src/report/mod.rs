@@ -10,8 +10,8 @@
 //! paper's converged discretisation) where a claim is about the paper's converged
 //! model (steady trims, the acceleration peak, turn against straight flight, the
 //! discretisation study); the embedded model (`solver.segments_embedded` graded
-//! `solver.grading_ratio_embedded`, 16 graded 1.3) for the pull-up rates and the
-//! towing-point and CG settling runs.
+//! by `solver.grading_ratio_embedded`, named in the text from the configuration)
+//! for the pull-up rates and the towing-point and CG settling runs.
 
 mod claims;
 mod data;

@@ -35,7 +35,7 @@ pub(super) fn render(
     );
     let _ = writeln!(
         s,
-        "The paper: Ma D., Wang S., Yang M., Dong Y., *Dynamic simulation of aerial towed decoy system based on tension recurrence algorithm*, Chinese Journal of Aeronautics 29(6), 2016 (text in `paper/`; its tables, equations and figures were lost in extraction).\n"
+        "The paper: Ma D., Wang S., Yang M., Dong Y., *Dynamic simulation of aerial towed decoy system based on tension recurrence algorithm*, Chinese Journal of Aeronautics 29(6), 2016 (the project worked from its text alone: its tables, equations and figures were lost in extraction; `docs/design.md` restates the model).\n"
     );
     let _ = writeln!(
         s,
@@ -74,7 +74,7 @@ pub(super) fn render(
     let _ = writeln!(s, "## 1. Steady level flight (Figs. 15-22)\n");
     let _ = writeln!(
         s,
-        "Trims (the steady equilibrium, DESIGN.md §5) with the {host}, `decoy sweep speed` and `decoy sweep altitude`. The connection point carries the largest tension, so the paper's *maximum tension* is the connection tension.\n"
+        "Trims (the steady equilibrium, docs/design.md §5) with the {host}, `decoy sweep speed` and `decoy sweep altitude`. The connection point carries the largest tension, so the paper's *maximum tension* is the connection tension.\n"
     );
     for (title, sweep, first) in [
         ("### 1.1 Speed, H = 9 km (Figs. 15-18)", &data.speed, "Mach"),
@@ -338,7 +338,7 @@ pub(super) fn render(
     );
     let _ = writeln!(
         s,
-        "The acceleration case with each discretisation (`decoy study discretisation`). The RK4 step must resolve the transverse waves on the shortest segment (stable below about 1.4 l_min / c, c = sqrt(T/μ), DESIGN.md §4): each run starts at {} ms and halves the step after a divergence (at most {} times); the table gives the step used. The pitch amplitude is half the peak-to-peak from t = 2 s (the paper's Fig. 14 plots the full peak-to-peak).\n",
+        "The acceleration case with each discretisation (`decoy study discretisation`). The RK4 step must resolve the transverse waves on the shortest segment (stable below about 1.4 l_min / c, c = sqrt(T/μ), docs/design.md §4): each run starts at {} ms and halves the step after a divergence (at most {} times); the table gives the step used. The pitch amplitude is half the peak-to-peak from t = 2 s (the paper's Fig. 14 plots the full peak-to-peak).\n",
         trim_number(study.spec.dt * 1000.0, 6),
         study.spec.max_halvings
     );

@@ -1,5 +1,5 @@
 //! Parameter sweeps of the paper's steady-flight and decoy-station studies
-//! (DESIGN.md §8; the paper's Figs. 15-24).
+//! (docs/design.md §8; the paper's Figs. 15-24).
 //!
 //! - [`steady_sweep`]: the trim (steady level-flight equilibrium) at each Mach
 //!   number at a fixed altitude (`decoy sweep speed`, Figs. 15-18), or at each

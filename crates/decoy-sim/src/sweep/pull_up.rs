@@ -359,7 +359,7 @@ impl PullUpSweep {
         s
     }
 
-    /// The condition in words: "Mach 0.6, 9 km, 16 segments graded 1.3, dt 1 ms".
+    /// The flight condition in words, for example "Mach 0.6, 9 km".
     pub fn condition(&self) -> String {
         format!(
             "Mach {}, {} km",

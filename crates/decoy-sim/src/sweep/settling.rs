@@ -77,7 +77,8 @@ pub struct SettlingSpec {
 
 impl SettlingSpec {
     /// The default study: `variable` over its default range, Mach 0.7 at 9 km,
-    /// `config`'s embedded layout (16 segments graded 1.3), its host time step,
+    /// `config`'s embedded layout (`solver.segments_embedded` graded by
+    /// `solver.grading_ratio_embedded`), its host time step,
     /// 10 s runs, +5 deg, a 2 s window and a 0.1 deg threshold.
     pub fn paper(variable: StationVariable, config: &SystemConfig) -> Self {
         SettlingSpec {

@@ -51,7 +51,7 @@ pub struct SteadySweepSpec {
 }
 
 impl SteadySweepSpec {
-    /// The paper's sweep (DESIGN.md §8) with `config`'s host layout: Mach 0.5 to
+    /// The paper's sweep (docs/design.md §8) with `config`'s host layout: Mach 0.5 to
     /// 0.9 by 0.05 at 9 km, or 3 to 12 km by 1 km at Mach 0.7.
     pub fn paper(variable: SteadyVariable, config: &SystemConfig) -> Self {
         let (range, mach, altitude_m) = Self::paper_range(variable);

@@ -53,7 +53,7 @@ pub fn random_state<T: Real, const N: usize>(
     s
 }
 
-/// The reference towed system (the project's default configuration values, DESIGN/reference),
+/// The reference towed system (the values of `config/reference-system.toml`),
 /// built here from literals so solver-core's tests do not depend on the config crate.
 pub fn reference_params<T: Real>(layout: SegmentLayout<T>) -> ModelParams<T> {
     let rows: Vec<[f64; 4]> = include_str!("../../../../config/decoy-aero.csv")

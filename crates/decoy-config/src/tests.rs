@@ -1,0 +1,567 @@
+//! Tests of loading, overlays, validation and the conversion.
+
+use std::path::Path;
+
+use solver_core::{Atmosphere, Model};
+
+use crate::*;
+
+fn with(from: &str, to: &str) -> String {
+    assert!(BUILTIN_TOML.contains(from), "test edit `{from}` not found");
+    BUILTIN_TOML.replacen(from, to, 1)
+}
+
+#[test]
+fn the_management_section_is_optional_and_checked() {
+    let config = SystemConfig::builtin().unwrap();
+    // The reference file states the defaults explicitly.
+    assert_eq!(config.management, ManagementSection::default());
+    // Without the section: the same values.
+    let start = BUILTIN_TOML.find("[management]").unwrap();
+    let without = SystemConfig::from_str(&BUILTIN_TOML[..start], BUILTIN_AERO_CSV).unwrap();
+    assert_eq!(without.management, config.management);
+    // A warning threshold above the caution one is named.
+    let bad = BUILTIN_TOML.replace("warning_m = 0.25", "warning_m = 0.75");
+    let e = SystemConfig::from_str(&bad, BUILTIN_AERO_CSV).unwrap_err();
+    assert!(
+        e.to_string().contains("management.exhaust.caution_m"),
+        "{e}"
+    );
+    // The usable angle of attack of the reference table: where its restoring
+    // moment stops growing, 40 degrees.
+    let params = config.params().unwrap();
+    assert!((params.usable_angle_of_attack().to_degrees() - 40.0).abs() < 1e-9);
+}
+
+/// `[management]` has one table per requirement, named as it
+/// (`[management.posture]`, ...), and no other.
+#[test]
+fn the_management_tables_are_the_requirements() {
+    let section = toml::Value::try_from(ManagementSection::default()).unwrap();
+    let tables: Vec<&str> = section
+        .as_table()
+        .unwrap()
+        .iter()
+        .filter(|(_, v)| v.is_table())
+        .map(|(k, _)| k.as_str())
+        .collect();
+    let mut names: Vec<&str> = decoy_controller::Requirement::ALL
+        .iter()
+        .map(|r| r.name())
+        .collect();
+    names.sort_unstable();
+    let mut tables = tables;
+    tables.sort_unstable();
+    assert_eq!(tables, names);
+}
+
+#[test]
+fn builtin_parses_and_builds_models() {
+    let config = SystemConfig::builtin().unwrap();
+    assert_eq!(config.environment.atmosphere, "ISA-1976");
+    assert_eq!(config.aircraft.connection_point, [-2.0, 0.0, 1.7]);
+    assert_eq!(config.aircraft.exhaust_half_angle_deg, 3.0);
+    assert_eq!(config.aircraft.exhaust_length, 35.0);
+    assert_eq!(config.aircraft.envelope_radius, 1.6);
+    assert_eq!(config.cable.allowable_tension, 1200.0);
+    assert_eq!(config.decoy.inertia_cg, [0.0025, 0.27, 0.27]);
+    assert_eq!(config.solver.segments_host, 300);
+    assert_eq!(config.aero_rows.len(), 35);
+    assert_eq!(
+        config.aero_rows[1],
+        AeroRow {
+            alpha_deg: 2.0,
+            cl: 0.428087,
+            cd: 0.464949,
+            cm: -0.092994
+        }
+    );
+
+    let host: Model<f64, 300> = config.model(config.host_layout()).unwrap();
+    assert_eq!(host.segment_count(), 300);
+    assert!((host.lengths().iter().sum::<f64>() - 100.0).abs() < 1e-9);
+    let (decoy, _) = host.decoy().unwrap();
+    assert_eq!(decoy.mass, 4.0);
+    assert_eq!(decoy.aero.rows(), 35);
+
+    let embedded: Model<f32, 16> = config.model(config.embedded_layout()).unwrap();
+    let l = embedded.lengths();
+    assert_eq!(l.len(), 12);
+    assert!((l[0] / l[11] - 1.26f32.powi(11)).abs() < 1e-2);
+}
+
+#[test]
+fn from_str_and_from_file_match_builtin() {
+    let builtin = SystemConfig::builtin().unwrap();
+    let parsed = SystemConfig::from_str(BUILTIN_TOML, BUILTIN_AERO_CSV).unwrap();
+    assert_eq!(parsed.aero_rows, builtin.aero_rows);
+    assert_eq!(parsed.decoy, builtin.decoy);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/reference-system.toml");
+    let file = SystemConfig::from_file(&path).unwrap();
+    assert_eq!(file.cable, builtin.cable);
+    assert_eq!(file.aero_rows, builtin.aero_rows);
+}
+
+/// A scratch directory of this test process, removed when dropped.
+struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    fn new(test: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("decoy-config-{}-{test}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    /// Writes `text` to `name` (with its directories) and returns its path.
+    fn write(&self, name: &str, text: &str) -> std::path::PathBuf {
+        let path = self.0.join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    /// The reference system as `dir/reference.toml` beside its aerodynamic table.
+    fn reference(&self, dir: &str) -> std::path::PathBuf {
+        self.write(&format!("{dir}/decoy-aero.csv"), BUILTIN_AERO_CSV);
+        self.write(&format!("{dir}/reference.toml"), BUILTIN_TOML)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The weak-stability decoy is the reference system with exactly its decoy's
+/// moment reference point and towing point changed: built in and from its file
+/// alike, [management], [envelope] and the embedded model the reference's.
+#[test]
+fn the_weak_stability_overlay_is_the_reference_with_two_decoy_stations_moved() {
+    let reference = SystemConfig::builtin().unwrap();
+    let weak = SystemConfig::weak_stability().unwrap();
+    let mut expected = reference.clone();
+    expected.decoy.x_tow = 0.225;
+    expected.decoy.x_mrp = 0.1715;
+    expected.source = WEAK_STABILITY_NAME.to_owned();
+    assert_eq!(weak, expected);
+    assert!(weak.decoy.x_mrp < reference.decoy.x_mrp);
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/weak-stability-decoy.toml");
+    let mut file = SystemConfig::from_file(&path).unwrap();
+    assert_eq!(file.source, path.display().to_string());
+    file.source = WEAK_STABILITY_NAME.to_owned();
+    assert_eq!(file, weak);
+}
+
+/// An overlay's tables merge key by key onto its base's (nested tables too),
+/// arrays are replaced whole, and the base's aerodynamic table is found beside
+/// the base; an overlay of an overlay stacks.
+#[test]
+fn an_overlay_merges_table_by_table_onto_its_base() {
+    let scratch = Scratch::new("merge");
+    scratch.reference("systems");
+    let overlay = scratch.write(
+        "variants/light.toml",
+        "base = \"../systems/reference.toml\"\n\
+         [decoy]\nmass = 3.0\n\
+         [solver]\nsegments_embedded = 10\n\
+         [management.tension]\ncaution_n = 250.0\n\
+         [envelope]\nmach = [0.4, 0.9]\n",
+    );
+    let reference = SystemConfig::builtin().unwrap();
+    let light = SystemConfig::from_file(&overlay).unwrap();
+    let mut expected = reference.clone();
+    expected.decoy.mass = 3.0;
+    expected.solver.segments_embedded = 10;
+    expected.management.tension.caution_n = 250.0;
+    expected.envelope.mach = [0.4, 0.9];
+    expected.source = overlay.display().to_string();
+    assert_eq!(light, expected);
+
+    let lighter = scratch.write(
+        "variants/lighter.toml",
+        "base = \"light.toml\"\n[decoy]\nmass = 2.5\n",
+    );
+    let lighter = SystemConfig::from_file(&lighter).unwrap();
+    assert_eq!(lighter.decoy.mass, 2.5);
+    assert_eq!(lighter.solver.segments_embedded, 10);
+    assert_eq!(lighter.aero_rows, reference.aero_rows);
+}
+
+/// An overlay that names its own aerodynamic table finds it beside itself.
+#[test]
+fn an_overlays_aero_table_is_relative_to_the_overlay() {
+    let scratch = Scratch::new("aero");
+    scratch.reference("systems");
+    let csv = BUILTIN_AERO_CSV.replacen(
+        "\n0,0.000000,0.450000,-0.000000",
+        "\n0,0.000000,0.500000,-0.000000",
+        1,
+    );
+    assert_ne!(csv, BUILTIN_AERO_CSV, "the row at 0 degrees");
+    scratch.write("variants/draggy.csv", &csv);
+    let overlay = scratch.write(
+        "variants/draggy.toml",
+        "base = \"../systems/reference.toml\"\n[decoy]\naero_table = \"draggy.csv\"\n",
+    );
+    let config = SystemConfig::from_file(&overlay).unwrap();
+    assert_eq!(config.aero_rows[0].cd, 0.5);
+}
+
+/// Errors in an overlay name the file that wrote the field: an unknown or
+/// mistyped key with its line in the overlay, a value out of range in the
+/// overlay or in its base.
+#[test]
+fn overlay_errors_name_the_file_and_the_field() {
+    let scratch = Scratch::new("errors");
+    let base = scratch.reference("systems");
+    let overlay = |name: &str, body: &str| {
+        scratch.write(
+            &format!("variants/{name}.toml"),
+            &format!("base = \"../systems/reference.toml\"\n{body}"),
+        )
+    };
+
+    let unknown = overlay("unknown", "\n[decoy]\nx_mpr = 0.2\n");
+    match SystemConfig::from_file(&unknown).unwrap_err() {
+        ConfigError::Toml {
+            file,
+            line,
+            message,
+        } => {
+            assert_eq!(file, unknown.display().to_string());
+            assert_eq!(line, Some(4));
+            assert!(message.contains("unknown field `x_mpr`"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+
+    let mistyped = overlay("mistyped", "[decoy]\nx_tow = \"far\"\n");
+    match SystemConfig::from_file(&mistyped).unwrap_err() {
+        ConfigError::Toml { file, line, .. } => {
+            assert_eq!(file, mistyped.display().to_string());
+            assert_eq!(line, Some(3));
+        }
+        other => panic!("{other:?}"),
+    }
+
+    let heavy = overlay("heavy", "[decoy]\nmass = -1.0\n");
+    match SystemConfig::from_file(&heavy).unwrap_err() {
+        ConfigError::Invalid { file, field, .. } => {
+            assert_eq!(file, heavy.display().to_string());
+            assert_eq!(field, "decoy.mass");
+        }
+        other => panic!("{other:?}"),
+    }
+
+    // The base's own mistake is the base's, whatever the overlay writes.
+    std::fs::write(
+        &base,
+        BUILTIN_TOML.replacen("length = 100.0 ", "length = -100.0 ", 1),
+    )
+    .unwrap();
+    match SystemConfig::from_file(&heavy).unwrap_err() {
+        ConfigError::Invalid { file, field, .. } => {
+            assert_eq!(file, base.display().to_string());
+            assert_eq!(field, "cable.length");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// `base` must be a string naming a file that exists, and the chain of bases
+/// must not come back to a file in it.
+#[test]
+fn bad_bases_are_typed_errors() {
+    let scratch = Scratch::new("bases");
+    let a = scratch.write("a.toml", "base = \"b.toml\"\n");
+    scratch.write("b.toml", "base = \"./a.toml\"\n");
+    match SystemConfig::from_file(&a).unwrap_err() {
+        ConfigError::BaseCycle { file, base, chain } => {
+            assert!(file.ends_with("b.toml"), "{file}");
+            assert_eq!(base, "./a.toml");
+            assert_eq!(chain.len(), 3, "{chain:?}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let own = scratch.write("own.toml", "base = \"own.toml\"\n");
+    assert!(
+        matches!(
+            SystemConfig::from_file(&own),
+            Err(ConfigError::BaseCycle { .. })
+        ),
+        "a file cannot be its own base"
+    );
+
+    let number = scratch.write("number.toml", "base = 3\n");
+    match SystemConfig::from_file(&number).unwrap_err() {
+        ConfigError::Invalid {
+            file,
+            field,
+            message,
+        } => {
+            assert_eq!(file, number.display().to_string());
+            assert_eq!(field, BASE_KEY);
+            assert!(message.contains("got an integer"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+
+    let missing = scratch.write("missing.toml", "base = \"nowhere.toml\"\n");
+    match SystemConfig::from_file(&missing).unwrap_err() {
+        ConfigError::Io { path, .. } => assert!(path.ends_with("nowhere.toml"), "{path:?}"),
+        other => panic!("{other:?}"),
+    }
+
+    // Text without a file has nothing to resolve a base against.
+    match SystemConfig::from_str("base = \"reference-system.toml\"\n", BUILTIN_AERO_CSV) {
+        Err(ConfigError::Invalid { field, .. }) => assert_eq!(field, BASE_KEY),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn too_many_segments_is_a_solver_error() {
+    let config = SystemConfig::builtin().unwrap();
+    let err = config.model::<f64, 16>(config.host_layout()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ConfigError::Solver(solver_core::ConfigError::TooManySegments { .. })
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn missing_field_is_named() {
+    let toml = with("mass = 4.0 ", "# no mass ");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    assert!(matches!(err, ConfigError::Toml { .. }), "{err:?}");
+    let message = err.to_string();
+    assert!(
+        message.contains("missing field `mass`") && message.contains("decoy"),
+        "{message}"
+    );
+}
+
+#[test]
+fn unknown_field_is_named_with_its_line() {
+    let toml = with("cl_p = -0.3", "cl_p = -0.3\ncl_r = 1.0");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    let line = toml.lines().position(|l| l.starts_with("cl_r")).unwrap() + 1;
+    match &err {
+        ConfigError::Toml {
+            line: Some(l),
+            message,
+            ..
+        } => {
+            assert_eq!(*l, line);
+            assert!(message.contains("unknown field `cl_r`"), "{message}");
+        }
+        other => panic!("wrong error {other:?}"),
+    }
+    assert!(err.to_string().contains(&format!("line {line}")), "{err}");
+}
+
+/// Issue 27, item 8: every number of the configuration has a physical range.
+/// Each numeric value of the reference system's TOML (every element of an
+/// array too) set to a huge value, then to its negative, is rejected as
+/// `Invalid` naming its own field (`wind_ned = [1e30, 0, 0]` trimmed to
+/// 4.37e57 N before).
+#[test]
+fn every_configuration_number_has_a_physical_range() {
+    let reference: toml::Table = toml::from_str(BUILTIN_TOML).unwrap();
+    let mut checked = 0;
+    for (table, keys) in &reference {
+        let toml::Value::Table(keys) = keys else {
+            continue;
+        };
+        for (key, value) in keys {
+            let elements = match value {
+                toml::Value::Array(a) => a.len(),
+                toml::Value::Float(_) => 0,
+                _ => continue,
+            };
+            for element in 0..elements.max(1) {
+                for huge in [1e30, -1e30] {
+                    let mut edited = reference.clone();
+                    let slot = edited[table.as_str()]
+                        .as_table_mut()
+                        .unwrap()
+                        .get_mut(key.as_str())
+                        .unwrap();
+                    let slot = match slot {
+                        toml::Value::Array(a) => &mut a[element],
+                        other => other,
+                    };
+                    *slot = toml::Value::Float(huge);
+                    let text = toml::to_string(&edited).unwrap();
+                    let field = format!("{table}.{key}");
+                    match SystemConfig::from_str(&text, BUILTIN_AERO_CSV) {
+                        Err(ConfigError::Invalid { field: named, .. }) => assert!(
+                            named.starts_with(&field),
+                            "{field}[{element}] = {huge}: blamed on {named}"
+                        ),
+                        other => panic!("{field}[{element}] = {huge}: {other:?}"),
+                    }
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 100, "{checked} values checked");
+    // The aerodynamic table's coefficients too.
+    for (edit, named) in [
+        ("\n0,1e30,0.450000,-0.000000", "cl"),
+        ("\n0,0.000000,-0.1,-0.000000", "cd"),
+        ("\n0,0.000000,0.450000,-1e30", "cm"),
+    ] {
+        let csv = BUILTIN_AERO_CSV.replacen("\n0,0.000000,0.450000,-0.000000", edit, 1);
+        assert_ne!(csv, BUILTIN_AERO_CSV, "the row at 0 degrees");
+        match SystemConfig::from_str(BUILTIN_TOML, &csv) {
+            Err(ConfigError::AeroCsv { message, .. }) => {
+                assert!(
+                    message.starts_with(&format!("{named} must be between")),
+                    "{message}"
+                )
+            }
+            other => panic!("{named}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn negative_mass_is_invalid() {
+    let toml = with("mass = 4.0 ", "mass = -4.0 ");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    match &err {
+        ConfigError::Invalid { field, .. } => assert_eq!(field, "decoy.mass"),
+        other => panic!("wrong error {other:?}"),
+    }
+    assert!(
+        err.to_string()
+            .contains("decoy.mass must be positive, got -4"),
+        "{err}"
+    );
+}
+
+#[test]
+fn non_finite_and_unsupported_values_are_rejected() {
+    let toml = with("length = 100.0 ", "length = nan ");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    assert!(
+        matches!(&err, ConfigError::Invalid { field, .. } if field == "cable.length"),
+        "{err:?}"
+    );
+    let toml = with("\"ISA-1976\"", "\"US-1962\"");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    assert!(
+        matches!(&err, ConfigError::UnsupportedAtmosphere { name, .. } if name == "US-1962"),
+        "{err:?}"
+    );
+    let toml = with("x_tow = 0.12", "x_tow = 1.5");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    assert!(
+        matches!(&err, ConfigError::Invalid { field, .. } if field == "decoy.x_tow"),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn bad_csv_row_names_its_line() {
+    let csv = BUILTIN_AERO_CSV.replacen(
+        "4,0.903119,0.513152,-0.185451",
+        "4,0.903119,oops,-0.185451",
+        1,
+    );
+    let line = csv.lines().position(|l| l.contains("oops")).unwrap() + 1;
+    let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+    match &err {
+        ConfigError::AeroCsv {
+            line: Some(l),
+            message,
+            ..
+        } => {
+            assert_eq!(*l, line);
+            assert!(message.contains("cd: `oops` is not a number"), "{message}");
+        }
+        other => panic!("wrong error {other:?}"),
+    }
+    assert!(
+        err.to_string()
+            .contains(&format!("decoy-aero.csv, line {line}")),
+        "{err}"
+    );
+
+    let csv = BUILTIN_AERO_CSV.replacen("6,1.420349,0.599285,-0.276836", "6,1.420349,0.599285", 1);
+    let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+    assert!(
+        matches!(err, ConfigError::AeroCsv { line: Some(_), .. }),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn non_increasing_alpha_names_its_line() {
+    let csv = BUILTIN_AERO_CSV.replacen("\n12,", "\n9,", 1);
+    let line = csv.lines().position(|l| l.starts_with("9,")).unwrap() + 1;
+    let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+    match &err {
+        ConfigError::AeroCsv {
+            line: Some(l),
+            message,
+            ..
+        } => {
+            assert_eq!(*l, line);
+            assert!(
+                message.contains("alpha_deg 9 does not increase"),
+                "{message}"
+            );
+        }
+        other => panic!("wrong error {other:?}"),
+    }
+}
+
+#[test]
+fn table_not_spanning_0_to_180_and_bad_header_are_rejected() {
+    let csv = BUILTIN_AERO_CSV.replacen("\n180,0.000000,0.450000,0.000000", "", 1);
+    let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+    assert!(
+        matches!(err, ConfigError::AeroCsv { line: None, .. }),
+        "{err:?}"
+    );
+    let csv = BUILTIN_AERO_CSV.replacen("alpha_deg,cl,cd,cm", "alpha,cl,cd,cm", 1);
+    let err = SystemConfig::from_str(BUILTIN_TOML, &csv).unwrap_err();
+    assert!(
+        matches!(err, ConfigError::AeroCsv { line: Some(_), .. }),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn missing_files_are_io_errors_naming_the_path() {
+    let err = SystemConfig::from_file("/nonexistent/system.toml").unwrap_err();
+    assert!(matches!(err, ConfigError::Io { .. }), "{err:?}");
+    assert!(
+        err.to_string().contains("/nonexistent/system.toml"),
+        "{err}"
+    );
+}
+
+#[test]
+fn mach_to_speed_uses_isa() {
+    let config = SystemConfig::builtin().unwrap();
+    let a0 = config.speed_of_sound(0.0).unwrap();
+    assert!((a0 - 340.294).abs() < 0.01, "{a0}");
+    let v = config.mach_to_speed(9000.0, 0.8).unwrap();
+    let a9 = Atmosphere::<f64>::isa().at(9000.0).unwrap().speed_of_sound;
+    assert_eq!(v, 0.8 * a9);
+    assert!((a9 - 303.85).abs() < 0.05, "{a9}");
+    assert!(matches!(
+        config.mach_to_speed(25_000.0, 0.8),
+        Err(ConfigError::Atmosphere(_))
+    ));
+}
