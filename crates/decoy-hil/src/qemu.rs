@@ -26,7 +26,8 @@ pub const QEMU: &str = "qemu-system-arm";
 /// The environment variable naming the QEMU binary to run instead of [`QEMU`]
 /// from `PATH` (a path, or a name looked up on `PATH`); read by [`Qemu::new`]
 /// (so by `decoy hil`, `decoy bridge --backend qemu`, the benches and the HIL
-/// tests) and by `firmware/qemu-run.sh`. Unset or empty: [`QEMU`].
+/// tests) and by the firmware's cargo runner (`firmware/qemu-run.sh`, `cargo xtask
+/// firmware qemu-run`). Unset or empty: [`QEMU`].
 pub const QEMU_ENV: &str = "DECOY_QEMU";
 
 /// Where `cargo xtask setup` unpacks a second QEMU version for comparison,
