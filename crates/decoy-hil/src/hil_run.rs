@@ -133,7 +133,7 @@ pub struct HilSummary {
     /// Static RAM plus the larger stack peak: the most RAM in use at any moment,
     /// bytes; None without the stack reports.
     pub ram_peak_bytes: Option<u64>,
-    /// The board's RAM ([`crate::qemu::Board::ram_budget`]), bytes.
+    /// The board's RAM budget ([`decoy_boards::BoardSpec::ram_budget`]), bytes.
     pub ram_budget_bytes: u64,
     /// Round trips per second over the link (wall clock).
     pub link_frames_per_s: f64,

@@ -295,7 +295,7 @@ impl decoy_controller::serve::Clock for Clock {
 
 impl decoy_controller::InstructionCounter for Clock {
     /// Instructions since the clock started, wrapping at 2^32, in multiples of
-    /// [`INSTRUCTIONS_PER_TICK`].
+    /// `INSTRUCTIONS_PER_TICK`.
     #[inline(always)]
     fn now(&self) -> u32 {
         (self.ticks() as u32).wrapping_mul(INSTRUCTIONS_PER_TICK)
