@@ -31,9 +31,6 @@ fn main() -> ! {
     let Some(board) = Board::take() else {
         board::fail()
     };
-    #[cfg(not(feature = "board-stm32f405"))]
-    let Board { mut uart, clock } = board;
-    #[cfg(feature = "board-stm32f405")]
     let Board {
         mut uart, clock, ..
     } = board;

@@ -7,9 +7,11 @@
 //! into the controller, every answer is encoded and written back, and the link's
 //! silence is supervised with the millisecond clock. On a board with the advisory
 //! line (the STM32F405), the line follows each Output's hazard flags
-//! (`decoy_firmware::advisory`), and each change is logged. The solver lives inside the
-//! controller in a `static`; nothing is allocated. Hardware is in the board
-//! module only (`src/board/`, chosen by feature); precision by feature `f64`.
+//! (`decoy_firmware::advisory`), and each change is logged; on a board without it
+//! the board's pin does nothing and the update compiles to nothing. The solver
+//! lives inside the controller in a `static`; nothing is allocated. Hardware is in
+//! the board module only (`src/board/`, chosen by `firmware/boards.toml` and the
+//! board's feature); precision by feature `f64`.
 #![no_std]
 #![no_main]
 
@@ -18,7 +20,6 @@ use cortex_m as _;
 use cortex_m_rt::entry;
 use decoy_controller::Controller;
 use decoy_controller::serve::{self, Event};
-#[cfg(feature = "board-stm32f405")]
 use decoy_firmware::advisory::Advisory;
 use decoy_firmware::board::{self, Board};
 use decoy_firmware::{SEGMENT_CAPACITY, Scalar, reference};
@@ -45,15 +46,11 @@ fn main() -> ! {
         defmt::error!("the board's peripherals are already taken or cannot be set up");
         board::fail()
     };
-    #[cfg(not(feature = "board-stm32f405"))]
-    let Board { mut uart, clock } = board;
-    #[cfg(feature = "board-stm32f405")]
     let Board {
         mut uart,
         clock,
         advisory,
     } = board;
-    #[cfg(feature = "board-stm32f405")]
     let advisory = match Advisory::new(advisory) {
         Ok(advisory) => advisory,
         Err(never) => match never {},
@@ -87,14 +84,7 @@ fn main() -> ! {
         defmt::warn!("uart: {}", defmt::Debug2Format(&e));
     }
 
-    run(
-        controller,
-        decoder,
-        &mut uart,
-        &clock,
-        #[cfg(feature = "board-stm32f405")]
-        advisory,
-    )
+    run(controller, decoder, &mut uart, &clock, advisory)
 }
 
 /// The serve loop, logging what it does. Not inlined into `main`, so that its
@@ -105,13 +95,12 @@ fn run(
     decoder: &mut FrameDecoder,
     uart: &mut board::Uart,
     clock: &board::Clock,
-    #[cfg(feature = "board-stm32f405")] mut advisory: Advisory<board::AdvisoryPin>,
+    mut advisory: Advisory<board::AdvisoryPin>,
 ) -> ! {
     let mut accepted: u32 = 0;
     serve::serve(controller, decoder, uart, clock, |event| match event {
         Event::Answered(answer) => {
             log_answer(answer, &mut accepted);
-            #[cfg(feature = "board-stm32f405")]
             drive_advisory(&mut advisory, answer);
         }
         Event::Silent(_) => defmt::warn!("link silent: degraded"),
@@ -192,8 +181,8 @@ fn log_answer(answer: &DeviceMessage, accepted: &mut u32) {
 }
 
 /// Drives the advisory line from an Output's management report and logs each change (under
-/// QEMU, whose GPIO is a stub, the log is the only trace of the line).
-#[cfg(feature = "board-stm32f405")]
+/// QEMU, whose GPIO is a stub, the log is the only trace of the line). Nothing on a
+/// board without the line: its pin is not wired, so the update never changes it.
 fn drive_advisory(advisory: &mut Advisory<board::AdvisoryPin>, answer: &DeviceMessage) {
     let DeviceMessage::Output(o) = answer else {
         return;

@@ -4,15 +4,20 @@
 //!   QEMU, the Python environment `.venv/`) and say what was found and what was
 //!   installed.
 //! - `test`: `setup`, then every test stage (fmt, clippy, host tests, the solver's
-//!   no_std cross build, the firmware build), failing fast.
+//!   no_std cross build, each board's firmware build and lints), failing fast;
+//!   `test --list` prints the stages and their commands without running them.
 //! - `run`: the main job on the built-in reference system (see [`main_job`]).
 //! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
 //!   [`bench_report`]), then the bridge's soak.
 //! - `soak`: the bridge's soak alone (see [`soak`]): `docs/soak.md`, `docs/soak.json`.
+//! - `firmware build|clippy|run --board NAME`: a board's firmware as
+//!   `firmware/boards.toml` describes it (module `firmware`); `firmware qemu-run
+//!   ELF` is the firmware's cargo runner (`firmware/qemu-run.sh`).
 //! - `check-refs`: the references stage alone ([`refs`]): every repository file
 //!   and section the text cites exists.
 
 mod apt;
+mod firmware;
 mod layering;
 mod process;
 mod python;
@@ -24,8 +29,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::time::{Duration, Instant};
 
+use clap::builder::PossibleValuesParser;
 use clap::{Parser, Subcommand};
+use decoy_boards::{Board, Build};
 
+use firmware::Task;
 use process::Result;
 use setup::{Scope, TARGET, Toolchain};
 
@@ -66,7 +74,11 @@ enum Cmd {
     /// Install what the project needs (target toolchain, QEMU) and report it.
     Setup,
     /// Run setup, then every test stage; stops at the first failing stage.
-    Test,
+    Test {
+        /// Print the stages and their commands instead of running them (no setup).
+        #[arg(long)]
+        list: bool,
+    },
     /// Run the main job on the built-in reference system.
     Run,
     /// Run the wall-clock and instruction-count benchmarks and the firmware under
@@ -83,6 +95,66 @@ enum Cmd {
     /// Check that every repository file and section the text cites exists (the
     /// references stage of `test`, alone).
     CheckRefs,
+    /// A board's firmware (firmware/boards.toml): build, lint or run it.
+    Firmware {
+        #[command(subcommand)]
+        command: FirmwareCmd,
+    },
+}
+
+/// `cargo xtask firmware ...`.
+#[derive(Subcommand)]
+enum FirmwareCmd {
+    /// Build the board's firmware (release), as the test stage does; further cargo
+    /// arguments after `--` (`-- --example step_cost`).
+    Build {
+        #[command(flatten)]
+        board: BoardArgs,
+        /// The real hardware's build instead of the QEMU build.
+        #[arg(long)]
+        hardware: bool,
+        /// Further cargo arguments.
+        #[arg(last = true)]
+        cargo_args: Vec<String>,
+    },
+    /// Lint the board's firmware with clippy (-D warnings), as the test stage does.
+    Clippy {
+        #[command(flatten)]
+        board: BoardArgs,
+        /// The real hardware's build instead of the QEMU build.
+        #[arg(long)]
+        hardware: bool,
+    },
+    /// Build the board's firmware and boot it under QEMU (DECOY_LINK_PORT,
+    /// DECOY_LINK_LISTEN, DECOY_QEMU, QEMU_TIMEOUT, DEFMT_RAW: see firmware/README.md).
+    Run {
+        #[command(flatten)]
+        board: BoardArgs,
+        /// Further cargo arguments of the build.
+        #[arg(last = true)]
+        cargo_args: Vec<String>,
+    },
+    /// The firmware's cargo runner (firmware/qemu-run.sh): boot ELF under QEMU on
+    /// the board it was built for (its `_decoy_board_NAME` symbol, or $DECOY_BOARD).
+    QemuRun {
+        /// The firmware ELF.
+        elf: PathBuf,
+    },
+}
+
+/// `--board NAME`: a board of firmware/boards.toml.
+#[derive(clap::Args)]
+struct BoardArgs {
+    /// The board (firmware/boards.toml).
+    #[arg(long, value_name = "NAME", default_value = Board::default().spec().name(),
+          value_parser = PossibleValuesParser::new(Board::all().iter().map(|b| b.spec().name())))]
+    board: String,
+}
+
+impl BoardArgs {
+    fn board(&self) -> Result<Board> {
+        Board::by_name(&self.board).map_err(|e| e.to_string())
+    }
 }
 
 fn main() -> ExitCode {
@@ -90,11 +162,20 @@ fn main() -> ExitCode {
     let root = workspace_root();
     let result = match cli.command {
         Cmd::Setup => setup::setup(&root, Scope::Full).map(drop),
-        Cmd::Test => test(&root),
+        Cmd::Test { list: true } => {
+            list_stages(&root);
+            Ok(())
+        }
+        Cmd::Test { list: false } => test(&root),
         Cmd::Run => run(&root),
         Cmd::BenchReport => bench_report(&root).and_then(|()| soak(&root, SOAK_DURATION)),
         Cmd::Soak { duration } => soak(&root, &duration),
         Cmd::CheckRefs => refs::check(&root),
+        Cmd::Firmware { command } => match firmware_command(&root, command) {
+            // The runner's exit code is QEMU's.
+            Ok(code) => return ExitCode::from(code),
+            Err(e) => Err(e),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -118,9 +199,49 @@ fn cargo(dir: &Path, args: &[&str]) -> Command {
     cmd
 }
 
+/// `cargo xtask firmware ...`; returns the exit code.
+fn firmware_command(root: &Path, command: FirmwareCmd) -> Result<u8> {
+    let build_of = |hardware: bool| {
+        if hardware {
+            Build::Hardware
+        } else {
+            Build::Qemu
+        }
+    };
+    let run_task = |task: Task, board: &BoardArgs, hardware: bool, extra: &[String]| {
+        let board = board.board()?;
+        let build = build_of(hardware);
+        let toolchain = setup::Toolchain::recorded(root);
+        let mut cmd =
+            firmware::command(root, toolchain, task, &board, build, extra).ok_or_else(|| {
+                format!("board `{board}` has no {build} build (firmware/boards.toml)")
+            })?;
+        process::run(&mut cmd)?;
+        Ok(board)
+    };
+    match command {
+        FirmwareCmd::Build {
+            board,
+            hardware,
+            cargo_args,
+        } => run_task(Task::Build, &board, hardware, &cargo_args).map(|_| 0),
+        FirmwareCmd::Clippy { board, hardware } => {
+            run_task(Task::Clippy, &board, hardware, &[]).map(|_| 0)
+        }
+        FirmwareCmd::Run { board, cargo_args } => {
+            let board = run_task(Task::Build, &board, false, &cargo_args)?;
+            firmware::boot(&firmware::elf(root, &board), board)
+        }
+        FirmwareCmd::QemuRun { elf } => {
+            let board = firmware::board_of(&elf)?;
+            firmware::boot(&elf, board)
+        }
+    }
+}
+
 /// One test stage: a command to run, or the reason it is skipped.
 struct Stage {
-    name: &'static str,
+    name: String,
     action: Action,
 }
 
@@ -148,7 +269,7 @@ fn test(root: &Path) -> Result<()> {
         let outcome = match stage.action {
             Action::Skip(reason) => {
                 println!("<== {}: skipped ({reason})", stage.name);
-                skipped.push(stage.name);
+                skipped.push(stage.name.clone());
                 continue;
             }
             Action::Run(mut cmd) => process::run(&mut cmd),
@@ -180,65 +301,49 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
         Action::Skip("rustfmt is not installed".into())
     };
 
-    let firmware_dir = root.join("firmware");
-    let firmware_build = |args: &[&str]| {
-        if firmware_dir.join("Cargo.toml").is_file() {
-            let mut cmd = toolchain.cargo(&firmware_dir, args);
-            let_directory_choose_toolchain(&mut cmd);
-            Action::Run(cmd)
-        } else {
-            Action::Skip("firmware/Cargo.toml does not exist yet".into())
+    // Each board's firmware (firmware/boards.toml): its QEMU build built and
+    // linted, its hardware build (where it has one) linted, each in its own
+    // target directory, the one the HIL library and `cargo xtask firmware` use.
+    let have_firmware = firmware::dir(root).join("Cargo.toml").is_file();
+    let mut firmware_stages = Vec::new();
+    for &board in Board::all() {
+        for build in board.builds() {
+            let tasks: &[Task] = match build {
+                Build::Qemu => &[Task::Build, Task::Clippy],
+                Build::Hardware => &[Task::Clippy],
+            };
+            for &task in tasks {
+                let what = match task {
+                    Task::Build => "build",
+                    Task::Clippy => "clippy",
+                };
+                let precision = board.precision();
+                let name = match build {
+                    Build::Qemu => format!("firmware {what} ({board}, {precision})"),
+                    Build::Hardware => {
+                        format!("firmware {what} ({board}, {precision}, hardware configuration)")
+                    }
+                };
+                let action = if !have_firmware {
+                    Action::Skip("firmware/Cargo.toml does not exist yet".into())
+                } else {
+                    match firmware::command(root, toolchain, task, &board, build, &[]) {
+                        Some(cmd) => Action::Run(cmd),
+                        None => continue,
+                    }
+                };
+                firmware_stages.push(Stage { name, action });
+            }
         }
-    };
-    let firmware = firmware_build(&["build", "--release"]);
-    let firmware_clippy = firmware_build(&[
-        "clippy",
-        "--release",
-        "--all-targets",
-        "--",
-        "-D",
-        "warnings",
-    ]);
-    // The Cortex-M7 f64 profile (alias in firmware/.cargo/config.toml).
-    let firmware_m7 = firmware_build(&["build-m7"]);
-    // The STM32F405 (stm32f4xx-hal): the QEMU profile built (alias) and linted, and
-    // the real part's configuration (PLL clocks, RTT logs) linted, each in the
-    // target directory of its own that the alias and the HIL library use.
-    let firmware_stm32f405 = firmware_build(&["build-stm32f405"]);
-    let firmware_clippy_stm32f405 = firmware_build(&[
-        "clippy",
-        "--release",
-        "--all-targets",
-        "--no-default-features",
-        "--features",
-        "qemu,defmt-semihosting,board-stm32f405",
-        "--target-dir",
-        "target/stm32f405",
-        "--",
-        "-D",
-        "warnings",
-    ]);
-    let firmware_clippy_stm32f405_hardware = firmware_build(&[
-        "clippy",
-        "--release",
-        "--all-targets",
-        "--no-default-features",
-        "--features",
-        "rtt,board-stm32f405",
-        "--target-dir",
-        "target/stm32f405-hw",
-        "--",
-        "-D",
-        "warnings",
-    ]);
+    }
 
-    vec![
+    let mut stages = vec![
         Stage {
-            name: "fmt",
+            name: "fmt".into(),
             action: fmt,
         },
         Stage {
-            name: "clippy",
+            name: "clippy".into(),
             action: Action::Run(cargo(
                 root,
                 &[
@@ -252,7 +357,7 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
             )),
         },
         Stage {
-            name: "unused dependencies (cargo machete: workspace and firmware)",
+            name: "unused dependencies (cargo machete: workspace and firmware)".into(),
             action: Action::Run({
                 let mut cmd = Command::new(setup::CARGO_MACHETE.0);
                 cmd.current_dir(root);
@@ -260,23 +365,23 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
             }),
         },
         Stage {
-            name: "layering (cargo tree, sources)",
+            name: "layering (cargo tree, sources)".into(),
             action: Action::Check(layering::check),
         },
         Stage {
-            name: "references (cited files and sections exist)",
+            name: "references (cited files and sections exist)".into(),
             action: Action::Check(refs::check),
         },
         Stage {
-            name: "host tests",
+            name: "host tests".into(),
             action: Action::Run(cargo(root, &["test", "--workspace"])),
         },
         Stage {
-            name: "python client (pytest: layout, lockstep, JSBSim F-16)",
+            name: "python client (pytest: layout, lockstep, JSBSim F-16)".into(),
             action: Action::Check(python::test_stage),
         },
         Stage {
-            name: "solver no_std cross build",
+            name: "solver no_std cross build".into(),
             action: Action::Run(toolchain.cargo(
                 root,
                 &[
@@ -291,7 +396,7 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
             )),
         },
         Stage {
-            name: "protocol and controller no_std cross build",
+            name: "protocol and controller no_std cross build".into(),
             action: Action::Run(toolchain.cargo(
                 root,
                 &[
@@ -306,41 +411,23 @@ fn stages(root: &Path, toolchain: Toolchain) -> Vec<Stage> {
                 ],
             )),
         },
-        Stage {
-            name: "firmware build",
-            action: firmware,
-        },
-        Stage {
-            name: "firmware clippy",
-            action: firmware_clippy,
-        },
-        Stage {
-            name: "firmware build (Cortex-M7, f64)",
-            action: firmware_m7,
-        },
-        Stage {
-            name: "firmware build (STM32F405)",
-            action: firmware_stm32f405,
-        },
-        Stage {
-            name: "firmware clippy (STM32F405 under QEMU)",
-            action: firmware_clippy_stm32f405,
-        },
-        Stage {
-            name: "firmware clippy (STM32F405 hardware configuration)",
-            action: firmware_clippy_stm32f405_hardware,
-        },
-    ]
+    ];
+    stages.extend(firmware_stages);
+    stages
 }
 
-/// Drops the toolchain rustup chose by default for `cargo xtask`, so that a
-/// `rust-toolchain.toml` in the command's directory applies. An explicit choice
-/// (`cargo +name xtask`, `RUSTUP_TOOLCHAIN=...`) is kept.
-fn let_directory_choose_toolchain(cmd: &mut Command) {
-    let source = std::env::var("RUSTUP_TOOLCHAIN_SOURCE").unwrap_or_default();
-    if source.is_empty() || source == "default" {
-        cmd.env_remove("RUSTUP_TOOLCHAIN")
-            .env_remove("RUSTUP_TOOLCHAIN_SOURCE");
+/// `cargo xtask test --list`: the stages and their commands, without running them
+/// (nor setup: the toolchain is the one setup recorded).
+fn list_stages(root: &Path) {
+    let stages = stages(root, Toolchain::recorded(root));
+    let total = stages.len();
+    for (i, stage) in stages.into_iter().enumerate() {
+        let what = match &stage.action {
+            Action::Run(cmd) => process::display(cmd),
+            Action::Check(_) => "(a check done by the xtask itself)".to_owned(),
+            Action::Skip(reason) => format!("(skipped: {reason})"),
+        };
+        println!("stage {}/{total}: {}\n    {what}", i + 1, stage.name);
     }
 }
 

@@ -22,7 +22,7 @@
 //!   is ambiguous). Relative tokens (`../config`) resolve against the citing
 //!   file's directory or one of its ancestors, and must stay inside the root.
 //!   Brace lists (`figure.{png,svg}`) must exist for every alternative, `*` must
-//!   match something. Not checked: tokens with placeholders (`<board>`, `...`,
+//!   match something. Not checked: tokens with placeholders (`<board>`, `...`, a format string's `{}`,
 //!   an upper-case directory such as `DIR/`), alternative extensions
 //!   (`plot.png/.svg`), paths into generated directories ([`GENERATED`]:
 //!   `target/`, `out/`), and another crate's files written with that crate's
@@ -678,6 +678,7 @@ impl Checker {
             let letters = stem.chars().filter(|c| c.is_alphabetic()).count();
             let upper = letters >= 2 && !stem.chars().any(|c| c.is_lowercase());
             c.contains(['<', '>'])
+                || c.contains("{}")
                 || c.contains("...")
                 || c.starts_with('@')
                 || GENERATED.contains(&c)

@@ -23,8 +23,9 @@ use crate::apt::Apt;
 use crate::process::{self, Result};
 use crate::qemu;
 
-/// The bare-metal target of the firmware and of the solver's no_std build.
-pub const TARGET: &str = "thumbv7em-none-eabihf";
+/// The bare-metal target of the firmware and of the solver's no_std build
+/// (every board's: `firmware/boards.toml`, crate `decoy-boards`).
+pub use decoy_boards::TARGET;
 
 /// Time limit of one `rustup target add` / `rustup component add` attempt.
 const RUSTUP_TIMEOUT: Duration = Duration::from_secs(90);
@@ -60,6 +61,23 @@ pub enum Toolchain {
 }
 
 impl Toolchain {
+    /// The mode `cargo xtask setup` recorded in `target/xtask-toolchain` under
+    /// `root`; the rustup toolchain if setup has not run (it says so).
+    pub fn recorded(root: &Path) -> Toolchain {
+        let file = root.join("target").join("xtask-toolchain");
+        match fs::read_to_string(&file) {
+            Ok(mode) if mode.trim() == DEBIAN_TOOLCHAIN => Toolchain::Debian,
+            Ok(_) => Toolchain::Rustup,
+            Err(_) => {
+                eprintln!(
+                    "{} does not exist (`cargo xtask setup` writes it): using the rustup toolchain",
+                    file.display()
+                );
+                Toolchain::Rustup
+            }
+        }
+    }
+
     fn name(self) -> &'static str {
         match self {
             Toolchain::Rustup => "rustup",

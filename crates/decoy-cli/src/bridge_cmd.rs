@@ -30,9 +30,9 @@ pub struct BridgeArgs {
     /// host: the controller in this process; qemu: the firmware under QEMU over its UART.
     #[arg(long, value_enum, default_value_t = BackendArg::Host)]
     backend: BackendArg,
-    /// The qemu backend's board: m4 (Cortex-M4F, f32), m7 (Cortex-M7, f64) or stm32f405 (STM32F405, f32).
-    #[arg(long, value_enum, default_value_t = BridgeBoard::M4)]
-    board: BridgeBoard,
+    /// The qemu backend's board (firmware/boards.toml).
+    #[arg(long, value_name = "NAME", value_parser = crate::board_arg::BoardParser, default_value_t = Board::default())]
+    board: Board,
     /// The host backend's precision (f32 with libm: the firmware's bits).
     #[arg(long, value_enum)]
     precision: Option<PrecisionArg>,
@@ -95,16 +95,6 @@ enum BackendArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum BridgeBoard {
-    /// Cortex-M4F (mps2-an386), f32.
-    M4,
-    /// Cortex-M7 (mps2-an500), f64.
-    M7,
-    /// STM32F405 (netduinoplus2), f32.
-    Stm32f405,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum PrecisionArg {
     /// f32.
     F32,
@@ -161,11 +151,7 @@ pub fn bridge_command(
     let iox = iox_config(None, None).map_err(bridge_failure)?;
     let options = BackendOptions {
         kind,
-        board: match args.board {
-            BridgeBoard::M4 => Board::M4,
-            BridgeBoard::M7 => Board::M7,
-            BridgeBoard::Stm32f405 => Board::Stm32f405,
-        },
+        board: args.board,
         precision: args.precision.map(|p| match p {
             PrecisionArg::F32 => Precision::F32,
             PrecisionArg::F64 => Precision::F64,

@@ -30,6 +30,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod board_arg;
 mod bridge_cmd;
 mod progress;
 mod signals;
@@ -107,9 +108,9 @@ struct HilArgs {
     /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
     #[arg(long, value_name = "NAME|FILE")]
     scenario: String,
-    /// The board: m4 (Cortex-M4F, f32, mps2-an386), m7 (Cortex-M7, f64, mps2-an500) or stm32f405 (STM32F405, f32, netduinoplus2).
-    #[arg(long, value_enum, default_value_t = BoardArg::M4)]
-    board: BoardArg,
+    /// The board (firmware/boards.toml).
+    #[arg(long, value_name = "NAME", value_parser = board_arg::BoardParser, default_value_t = Board::default())]
+    board: Board,
     /// Cable segments (default: the configuration's solver.segments_embedded; another count builds a firmware variant).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
@@ -129,17 +130,6 @@ struct HilArgs {
     /// of the checkout this `decoy` was built from, or of $DECOY_SOURCE_DIR).
     #[arg(long, value_name = "ELF")]
     firmware: Option<PathBuf>,
-}
-
-/// The board `decoy hil` runs on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum BoardArg {
-    /// Cortex-M4F (QEMU mps2-an386), f32: the decoy controller.
-    M4,
-    /// Cortex-M7 (QEMU mps2-an500), f64 in hardware.
-    M7,
-    /// STM32F405 (QEMU netduinoplus2, Cortex-M4F at 168 MHz, stm32f4xx-hal), f32.
-    Stm32f405,
 }
 
 #[derive(Args, Debug)]
@@ -624,11 +614,7 @@ fn write_management(s: &mut String, m: &decoy_sim::ManagementSummary) {
 fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<String, Failure> {
     let scenario = Scenario::load(&args.scenario)?;
     let options = HilOptions {
-        board: match args.board {
-            BoardArg::M4 => Board::M4,
-            BoardArg::M7 => Board::M7,
-            BoardArg::Stm32f405 => Board::Stm32f405,
-        },
+        board: args.board,
         segments: args.segments,
         t_end: args.t_end,
         rate: args.rate,

@@ -14,12 +14,14 @@ use std::time::Duration;
 
 use object::{Object, ObjectSection, SectionFlags, SectionKind};
 
+use decoy_boards::Build;
+
 use crate::qemu::{Board, Captured, RunError, run_with_timeout};
 
-/// The bare-metal target of the firmware.
-pub const TARGET: &str = "thumbv7em-none-eabihf";
 /// The firmware's binary name.
-pub const BINARY: &str = "decoy-firmware";
+pub use decoy_boards::BINARY;
+/// The bare-metal target of the firmware (every board's).
+pub use decoy_boards::TARGET;
 
 /// The environment variable naming the checkout whose `firmware/` is built (for
 /// a `decoy` installed away from its checkout).
@@ -71,68 +73,33 @@ pub fn firmware_dir() -> PathBuf {
     workspace_root().join("firmware")
 }
 
-/// The release ELF that [`build_release`] produces.
-pub fn release_elf() -> PathBuf {
-    firmware_dir()
-        .join("target")
-        .join(TARGET)
-        .join("release")
-        .join(BINARY)
-}
-
-/// The ELF of the M7 profile that [`build_board`] produces
-/// (`firmware/target/m7/...`: its own target directory, so the two profiles do
-/// not rebuild each other).
-pub fn release_elf_m7() -> PathBuf {
-    firmware_dir()
-        .join("target")
-        .join("m7")
-        .join(TARGET)
-        .join("release")
-        .join(BINARY)
-}
-
-/// The ELF of the STM32F405 profile that [`build_board`] produces
-/// (`firmware/target/stm32f405/...`, its own target directory like the M7's).
-pub fn release_elf_stm32f405() -> PathBuf {
-    firmware_dir()
-        .join("target")
-        .join("stm32f405")
-        .join(TARGET)
-        .join("release")
-        .join(BINARY)
-}
-
-/// Cargo arguments of the STM32F405 profile (the firmware's `cargo build-stm32f405`
-/// alias): the board `stm32f405` through stm32f4xx-hal, with the QEMU clock setup
-/// (feature `qemu`), f32.
-pub const STM32F405_ARGS: &[&str] = &[
-    "--no-default-features",
-    "--features",
-    "qemu,defmt-semihosting,board-stm32f405",
-];
-
-/// The cargo arguments and the target subdirectory (under `firmware/target/`, or
-/// `target-<name>` among the variants) of `board`'s profile; `None` for the default
-/// build (the M4).
-fn profile(board: Board) -> Option<(&'static [&'static str], &'static str)> {
-    match board {
-        Board::M4 => None,
-        Board::M7 => Some((M7_ARGS, "m7")),
-        Board::Stm32f405 => Some((STM32F405_ARGS, "stm32f405")),
+/// The target directory of `board`'s QEMU build in the firmware workspace at
+/// `firmware` (`decoy_boards::BoardSpec::target_subdir`): Cargo's own `target/`
+/// for the default board, `target/NAME/` for the others, so that the boards do
+/// not rebuild each other.
+fn target_dir_in(firmware: &Path, board: Board) -> PathBuf {
+    match board.target_subdir(Build::Qemu) {
+        Some(subdir) => firmware.join(subdir),
+        None => firmware.join("target"),
     }
 }
 
-/// Cargo arguments of the M7 profile (the firmware's `cargo build-m7` alias): the
-/// board `mps2-an500` and the `f64` precision (two independent features) and code for the Cortex-M7's
-/// double-precision FPU.
-pub const M7_ARGS: &[&str] = &[
-    "--no-default-features",
-    "--features",
-    "qemu,defmt-semihosting,board-mps2-an500,f64",
-    "--config",
-    "target.thumbv7em-none-eabihf.rustflags=[\"-C\", \"target-cpu=cortex-m7\"]",
-];
+/// The ELF that [`build_board`] produces for `board`
+/// (`firmware/target/[NAME/]thumbv7em-none-eabihf/release/decoy-firmware`).
+pub fn release_elf(board: Board) -> PathBuf {
+    target_dir_in(&firmware_dir(), board)
+        .join(TARGET)
+        .join("release")
+        .join(BINARY)
+}
+
+/// The cargo arguments of `board`'s QEMU build
+/// (`decoy_boards::BoardSpec::cargo_args`: its features and target CPU, from
+/// `firmware/boards.toml`).
+pub fn board_args(board: Board) -> Vec<String> {
+    // Every board of the table has a QEMU build.
+    board.cargo_args(Build::Qemu).unwrap_or_default()
+}
 
 /// Why the firmware could not be built.
 #[derive(Debug)]
@@ -189,24 +156,15 @@ fn debian_toolchain() -> bool {
         .is_ok_and(|mode| mode.trim() == "debian")
 }
 
-/// The `cargo build --release` command of the firmware.
+/// A `cargo build --release` command of the firmware workspace at `dir` (the
+/// firmware itself, or a [`build_with_segments`] copy of it) with `extra` cargo
+/// arguments (a board's, [`board_args`]).
 ///
-/// It runs in `firmware/` so that `firmware/.cargo/config.toml` (target, linker
-/// script, runner) applies, with `--manifest-path` for clarity. Variables that
-/// would override that configuration when inherited from an outer `cargo test`
-/// (`RUSTFLAGS`, a shared target directory, a build target) are removed.
-pub fn build_command() -> Command {
-    build_command_in(&firmware_dir())
-}
-
-/// [`build_command`] for a firmware workspace at `dir` (the firmware itself, or a
-/// [`build_with_segments`] copy of it).
-fn build_command_in(dir: &Path) -> Command {
-    build_command_with(dir, &[])
-}
-
-/// [`build_command_in`] with further cargo arguments.
-fn build_command_with(dir: &Path, extra: &[&str]) -> Command {
+/// It runs in `dir` so that its `.cargo/config.toml` (target, runner) applies,
+/// with `--manifest-path` for clarity. Variables that would override that
+/// configuration when inherited from an outer `cargo test` (`RUSTFLAGS`, a
+/// shared target directory, a build target) are removed.
+fn build_command_with<S: AsRef<std::ffi::OsStr>>(dir: &Path, extra: &[S]) -> Command {
     let manifest = dir.join("Cargo.toml");
     let mut cmd = if debian_toolchain() {
         let mut cmd = Command::new("rustup");
@@ -241,51 +199,23 @@ fn build_command_with(dir: &Path, extra: &[&str]) -> Command {
     cmd
 }
 
-/// Builds the firmware in release mode within `timeout` and returns its ELF.
-pub fn build_release(timeout: Duration) -> Result<PathBuf, BuildError> {
-    let out = run_with_timeout(
-        &mut build_command(),
-        timeout,
-        "cargo is not on PATH; install Rust with rustup",
-    )
-    .map_err(BuildError::Run)?;
-    if !out.status.success() {
-        return Err(BuildError::Failed(out));
-    }
-    let elf = release_elf();
-    if elf.is_file() {
-        Ok(elf)
-    } else {
-        Err(BuildError::MissingElf(elf))
-    }
-}
-
 /// Builds the firmware for `board` within `timeout` and returns its ELF: the
-/// default build for [`Board::M4`], the M7 profile ([`M7_ARGS`], target directory
-/// `firmware/target/m7`) for [`Board::M7`], the STM32F405 profile
-/// ([`STM32F405_ARGS`], `firmware/target/stm32f405`) for [`Board::Stm32f405`].
+/// board's QEMU build as `firmware/boards.toml` describes it ([`board_args`]),
+/// in its own target directory ([`release_elf`]).
 pub fn build_board(board: Board, timeout: Duration) -> Result<PathBuf, BuildError> {
     let (release, mut cmd) = board_build(board, &[]);
     run_build(&mut cmd, timeout, release.join(BINARY))
 }
 
 /// The release output directory of `board`'s build of the firmware workspace and
-/// the command that builds it with `extra` cargo arguments (M4: the default
-/// target directory; the others: their profile's arguments and target directory).
+/// the command that builds it with `extra` cargo arguments.
 fn board_build(board: Board, extra: &[&str]) -> (PathBuf, Command) {
-    match profile(board) {
-        None => {
-            let release = firmware_dir().join("target").join(TARGET).join("release");
-            (release, build_command_with(&firmware_dir(), extra))
-        }
-        Some((profile_args, dir)) => {
-            let target_dir = firmware_dir().join("target").join(dir);
-            let args: Vec<&str> = profile_args.iter().chain(extra).copied().collect();
-            let mut cmd = build_command_with(&firmware_dir(), &args);
-            cmd.arg("--target-dir").arg(&target_dir);
-            (target_dir.join(TARGET).join("release"), cmd)
-        }
-    }
+    let target_dir = target_dir_in(&firmware_dir(), board);
+    let mut args = board_args(board);
+    args.extend(extra.iter().map(|&a| a.to_owned()));
+    let mut cmd = build_command_with(&firmware_dir(), &args);
+    cmd.arg("--target-dir").arg(&target_dir);
+    (target_dir.join(TARGET).join("release"), cmd)
 }
 
 /// Builds the firmware's example `name` (`firmware/examples/<name>.rs`) for
@@ -314,9 +244,11 @@ fn run_build(cmd: &mut Command, timeout: Duration, elf: PathBuf) -> Result<PathB
     }
 }
 
-/// [`build_with_segments`] for `board` (the other profiles' variants have their
-/// own target directories and ELF names `decoy-firmware-<board>-<segments>seg`).
-/// Errors if `segments` is 0 or more than [`MAX_SEGMENTS`].
+/// [`build_with_segments`] for `board`: each board's variants have their own
+/// target directory (`target/firmware-variants/target` for the default board,
+/// `target-NAME` for the others) and ELF names (`decoy-firmware-<segments>seg`,
+/// `decoy-firmware-NAME-<segments>seg`). Errors if `segments` is 0 or more than
+/// [`MAX_SEGMENTS`].
 pub fn build_board_with_segments(
     board: Board,
     segments: usize,
@@ -327,9 +259,6 @@ pub fn build_board_with_segments(
             "the firmware's solver holds 1 to {MAX_SEGMENTS} segments, not {segments}"
         )));
     }
-    let Some((profile_args, dir)) = profile(board) else {
-        return build_with_segments(segments, timeout);
-    };
     let variants = variants_dir();
     let root = variants.join(format!("segments-{segments}"));
     prepare_variant(&root, segments, None).map_err(|e| {
@@ -337,22 +266,33 @@ pub fn build_board_with_segments(
             "preparing the sources for the {segments}-segment firmware: {e}"
         ))
     })?;
-    let target_dir = variants.join(format!("target-{dir}"));
-    let mut cmd = build_command_with(&root.join("firmware"), profile_args);
+    let target_dir = variant_target_dir(board);
+    let mut cmd = build_command_with(&root.join("firmware"), &board_args(board));
     cmd.arg("--target-dir").arg(&target_dir);
     let built = run_build(
         &mut cmd,
         timeout,
         target_dir.join(TARGET).join("release").join(BINARY),
     )?;
-    let elf = variants.join(format!("{BINARY}-{dir}-{segments}seg"));
+    let elf = if board.is_default() {
+        variants.join(format!("{BINARY}-{segments}seg"))
+    } else {
+        variants.join(format!("{BINARY}-{board}-{segments}seg"))
+    };
     fs::copy(&built, &elf).map_err(|e| {
-        BuildError::Variant(format!(
-            "copying the {segments}-segment {} ELF: {e}",
-            board.name()
-        ))
+        BuildError::Variant(format!("copying the {segments}-segment {board} ELF: {e}"))
     })?;
     Ok(elf)
+}
+
+/// The shared target directory of `board`'s variants under [`variants_dir`]:
+/// `target` for the default board, `target-NAME` for the others.
+fn variant_target_dir(board: Board) -> PathBuf {
+    if board.is_default() {
+        variants_dir().join("target")
+    } else {
+        variants_dir().join(format!("target-{board}"))
+    }
 }
 
 /// [`build_board_with_segments`] with the grading ratio replaced too (for the
@@ -376,23 +316,15 @@ pub fn build_board_with_layout(
     let root = variants.join(&name);
     prepare_variant(&root, segments, Some(grading))
         .map_err(|e| BuildError::Variant(format!("preparing the sources of {name}: {e}")))?;
-    let (target_dir, mut cmd) = match profile(board) {
-        None => {
-            let target_dir = variants.join("target");
-            (target_dir, build_command_in(&root.join("firmware")))
-        }
-        Some((profile_args, dir)) => (
-            variants.join(format!("target-{dir}")),
-            build_command_with(&root.join("firmware"), profile_args),
-        ),
-    };
+    let target_dir = variant_target_dir(board);
+    let mut cmd = build_command_with(&root.join("firmware"), &board_args(board));
     cmd.arg("--target-dir").arg(&target_dir);
     let built = run_build(
         &mut cmd,
         timeout,
         target_dir.join(TARGET).join("release").join(BINARY),
     )?;
-    let elf = variants.join(format!("{BINARY}-{board:?}-{name}"));
+    let elf = variants.join(format!("{BINARY}-{board}-{name}"));
     fs::copy(&built, &elf)
         .map_err(|e| BuildError::Variant(format!("copying the ELF of {name}: {e}")))?;
     Ok(elf)
@@ -428,32 +360,7 @@ pub fn build_with_segments(segments: usize, timeout: Duration) -> Result<PathBuf
         (1..=MAX_SEGMENTS).contains(&segments),
         "the firmware's solver holds 1 to {MAX_SEGMENTS} segments, not {segments}"
     );
-    let variants = variants_dir();
-    let root = variants.join(format!("segments-{segments}"));
-    let io = |what: &str, e: std::io::Error| {
-        BuildError::Variant(format!("{what} for the {segments}-segment firmware: {e}"))
-    };
-    prepare_variant(&root, segments, None).map_err(|e| io("preparing the sources", e))?;
-
-    let target_dir = variants.join("target");
-    let mut cmd = build_command_in(&root.join("firmware"));
-    cmd.env("CARGO_TARGET_DIR", &target_dir);
-    let out = run_with_timeout(
-        &mut cmd,
-        timeout,
-        "cargo is not on PATH; install Rust with rustup",
-    )
-    .map_err(BuildError::Run)?;
-    if !out.status.success() {
-        return Err(BuildError::Failed(out));
-    }
-    let built = target_dir.join(TARGET).join("release").join(BINARY);
-    if !built.is_file() {
-        return Err(BuildError::MissingElf(built));
-    }
-    let elf = variants.join(format!("{BINARY}-{segments}seg"));
-    fs::copy(&built, &elf).map_err(|e| io("copying the ELF", e))?;
-    Ok(elf)
+    build_board_with_segments(Board::default(), segments, timeout)
 }
 
 /// Lays out `root/{firmware,config,crates}` for [`build_with_segments`]. Files are

@@ -596,7 +596,7 @@ mod tests {
         let messages = scenario_messages(&scenario_frames(&path, 50));
         let mut session = Session::emulated(
             host_controller::<f32>(&config).unwrap(),
-            crate::qemu::Board::M4,
+            crate::qemu::Board::default(),
         )
         .unwrap();
         assert_eq!(session.hello.precision_bits, 32);

@@ -61,7 +61,7 @@ pub struct HilOptions {
 impl Default for HilOptions {
     fn default() -> Self {
         HilOptions {
-            board: Board::M4,
+            board: Board::default(),
             segments: None,
             t_end: None,
             rate: None,
@@ -132,7 +132,7 @@ pub struct HilSummary {
     /// Static RAM plus the larger stack peak: the most RAM in use at any moment,
     /// bytes; None without the stack reports.
     pub ram_peak_bytes: Option<u64>,
-    /// The board's RAM ([`crate::qemu::Board::ram_budget`]), bytes.
+    /// The board's RAM budget ([`decoy_boards::BoardSpec::ram_budget`]), bytes.
     pub ram_budget_bytes: u64,
     /// Round trips per second over the link (wall clock).
     pub link_frames_per_s: f64,
@@ -336,7 +336,22 @@ pub fn run_hil_until(
     };
     clear_output_dir(&out_dir).map_err(|e| HilError::Output(e.to_string()))?;
     let (elf, firmware_source) = match origin {
-        FirmwareOrigin::Given(elf) => (elf, "given with --firmware".to_owned()),
+        FirmwareOrigin::Given(elf) => {
+            // An ELF that names its board (`firmware/build.rs`) must name this one;
+            // one that names none is checked by its Hello below.
+            let named = Board::of_elf(&elf).map_err(|e| HilError::Usage(e.to_string()))?;
+            if let Some(named) = named.filter(|&b| b != options.board) {
+                return Err(HilError::Usage(format!(
+                    "the firmware {} is built for the board {} ({named} in firmware/boards.toml), \
+                     not {} (--board {})",
+                    elf.display(),
+                    named.hello(),
+                    options.board.hello(),
+                    options.board.name()
+                )));
+            }
+            (elf, "given with --firmware".to_owned())
+        }
         FirmwareOrigin::Source(dir) => {
             let elf = build_firmware(options.board, segments, configured)?;
             (elf, format!("built from {}", dir.display()))

@@ -9,10 +9,11 @@
 //! use it.
 //!
 //! - [`qemu`]: run a program with a time limit, killed on timeout and on drop;
-//!   the QEMU command line of the boards ([`qemu::Board`]: M4, M7, STM32F405).
+//!   the QEMU command line of the boards ([`qemu::Board`], the boards of
+//!   `firmware/boards.toml` through the crate `decoy-boards`).
 //! - [`firmware`]: find the firmware's source (the checkout `decoy` was built
-//!   from, or `$DECOY_SOURCE_DIR`), build it (M4, M7, STM32F405, other segment counts), locate
-//!   or check an ELF, read its memory use.
+//!   from, or `$DECOY_SOURCE_DIR`), build it (each board's build as the table
+//!   says, other segment counts), locate or check an ELF, read its memory use.
 //! - [`serial`]: the UART's TCP listener (ephemeral port, accept with a deadline).
 //! - [`link`]: [`link::Session`] (QEMU + link, killed on drop, defmt log shown
 //!   when a test fails) and [`link::Link`] (frames with deadlines).

@@ -26,7 +26,8 @@ pub const QEMU: &str = "qemu-system-arm";
 /// The environment variable naming the QEMU binary to run instead of [`QEMU`]
 /// from `PATH` (a path, or a name looked up on `PATH`); read by [`Qemu::new`]
 /// (so by `decoy hil`, `decoy bridge --backend qemu`, the benches and the HIL
-/// tests) and by `firmware/qemu-run.sh`. Unset or empty: [`QEMU`].
+/// tests) and by the firmware's cargo runner (`firmware/qemu-run.sh`, `cargo xtask
+/// firmware qemu-run`). Unset or empty: [`QEMU`].
 pub const QEMU_ENV: &str = "DECOY_QEMU";
 
 /// Where `cargo xtask setup` unpacks a second QEMU version for comparison,
@@ -187,100 +188,17 @@ fn parse_version(line: &str) -> Option<&str> {
         .then_some(version)
 }
 
-/// Board and CPU: MPS2 AN386, Cortex-M4F (4 MiB flash at 0, 4 MiB RAM at 0x2000_0000).
-pub const BOARD_ARGS: &[&str] = &["-M", "mps2-an386", "-cpu", "cortex-m4"];
-
-/// Board and CPU of the M7 profile: MPS2 AN500, Cortex-M7 (same memory map; f64 in
-/// hardware with the firmware's `cortex-m7` build).
-pub const BOARD_ARGS_M7: &[&str] = &["-M", "mps2-an500", "-cpu", "cortex-m7"];
-
-/// Machine of the STM32F405 profile: the Netduino Plus 2 (STM32F405, Cortex-M4F;
-/// 1 MiB flash at 0x0800_0000, 192 KiB SRAM at 0x2000_0000 in QEMU, USART1 on the
-/// first `-serial`). The machine fixes its CPU, so there is no `-cpu`.
-pub const BOARD_ARGS_STM32F405: &[&str] = &["-M", "netduinoplus2"];
-
-/// The QEMU board a firmware runs on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Board {
-    /// MPS2 AN386 with a Cortex-M4F (single-precision FPU): the decoy controller.
-    #[default]
-    M4,
-    /// MPS2 AN500 with a Cortex-M7 (double-precision FPU).
-    M7,
-    /// STM32F405 (Cortex-M4F, 168 MHz) on QEMU's `netduinoplus2`, brought up through
-    /// `stm32f4xx-hal`: the same f32 controller as [`Board::M4`] on a real MCU's
-    /// peripherals.
-    Stm32f405,
-}
-
-impl Board {
-    /// Every board, in the order the command line lists them.
-    pub const ALL: [Board; 3] = [Board::M4, Board::M7, Board::Stm32f405];
-
-    /// QEMU's `-M` (and, where the machine does not fix it, `-cpu`) arguments for
-    /// this board.
-    pub fn qemu_args(self) -> &'static [&'static str] {
-        match self {
-            Board::M4 => BOARD_ARGS,
-            Board::M7 => BOARD_ARGS_M7,
-            Board::Stm32f405 => BOARD_ARGS_STM32F405,
-        }
-    }
-
-    /// The board as its firmware names itself in Hello, and its core clock.
-    pub fn info(self) -> decoy_link::BoardInfo {
-        let (name, core_clock_hz) = match self {
-            Board::M4 => ("mps2-an386", 25_000_000),
-            Board::M7 => ("mps2-an500", 25_000_000),
-            Board::Stm32f405 => ("stm32f405", 168_000_000),
-        };
-        decoy_link::BoardInfo {
-            // The names are short ASCII.
-            name: decoy_link::BoardName::new(name).unwrap_or_else(|| unreachable!()),
-            core_clock_hz,
-        }
-    }
-
-    /// The RAM the firmware may use on this board, bytes: static RAM and the
-    /// stack's peak together. The MPS2 boards stand for a Cortex-M part with
-    /// 64 KiB (QEMU maps 4 MiB; the product's budget is 64 KiB); the STM32F405's
-    /// 128 KiB SRAM (its 64 KiB CCM is not used).
-    pub fn ram_budget(self) -> u64 {
-        match self {
-            Board::M4 | Board::M7 => 64 * 1024,
-            Board::Stm32f405 => 128 * 1024,
-        }
-    }
-
-    /// The board's name on the command line (`m4`, `m7`, `stm32f405`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Board::M4 => "m4",
-            Board::M7 => "m7",
-            Board::Stm32f405 => "stm32f405",
-        }
-    }
-}
-
-impl fmt::Display for Board {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
+/// The boards, each described once in `firmware/boards.toml` (crate
+/// `decoy-boards`): [`Board::all`], [`Board::by_name`], [`Board::default`],
+/// [`Board::with_precision`]; a board's QEMU machine arguments
+/// (`Board::qemu_args`), Hello (`Board::info`), RAM budget (`Board::ram_budget`).
+pub use decoy_boards::{Board, Precision, UnknownBoard};
 
 /// No display or monitor; semihosting on (console and exit code to the host);
 /// virtual time 1 ns per executed instruction, so SysTick counts instructions
-/// deterministically. Mirrors `firmware/qemu-run.sh`.
-pub const HEADLESS_ARGS: &[&str] = &[
-    "-display",
-    "none",
-    "-monitor",
-    "none",
-    "-semihosting-config",
-    "enable=on,target=native",
-    "-icount",
-    "shift=0,align=off,sleep=off",
-];
+/// deterministically: every board's QEMU arguments after its machine's
+/// (`decoy_boards::QEMU_COMMON_ARGS`, which the cargo runner uses too).
+pub const HEADLESS_ARGS: &[&str] = decoy_boards::QEMU_COMMON_ARGS;
 
 /// Pause between polls of a running child.
 const POLL: Duration = Duration::from_millis(5);
@@ -550,11 +468,12 @@ impl Default for Qemu {
 
 impl Qemu {
     /// The [`default_program`] (`$DECOY_QEMU`, else `qemu-system-arm` from
-    /// `PATH`) on [`Board::M4`], 120 s time limit, UART0 unconnected.
+    /// `PATH`) on the default board ([`Board::default`]), 120 s time limit,
+    /// UART0 unconnected.
     pub fn new() -> Self {
         Qemu {
             program: default_program(),
-            board: Board::M4,
+            board: Board::default(),
             timeout: Duration::from_secs(120),
             serial: OsString::from("none"),
             extra: Vec::new(),
@@ -573,7 +492,7 @@ impl Qemu {
         &self.program
     }
 
-    /// Sets the board (default [`Board::M4`]).
+    /// Sets the board (default [`Board::default`]).
     pub fn board(mut self, board: Board) -> Self {
         self.board = board;
         self
@@ -631,10 +550,15 @@ impl Qemu {
 mod tests {
     use super::*;
 
+    fn board(name: &str) -> Board {
+        Board::by_name(name).unwrap_or_else(|e| panic!("{e}"))
+    }
+
     #[test]
     fn every_board_has_its_own_name_machine_and_hello() {
-        for (i, a) in Board::ALL.iter().enumerate() {
-            for b in &Board::ALL[i + 1..] {
+        let all = Board::all();
+        for (i, a) in all.iter().enumerate() {
+            for b in &all[i + 1..] {
                 assert_ne!(a.name(), b.name());
                 assert_ne!(a.qemu_args(), b.qemu_args());
                 assert_ne!(a.info().name, b.info().name);
@@ -642,9 +566,10 @@ mod tests {
             assert_eq!(a.qemu_args()[0], "-M", "{a}");
         }
         // The Netduino Plus 2 fixes its CPU; the STM32F405 runs at 168 MHz.
-        assert_eq!(Board::Stm32f405.qemu_args(), ["-M", "netduinoplus2"]);
-        assert_eq!(Board::Stm32f405.info().core_clock_hz, 168_000_000);
-        assert_eq!(Board::Stm32f405.info().name.as_str(), "stm32f405");
+        let stm32 = board("stm32f405");
+        assert_eq!(stm32.qemu_args(), ["-M", "netduinoplus2"]);
+        assert_eq!(stm32.info().core_clock_hz, 168_000_000);
+        assert_eq!(stm32.info().name.as_str(), "stm32f405");
     }
 
     #[test]
@@ -719,12 +644,12 @@ mod tests {
     fn the_binary_can_be_chosen() {
         let qemu = Qemu::new()
             .program("/opt/qemu-7.2/bin/qemu-system-arm")
-            .board(Board::Stm32f405);
+            .board(board("stm32f405"));
         assert_eq!(
             qemu.get_program(),
             Path::new("/opt/qemu-7.2/bin/qemu-system-arm")
         );
-        assert_eq!(qemu.get_board(), Board::Stm32f405);
+        assert_eq!(qemu.get_board(), board("stm32f405"));
         let cmd = qemu.command(Path::new("fw.elf"));
         assert_eq!(cmd.get_program(), "/opt/qemu-7.2/bin/qemu-system-arm");
         assert_eq!(cmd.get_args().next().unwrap(), "-M");
@@ -785,7 +710,7 @@ mod tests {
     #[test]
     fn m7_board_and_tcp_serial() {
         let cmd = Qemu::new()
-            .board(Board::M7)
+            .board(board("m7"))
             .serial("tcp:127.0.0.1:4567,nodelay=on")
             .command(Path::new("fw.elf"));
         let line = cmd

@@ -7,38 +7,41 @@
 //! every State frame of every flight, the frames of the trim included:
 //!
 //! - the whole frame (validation, the trim's slice or the RK4 steps, outputs)
-//!   within [`FRAME_TARGET`] = 90,000 instructions on the M4 and the STM32F405
-//!   (issue 22: 10 % under the 100,000 budget), and the M7 (f64) within its
-//!   stated bound [`FRAME_BOUND_M7`];
+//!   within [`FRAME_TARGET`] = 90,000 instructions on the f32 boards, the M4
+//!   and the STM32F405 (issue 22: 10 % under the 100,000 budget), and the f64
+//!   boards, the M7, within its stated bound [`FRAME_BOUND_M7`];
 //! - every control step the nominal four RK4 steps (no STEP_LIMITED frame), the
 //!   decoy management within its budget;
 //! - no frame flagged OUTSIDE_ENVELOPE but in the two shipped manoeuvres beyond
 //!   the envelope's 4 g (the paper's 0.20 rad/s pull-up and turn);
 //! - every answer bit for bit the host controller's in the firmware's precision;
 //!   the shipped manoeuvres' tensions within the tolerances of the host's f64
-//!   (the precision's error) and, on the STM32F405, the advisory line as the
-//!   management reports it.
+//!   (the precision's error) and, on a board with the advisory line (the
+//!   STM32F405), the line as the management reports it.
 //!
-//! The flights are dealt into two shards per f32 board (the test harness runs
-//! two tests at once: both cores busy); the M7 flies a subset. The full grid is
-//! `cargo xtask bench-report`'s (docs/benchmarks.md, the per-altitude figure).
+//! The boards come from `firmware/boards.toml` by role. The flights are dealt
+//! into two shards, each flown on every f32 board in turn (the test harness runs
+//! two tests at once: both cores busy); the f64 boards fly a subset. The full
+//! grid is `cargo xtask bench-report`'s (docs/benchmarks.md, the per-altitude
+//! figure).
 
-use std::path::PathBuf;
+mod common;
+
 use std::sync::OnceLock;
-use std::time::Duration;
 
+use common::{boards_in, elf, on_each};
 use decoy_config::SystemConfig;
 use decoy_hil::flight;
-use decoy_hil::qemu::Board;
+use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::reference::Reference;
 use decoy_hil::sweep::{self, Case, Flown, Grid, Group};
-use decoy_hil::{defmt, firmware};
 use decoy_link::DeviceMessage;
 
-/// Issue 22's bound on every frame over the envelope, M4 and STM32F405.
+/// Issue 22's bound on every frame over the envelope, f32 boards (the M4 and the
+/// STM32F405).
 const FRAME_TARGET: u32 = 90_000;
-/// The M7's (f64 in hardware) stated bound on every frame over the envelope:
-/// the worst frame measured before issue 22 (160,080), kept.
+/// The f64 boards' (the M7's, f64 in hardware) stated bound on every frame over
+/// the envelope: the worst frame measured before issue 22 (160,080), kept.
 const FRAME_BOUND_M7: u32 = 160_000;
 /// Most instructions of decoy management (monitors and one look-ahead slice)
 /// per frame (issue 13).
@@ -61,24 +64,9 @@ const SNATCH_WINDOW_S: f64 = 10.0;
 /// The run's peak connection tension against the host's f64, relative.
 const PEAK_TOLERANCE: f64 = 5e-3;
 
-/// Time limit of a firmware build.
-const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
-
 fn config() -> &'static SystemConfig {
     static CONFIG: OnceLock<SystemConfig> = OnceLock::new();
     CONFIG.get_or_init(|| SystemConfig::builtin().expect("the built-in configuration"))
-}
-
-fn elf(board: Board) -> &'static PathBuf {
-    static ELFS: [OnceLock<PathBuf>; Board::ALL.len()] = [const { OnceLock::new() }; 3];
-    let index = Board::ALL
-        .iter()
-        .position(|&b| b == board)
-        .unwrap_or_else(|| unreachable!("Board::ALL lists every board"));
-    ELFS[index].get_or_init(|| {
-        defmt::require().unwrap_or_else(|e| panic!("{e}"));
-        firmware::build_board(board, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"))
-    })
 }
 
 /// Shard `k` of `of` of the test grid: the flights dealt by length, longest
@@ -210,7 +198,7 @@ fn check_flight(board: Board, flown: &Flown, bound: u32) -> String {
         "{label}: decoy management took {management} instructions"
     );
     // Bit for bit the host controller's answers in the firmware's precision.
-    let bits = if board == Board::M7 { 64 } else { 32 };
+    let bits = board.precision().bits();
     let host = Reference::for_config(config(), bits)
         .and_then(|mut r| r.replay(&flown.sent))
         .unwrap_or_else(|e| panic!("{label}: {e}"));
@@ -226,7 +214,7 @@ fn check_flight(board: Board, flown: &Flown, bound: u32) -> String {
         "{label}: outputs not bit-identical to the host's f{bits}"
     );
     let mut accuracy = String::new();
-    if case.group == Group::Shipped && board != Board::M7 {
+    if case.group == Group::Shipped && board.precision() == Precision::F32 {
         let (connection, tow, peak_relative) = if case.label.starts_with("recorded") {
             RECORDED_TOLERANCES
         } else if case.label.starts_with("pull-up") {
@@ -265,7 +253,7 @@ fn check_flight(board: Board, flown: &Flown, bound: u32) -> String {
             if peak_relative { " of peak" } else { "" },
             peak * 100.0
         );
-        if board == Board::Stm32f405 {
+        if board.advisory_line() {
             check_advisory_log(&label, &flown.answers, &flown.log);
         }
     }
@@ -311,30 +299,26 @@ fn sweep(board: Board, cases: &[Case], bound: u32) {
     );
 }
 
+/// Shard 1 of 2 on every f32 board.
 #[test]
-fn m4_envelope_shard_1_of_2() {
-    sweep(Board::M4, &shard(0, 2), FRAME_TARGET);
+fn f32_envelope_shard_1_of_2() {
+    on_each(&boards_in(Precision::F32), |board| {
+        sweep(board, &shard(0, 2), FRAME_TARGET)
+    });
 }
 
+/// Shard 2 of 2 on every f32 board.
 #[test]
-fn m4_envelope_shard_2_of_2() {
-    sweep(Board::M4, &shard(1, 2), FRAME_TARGET);
+fn f32_envelope_shard_2_of_2() {
+    on_each(&boards_in(Precision::F32), |board| {
+        sweep(board, &shard(1, 2), FRAME_TARGET)
+    });
 }
 
+/// The f64 boards (the M7): the steady corners of the envelope, the paper's
+/// 0.20 rad/s pull-up at its full duration and the climb through the tropopause.
 #[test]
-fn stm32f405_envelope_shard_1_of_2() {
-    sweep(Board::Stm32f405, &shard(0, 2), FRAME_TARGET);
-}
-
-#[test]
-fn stm32f405_envelope_shard_2_of_2() {
-    sweep(Board::Stm32f405, &shard(1, 2), FRAME_TARGET);
-}
-
-/// The M7 (f64): the steady corners of the envelope, the paper's 0.20 rad/s
-/// pull-up at its full duration and the climb through the tropopause.
-#[test]
-fn m7_envelope_subset() {
+fn f64_envelope_subset() {
     let cases: Vec<Case> = sweep::cases(config(), Grid::Test)
         .unwrap_or_else(|e| panic!("{e}"))
         .into_iter()
@@ -350,6 +334,8 @@ fn m7_envelope_subset() {
             corner || c.label.starts_with("pull-up 0.20") || c.label.starts_with("tropopause climb")
         })
         .collect();
-    assert_eq!(cases.len(), 6, "the M7's subset");
-    sweep(Board::M7, &cases, FRAME_BOUND_M7);
+    assert_eq!(cases.len(), 6, "the f64 boards' subset");
+    on_each(&boards_in(Precision::F64), |board| {
+        sweep(board, &cases, FRAME_BOUND_M7)
+    });
 }

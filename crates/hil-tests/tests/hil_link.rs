@@ -3,12 +3,12 @@
 //! by frame at the 10 ms control period with the aircraft states of the paper's
 //! scenarios (the profiles `decoy simulate` flies).
 //!
-//! Every f32 test runs on both f32 boards ([`F32_BOARDS`], one module each, the same
-//! test bodies): the Cortex-M4F of `mps2-an386` (the default build) and the
-//! STM32F405 on `netduinoplus2` (stm32f4xx-hal, SysTick at 168 MHz, the profile
-//! `board-stm32f405`); so the STM32F405 must answer bit for bit as the host f32
-//! controller and so as the M4, within the same instruction budgets. The M7
-//! profile (f64) has its own test.
+//! The boards come from `firmware/boards.toml` by role: every f32 test runs on
+//! every f32 board (module `f32_boards`, each test over each board in turn):
+//! today the Cortex-M4F of `mps2-an386` (the default build) and the STM32F405
+//! on `netduinoplus2` (stm32f4xx-hal, SysTick at 168 MHz); so the STM32F405 must
+//! answer bit for bit as the host f32 controller and so as the M4, within the
+//! same instruction budgets. The f64 boards (the M7) have their own tests.
 //!
 //! What is asserted here (the scenarios themselves, every shipped manoeuvre at
 //! its full duration with their answers, accuracy and instruction budget, are
@@ -19,17 +19,18 @@
 //!   stepping rule) in this process: every build computes the target's maths
 //!   (libm), so every answer must be equal: outputs in every field but the
 //!   instruction counts, bit for bit, rejections and status frames exactly; the
-//!   M7 profile (f64) against the f64 reference, its nominal frames within
-//!   [`FRAME_BUDGET_M7`].
+//!   f64 boards (the M7) against the f64 reference, their nominal frames
+//!   within [`FRAME_BUDGET_M7`].
 //! - **Memory.** The RAM peak (static RAM plus the deepest stack, at boot or in
-//!   the link loop) within the board's RAM, the M7 with 8 KiB left, the f32
-//!   boards at most their peak before issue 22; the controller in `.bss`, never
-//!   on the stack.
+//!   the link loop) within the board's RAM budget, and within issue 22's rule
+//!   for the board ([`RAM_PEAK_RULES`]: the M7 with 8 KiB left, the f32 boards
+//!   at most their peak before issue 22); the controller in `.bss`, never on
+//!   the stack.
 //! - **Determinism.** Two runs receive byte-identical streams (the instruction
 //!   counts included, so on the STM32F405 the 168 MHz SysTick's conversion to
 //!   instructions repeats too).
 //! - **Hello.** Each board names itself and its core clock as
-//!   `decoy_hil::qemu::Board::info` says.
+//!   `firmware/boards.toml` says (`decoy_hil::qemu::Board::info`).
 //! - **Robustness.** Corrupted, truncated, garbage, oversize frames; non-finite and
 //!   out-of-range values; a bad quaternion; time going backwards or jumping; link
 //!   silence. Each gets its typed answer with the right counter (the same answers a
@@ -40,27 +41,26 @@
 //! `cargo xtask setup`: nothing is skipped. When a test fails, the firmware's
 //! defmt log (decoded with `defmt-print`) and QEMU's stderr are printed with it.
 
-use std::path::PathBuf;
+mod common;
+
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
+use common::{boards_in, elf, on_each};
 use decoy_config::SystemConfig;
+use decoy_hil::firmware;
 use decoy_hil::flight::{self, Exchange};
 use decoy_hil::link::Session;
-use decoy_hil::qemu::Board;
+use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::reference::Reference;
-use decoy_hil::{defmt, firmware};
 use decoy_link::{
     AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, RejectReason, StatusFlags,
 };
 use decoy_sim::{RunOptions, Scenario};
 
-/// Time limit of the firmware build (a cold build takes about a minute).
-const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
-
-/// The M7 profile's (f64 in hardware) bound on a whole nominal frame: the worst
-/// frame measured before issue 22 (160,080), kept (`tests/envelope.rs` holds
-/// every frame of its flights to it).
+/// The f64 boards' (the M7's, f64 in hardware) bound on a whole nominal frame:
+/// the worst frame measured before issue 22 (160,080), kept
+/// (`tests/envelope.rs` holds every frame of its flights to it).
 const FRAME_BUDGET_M7: u32 = 160_000;
 
 /// RAM the M7 keeps free at its peak (issue 22: at least 8 KiB).
@@ -71,30 +71,35 @@ const M4_RAM_PEAK_BEFORE: u64 = 34_876;
 /// The STM32F405's RAM peak when issue 22 was filed: never above it.
 const STM32F405_RAM_PEAK_BEFORE: u64 = 34_904;
 
-/// The boards of the f32 controller, each with the whole f32 suite.
-const F32_BOARDS: [Board; 2] = [Board::M4, Board::Stm32f405];
-
-/// The firmware ELF of `board`, built once per test binary. Checks `defmt-print`
-/// first.
-fn elf(board: Board) -> &'static PathBuf {
-    static ELFS: [OnceLock<PathBuf>; Board::ALL.len()] = [const { OnceLock::new() }; 3];
-    let index = Board::ALL
-        .iter()
-        .position(|&b| b == board)
-        .unwrap_or_else(|| unreachable!("Board::ALL lists every board"));
-    ELFS[index].get_or_init(|| {
-        defmt::require().unwrap_or_else(|e| panic!("{e}"));
-        let started = Instant::now();
-        let elf = firmware::build_board(board, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
-        let memory = firmware::memory_usage(&elf).unwrap_or_else(|e| panic!("{e}"));
-        println!(
-            "{board} firmware built in {:.1} s: {}; {memory}",
-            started.elapsed().as_secs_f64(),
-            elf.display()
-        );
-        elf
-    })
+/// Issue 22's rule on a board's RAM peak, beyond its budget.
+#[derive(Clone, Copy, Debug)]
+enum RamRule {
+    /// At most this many bytes (the board's peak when the issue was filed).
+    AtMost(u64),
+    /// At least this many bytes of the budget left.
+    Headroom(u64),
 }
+
+/// Issue 22's rules on the RAM peak, by board name (`firmware/boards.toml`;
+/// [`every_ram_rule_names_a_board`] checks the names). A board without a rule
+/// is held to its budget alone.
+const RAM_PEAK_RULES: &[(&str, RamRule, &str)] = &[
+    (
+        "m4",
+        RamRule::AtMost(M4_RAM_PEAK_BEFORE),
+        "the M4's peak before issue 22",
+    ),
+    (
+        "stm32f405",
+        RamRule::AtMost(STM32F405_RAM_PEAK_BEFORE),
+        "the STM32F405's peak before issue 22",
+    ),
+    (
+        "m7",
+        RamRule::Headroom(M7_RAM_HEADROOM),
+        "the M7's 8 KiB of headroom",
+    ),
+];
 
 /// A fresh firmware session on `board`, whose Hello must name the board and its
 /// core clock.
@@ -168,15 +173,27 @@ fn nominal_frame_max(answers: &[DeviceMessage]) -> u32 {
         .unwrap_or(0)
 }
 
-/// The M7 profile (Cortex-M7, f64 in hardware, `mps2-an500`): the same answers as
-/// the host reference in f64 with the target's maths, bit for bit.
+/// Every board of [`RAM_PEAK_RULES`] is in the table (a renamed board must not
+/// lose its rule silently).
 #[test]
-fn m7_profile_matches_the_host_in_f64() {
-    defmt::require().unwrap_or_else(|e| panic!("{e}"));
-    let elf = firmware::build_board(Board::M7, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"));
-    let mut s = Session::start(&elf, Board::M7).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(s.hello.board, Board::M7.info().name);
-    assert_eq!(s.hello.core_clock_hz, 25_000_000);
+fn every_ram_rule_names_a_board() {
+    for (name, _, _) in RAM_PEAK_RULES {
+        Board::by_name(name).unwrap_or_else(|e| panic!("RAM_PEAK_RULES: {e}"));
+    }
+}
+
+/// The f64 boards (the M7: Cortex-M7, f64 in hardware, `mps2-an500`): the same
+/// answers as the host reference in f64 with the target's maths, bit for bit.
+#[test]
+fn f64_boards_match_the_host_in_f64() {
+    on_each(
+        &boards_in(Precision::F64),
+        f64_board_matches_the_host_in_f64,
+    );
+}
+
+fn f64_board_matches_the_host_in_f64(board: Board) {
+    let mut s = session(board);
     assert_eq!(s.hello.precision_bits, 64);
     let messages = flight::scenario_messages(&frames("acceleration", None, 3.0));
     let flown = flight::fly(&mut s, &messages, |_| {}).unwrap_or_else(|e| panic!("{e}"));
@@ -197,10 +214,10 @@ fn m7_profile_matches_the_host_in_f64() {
     );
     assert_eq!(
         agreement.identical, agreement.outputs,
-        "M7 outputs not bit-identical to the host's f64 ones: {agreement:?}"
+        "{board}: outputs not bit-identical to the host's f64 ones: {agreement:?}"
     );
     println!(
-        "M7 (f64) acceleration 3 s: {} outputs bit-identical to the host f64 reference; \
+        "{board} (f64) acceleration 3 s: {} outputs bit-identical to the host f64 reference; \
          whole frames max {}, mean {:.0}; nominal frames max {}; solver per nominal control \
          step max {}; {:.0} frames/s",
         agreement.identical,
@@ -214,7 +231,7 @@ fn m7_profile_matches_the_host_in_f64() {
         if out.steps == flight::NOMINAL_RK4_STEPS {
             assert!(
                 out.instructions <= FRAME_BUDGET_M7,
-                "M7: nominal frame seq {} took {} instructions, over {FRAME_BUDGET_M7}",
+                "{board}: nominal frame seq {} took {} instructions, over {FRAME_BUDGET_M7}",
                 out.seq,
                 out.instructions
             );
@@ -225,7 +242,8 @@ fn m7_profile_matches_the_host_in_f64() {
 /// Memory at every moment fits the board: static RAM (`.data` + `.bss`) plus the
 /// deepest stack, at boot (building the controller) or in the link loop (the
 /// trim and 300 frames of the acceleration), at most the board's RAM
-/// ([`Board::ram_budget`]); the controller, built in place in its `static`, lies
+/// ([`Board::ram_budget`]) and within its rule of [`RAM_PEAK_RULES`]; the
+/// controller, built in place in its `static`, lies
 /// in `.bss` and never on the stack: the boot's stack is smaller than the
 /// controller (a copy of it on the stack would make it larger).
 fn ram_peak_fits_the_board(board: Board) {
@@ -261,18 +279,19 @@ fn ram_peak_fits_the_board(board: Board) {
     );
     // Issue 22: the M7 with at least 8 KiB left at its peak; the f32 boards at
     // most their peak when the issue was filed.
-    let (limit, why) = match board {
-        Board::M7 => (budget - M7_RAM_HEADROOM, "the M7's 8 KiB of headroom"),
-        Board::M4 => (M4_RAM_PEAK_BEFORE, "the M4's peak before issue 22"),
-        Board::Stm32f405 => (
-            STM32F405_RAM_PEAK_BEFORE,
-            "the STM32F405's peak before issue 22",
-        ),
-    };
-    assert!(
-        peak <= limit,
-        "{board}: RAM peak {peak} B over {limit} B ({why})"
-    );
+    if let Some((_, rule, why)) = RAM_PEAK_RULES
+        .iter()
+        .find(|(name, ..)| *name == board.name())
+    {
+        let limit = match *rule {
+            RamRule::AtMost(bytes) => bytes,
+            RamRule::Headroom(bytes) => budget - bytes,
+        };
+        assert!(
+            peak <= limit,
+            "{board}: RAM peak {peak} B over {limit} B ({why})"
+        );
+    }
     assert!(
         memory.bss >= marks.controller,
         "{board}: the controller ({} B) is not in .bss ({} B): its `static` has an initial value (flash and a copy at boot)",
@@ -287,10 +306,11 @@ fn ram_peak_fits_the_board(board: Board) {
     );
 }
 
-/// [`ram_peak_fits_the_board`] on the M7 (f64: the largest controller, 64 KiB).
+/// [`ram_peak_fits_the_board`] on the f64 boards (the M7: the largest
+/// controller, 64 KiB).
 #[test]
-fn m7_ram_peak_fits_the_board() {
-    ram_peak_fits_the_board(Board::M7);
+fn f64_boards_ram_peak_fits_the_board() {
+    on_each(&boards_in(Precision::F64), ram_peak_fits_the_board);
 }
 
 fn two_runs_receive_identical_bytes(board: Board) {
@@ -688,55 +708,43 @@ fn link_silence_degrades_and_recovers(board: Board) {
     p.finish();
 }
 
-/// The f32 suite, once per board of [`F32_BOARDS`]: a module per board whose tests
-/// call the functions above with it.
-macro_rules! f32_suite {
-    ($($module:ident => $board:expr),* $(,)?) => {$(
-        mod $module {
-            use super::*;
+/// The f32 suite: each test on every f32 board of `firmware/boards.toml`, one
+/// after the other (the harness runs two tests at once).
+mod f32_boards {
+    use super::*;
 
-            /// The board of this module's tests.
-            const BOARD: Board = $board;
+    /// Runs `check` on every f32 board.
+    fn on_f32(check: fn(Board)) {
+        on_each(&boards_in(Precision::F32), check);
+    }
 
+    #[test]
+    fn ram_peak_fits_the_board() {
+        on_f32(super::ram_peak_fits_the_board);
+    }
 
+    #[test]
+    fn two_runs_receive_identical_bytes() {
+        on_f32(super::two_runs_receive_identical_bytes);
+    }
 
+    #[test]
+    fn malformed_frames_are_rejected_and_the_state_is_kept() {
+        on_f32(super::malformed_frames_are_rejected_and_the_state_is_kept);
+    }
 
+    #[test]
+    fn invalid_values_are_rejected_with_their_reason() {
+        on_f32(super::invalid_values_are_rejected_with_their_reason);
+    }
 
+    #[test]
+    fn time_going_backwards_or_jumping_is_rejected() {
+        on_f32(super::time_going_backwards_or_jumping_is_rejected);
+    }
 
-            #[test]
-            fn ram_peak_fits_the_board() {
-                super::ram_peak_fits_the_board(BOARD);
-            }
-
-            #[test]
-            fn two_runs_receive_identical_bytes() {
-                super::two_runs_receive_identical_bytes(BOARD);
-            }
-
-            #[test]
-            fn malformed_frames_are_rejected_and_the_state_is_kept() {
-                super::malformed_frames_are_rejected_and_the_state_is_kept(BOARD);
-            }
-
-            #[test]
-            fn invalid_values_are_rejected_with_their_reason() {
-                super::invalid_values_are_rejected_with_their_reason(BOARD);
-            }
-
-            #[test]
-            fn time_going_backwards_or_jumping_is_rejected() {
-                super::time_going_backwards_or_jumping_is_rejected(BOARD);
-            }
-
-            #[test]
-            fn link_silence_degrades_and_recovers() {
-                super::link_silence_degrades_and_recovers(BOARD);
-            }
-        }
-    )*};
-}
-
-f32_suite! {
-    m4 => F32_BOARDS[0],
-    stm32f405 => F32_BOARDS[1],
+    #[test]
+    fn link_silence_degrades_and_recovers() {
+        on_f32(super::link_silence_degrades_and_recovers);
+    }
 }

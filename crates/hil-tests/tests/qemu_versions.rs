@@ -4,14 +4,15 @@
 //! (bookworm's 7.2 beside the backports' 10, or the reverse;
 //! `decoy_hil::qemu::comparison_binaries`).
 //!
-//! On each board (the M4, the M7 in f64 and the STM32F405) one short frame
+//! On each board of `firmware/boards.toml` (the M4, the STM32F405 and the M7
+//! in f64; the f32 boards in one test, the f64 ones in another) one short frame
 //! sequence, [`SCENARIO`] at [`RATE`] for [`T_END`] s (the trim, steady flight,
 //! then the first second of the rotation), is flown under each QEMU, and
 //! everything the firmware says must be the same under all of them: the Hello,
 //! every answer (every output field, the instruction counts `instructions`,
 //! `step_instructions` and `management_instructions` included), the bytes
 //! received after Hello, and the decoded defmt log (its stack high-water marks
-//! and, on the STM32F405, the advisory line's changes). Under `-icount
+//! and, on a board with the advisory line, its changes). Under `-icount
 //! shift=0` an instruction is 1 ns of virtual time on every version, so a
 //! difference is a change in how a QEMU version executes or times the firmware.
 //!
@@ -20,20 +21,20 @@
 //! that setup has not run); a second version that is there but does not run
 //! fails them.
 
+mod common;
+
 use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
+use common::{boards_in, elf, on_each};
 use decoy_config::SystemConfig;
+use decoy_hil::firmware;
 use decoy_hil::flight::{self, Exchange};
 use decoy_hil::link::Session;
-use decoy_hil::qemu::{self, Board, Qemu, QemuVersion};
-use decoy_hil::{defmt, firmware};
+use decoy_hil::qemu::{self, Board, Precision, Qemu, QemuVersion};
 use decoy_link::{DeviceMessage, HostMessage, StatusFlags};
-
-/// Time limit of the firmware build (a cold build takes about a minute).
-const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
 
 /// The scenario flown: a pull-up, whose rotation starts at t = 2 s.
 const SCENARIO: &str = "pull-up";
@@ -97,19 +98,6 @@ fn qemus() -> Option<&'static [QemuVersion]> {
             None
         })
         .as_deref()
-}
-
-/// The firmware ELF of `board`, built once per test binary.
-fn elf(board: Board) -> &'static PathBuf {
-    static ELFS: [OnceLock<PathBuf>; Board::ALL.len()] = [const { OnceLock::new() }; 3];
-    let index = Board::ALL
-        .iter()
-        .position(|&b| b == board)
-        .unwrap_or_else(|| unreachable!("Board::ALL lists every board"));
-    ELFS[index].get_or_init(|| {
-        defmt::require().unwrap_or_else(|e| panic!("{e}"));
-        firmware::build_board(board, BUILD_TIMEOUT).unwrap_or_else(|e| panic!("{e}"))
-    })
 }
 
 fn config() -> &'static SystemConfig {
@@ -254,17 +242,15 @@ fn same_under_every_qemu(board: Board) {
     assert_eq!(outputs.len(), states.len() - initialising);
 }
 
+/// Every f32 board in turn.
 #[test]
-fn m4_answers_and_counts_are_the_same_under_every_qemu_version() {
-    same_under_every_qemu(Board::M4);
+fn f32_boards_answer_and_count_the_same_under_every_qemu_version() {
+    on_each(&boards_in(Precision::F32), same_under_every_qemu);
 }
 
+/// Every f64 board in turn (a test of its own, so that the harness runs it
+/// beside the f32 boards').
 #[test]
-fn m7_answers_and_counts_are_the_same_under_every_qemu_version() {
-    same_under_every_qemu(Board::M7);
-}
-
-#[test]
-fn stm32f405_answers_and_counts_are_the_same_under_every_qemu_version() {
-    same_under_every_qemu(Board::Stm32f405);
+fn f64_boards_answer_and_count_the_same_under_every_qemu_version() {
+    on_each(&boards_in(Precision::F64), same_under_every_qemu);
 }

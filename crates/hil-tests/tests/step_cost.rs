@@ -3,17 +3,21 @@
 //! system's 12 segments graded 1.26, capacity 64) along the flight path of 10 ms
 //! State frames, and logs each step's instructions ([`decoy_hil::step_cost`]).
 //!
-//! Asserted on both f32 boards, the Cortex-M4F of `mps2-an386` and the STM32F405
-//! (`netduinoplus2`, whose 168 MHz SysTick reads 125 instructions per 21 ticks): an
-//! RK4 step that evaluates all four stages
+//! Asserted on every f32 board of `firmware/boards.toml`, the Cortex-M4F of
+//! `mps2-an386` and the STM32F405 (`netduinoplus2`, whose 168 MHz SysTick reads
+//! 125 instructions per 21 ticks): an RK4 step that evaluates all four stages
 //! takes at most [`RK4_STEP_TARGET`] instructions (the benchmark issue's target),
 //! at most issue 14's [`ISSUE_14_STEP_TARGET`] and at most [`RK4_STEP_GUARD`]
 //! (just above the measurement); a
 //! frame's first step, whose first stage is the previous frame's output evaluation
 //! reused, is cheaper by most of an evaluation; and in the steady turn every frame
-//! costs the same to within a few ticks. The M7 (f64) counts are printed.
+//! costs the same to within a few ticks. The f64 boards' (the M7's) counts are
+//! printed.
 
-use decoy_hil::qemu::Board;
+mod common;
+
+use common::{boards_in, on_each};
+use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::step_cost::{StepCost, measure};
 
 /// The benchmark issue's target for one RK4 step, M4 f32.
@@ -28,13 +32,8 @@ const ISSUE_14_STEP_TARGET: u32 = 25_000;
 const RK4_STEP_GUARD: u32 = 22_500;
 
 #[test]
-fn an_rk4_step_on_the_m4_is_within_the_target() {
-    check_f32_step_cost(Board::M4);
-}
-
-#[test]
-fn an_rk4_step_on_the_stm32f405_is_within_the_target() {
-    check_f32_step_cost(Board::Stm32f405);
+fn an_rk4_step_on_every_f32_board_is_within_the_target() {
+    on_each(&boards_in(Precision::F32), check_f32_step_cost);
 }
 
 /// The f32 step-cost checks on `board`.
@@ -82,11 +81,17 @@ fn check_f32_step_cost(board: Board) {
 }
 
 #[test]
-fn the_m7_step_cost_is_measured() {
-    let frames = measure(Board::M7).unwrap_or_else(|e| panic!("{e}"));
+fn the_f64_boards_step_cost_is_measured() {
+    on_each(&boards_in(Precision::F64), check_f64_step_cost);
+}
+
+/// The f64 step cost on `board`, printed; a frame's first step must reuse the
+/// output evaluation.
+fn check_f64_step_cost(board: Board) {
+    let frames = measure(board).unwrap_or_else(|e| panic!("{e}"));
     let cost = StepCost::of(&frames);
     println!(
-        "M7 f64, the embedded model: RK4 step with four stages max {}, first step of a frame \
+        "{board} f64, the embedded model: RK4 step with four stages max {}, first step of a frame \
          (first stage reused) max {}, output evaluation max {} instructions",
         cost.four_stages, cost.first_stage_reused, cost.outputs
     );

@@ -51,7 +51,8 @@ impl Precision {
 pub struct BackendOptions {
     /// Host or QEMU.
     pub kind: BackendKind,
-    /// The board of the qemu backend (M4: f32, M7: f64).
+    /// The board of the qemu backend (its precision is the board's:
+    /// `firmware/boards.toml`).
     pub board: Board,
     /// The host backend's precision (None: f32; the qemu backend's is its board's).
     pub precision: Option<Precision>,
@@ -70,7 +71,7 @@ impl Default for BackendOptions {
     fn default() -> Self {
         BackendOptions {
             kind: BackendKind::Host,
-            board: Board::M4,
+            board: Board::default(),
             precision: None,
             segments: None,
             grading: None,
@@ -272,10 +273,9 @@ pub fn qemu_backend(
     options: &BackendOptions,
 ) -> Result<Box<dyn Backend + Send>, BridgeError> {
     let board = options.board;
-    let board_precision = if board == Board::M7 {
-        Precision::F64
-    } else {
-        Precision::F32
+    let board_precision = match board.precision() {
+        decoy_hil::qemu::Precision::F32 => Precision::F32,
+        decoy_hil::qemu::Precision::F64 => Precision::F64,
     };
     if let Some(p) = options.precision
         && p != board_precision

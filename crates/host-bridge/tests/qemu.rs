@@ -1,11 +1,12 @@
-//! The qemu backend: the firmware under QEMU (M4 and STM32F405, f32) behind the bridge. A
+//! The qemu backend: the firmware under QEMU (every f32 board of
+//! `firmware/boards.toml`: the M4 and the STM32F405) behind the bridge. A
 //! scenario flown in lockstep through shared memory gets the firmware's answers,
 //! which equal the host replay of the same frames bit for bit (as `decoy hil`
 //! checks over the UART), with the firmware's exact instruction counts.
 
 use decoy_config::SystemConfig;
 use decoy_hil::flight::{self, host_controller, replay, scenario_frames, scenario_messages};
-use decoy_hil::qemu::Board;
+use decoy_hil::qemu::{Board, Precision};
 use decoy_link::DeviceMessage;
 use host_bridge::backend::{BackendKind, BackendOptions};
 use host_bridge::client::BridgeClient;
@@ -13,16 +14,16 @@ use host_bridge::convert::{from_link_frame, output_to_link};
 use host_bridge::local::{Isolated, LocalBridge};
 
 #[test]
-fn lockstep_through_the_firmware_equals_the_host_replay() {
-    lockstep_through(Board::M4, "mps2-an386");
+fn lockstep_through_every_f32_firmware_equals_the_host_replay() {
+    let boards = Board::with_precision(Precision::F32);
+    assert!(!boards.is_empty(), "no f32 board in firmware/boards.toml");
+    for board in boards {
+        println!("{board}: the scenario in lockstep through the bridge");
+        lockstep_through(board);
+    }
 }
 
-#[test]
-fn lockstep_through_the_stm32f405_firmware_equals_the_host_replay() {
-    lockstep_through(Board::Stm32f405, "stm32f405");
-}
-
-fn lockstep_through(board: Board, board_name: &str) {
+fn lockstep_through(board: Board) {
     let iso = Isolated::new().unwrap();
     let config = SystemConfig::builtin().unwrap();
     let bridge = LocalBridge::start(
@@ -38,7 +39,7 @@ fn lockstep_through(board: Board, board_name: &str) {
     .unwrap();
     let mut c = BridgeClient::connect("qemu", "qemu-client", &iso.config).unwrap();
     let status = c.get_status().unwrap();
-    assert_eq!(bridge_types::field_text(&status.board), board_name);
+    assert_eq!(bridge_types::field_text(&status.board), board.hello());
     assert_eq!((status.precision_bits, status.segments), (32, 12));
     c.simple_command(bridge_types::command::RESET_TO_TRIM)
         .unwrap();

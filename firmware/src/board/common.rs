@@ -1,9 +1,20 @@
 //! What every board module shares, whatever its peripherals: the failure path
-//! (panic and HardFault handlers, the safe state), stack painting, and the
-//! blocking `embedded-io` read and write loops over a UART that moves one byte at
-//! a time. A board module supplies the byte-level access and `uart_off`.
+//! (panic and HardFault handlers, the safe state), stack painting, the blocking
+//! `embedded-io` read and write loops over a UART that moves one byte at a time,
+//! and the defmt transport. A board module supplies the byte-level access and
+//! `uart_off`.
 
 use cortex_m_rt::{ExceptionFrame, exception};
+
+#[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
+compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
+#[cfg(not(any(feature = "defmt-semihosting", feature = "rtt")))]
+compile_error!("a defmt transport is needed: feature `defmt-semihosting` or `rtt`");
+
+#[cfg(feature = "rtt")]
+use defmt_rtt as _;
+#[cfg(feature = "defmt-semihosting")]
+use defmt_semihosting as _;
 
 /// Fills `buf` from `try_read_byte`, blocking until at least one byte is
 /// available, then returning those waiting (`embedded_io::Read::read`'s contract

@@ -1,10 +1,12 @@
 //! The board: QEMU's MPS2 AN386 (Cortex-M4F) or AN500 (Cortex-M7), both with a
-//! 25 MHz core clock and the same memory map, and how the application uses it.
-//! Everything hardware-specific lives here.
+//! 25 MHz core clock and the same memory map (`firmware/boards.toml`, rows `m4`
+//! and `m7`), and how the application uses it. Everything hardware-specific
+//! lives here.
 //!
 //! | role | peripheral |
 //! |---|---|
 //! | host link | CMSDK APB UART0 at 0x4000_4000 (`embedded-io` 0.7 [`Uart`]) |
+//! | advisory line | none: [`AdvisoryPin`] is [`NoLine`], which does nothing |
 //! | instruction counter, millisecond clock | SysTick on the core clock, free-running, extended in software ([`Clock`]) |
 //! | logs | defmt over semihosting (feature `defmt-semihosting`) or RTT (`rtt`) |
 //! | exit code (QEMU) | Arm semihosting `SYS_EXIT` (feature `qemu`) |
@@ -19,32 +21,28 @@
 
 use core::cell::{Cell, RefCell};
 
-use super::common;
+use super::{Board, CORE_CLOCK_HZ, common};
+use crate::advisory::NoLine;
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
 
-#[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
-compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
-#[cfg(not(any(feature = "defmt-semihosting", feature = "rtt")))]
-compile_error!("a defmt transport is needed: feature `defmt-semihosting` or `rtt`");
-
-#[cfg(feature = "rtt")]
-use defmt_rtt as _;
-#[cfg(feature = "defmt-semihosting")]
-use defmt_semihosting as _;
-
 /// SysTick's reload value: the full 24-bit range.
 const SYSTICK_RELOAD: u32 = 0x00FF_FFFF;
-/// The core clock (SysTick's source), Hz.
-pub const CORE_CLOCK_HZ: u32 = 25_000_000;
 /// SysTick ticks per millisecond.
 const TICKS_PER_MS: u64 = CORE_CLOCK_HZ as u64 / 1000;
 
 /// Executed instructions per SysTick tick under `-icount shift=0`: virtual time
-/// advances 1 ns per instruction and SysTick runs on the 25 MHz core clock, so one
-/// tick (40 ns) is 40 instructions. Counts are therefore multiples of 40.
-pub const INSTRUCTIONS_PER_TICK: u32 = 40;
+/// advances 1 ns per instruction and SysTick runs on the core clock (25 MHz), so
+/// one tick (40 ns) is 40 instructions. Counts are therefore multiples of 40.
+pub const INSTRUCTIONS_PER_TICK: u32 = 1_000_000_000 / CORE_CLOCK_HZ;
+const _: () = assert!(
+    1_000_000_000 % CORE_CLOCK_HZ == 0,
+    "the MPS2 clock counts whole instructions per tick: the core clock must divide 1 GHz"
+);
+
+/// No advisory line on the MPS2 boards.
+pub type AdvisoryPin = NoLine;
 
 /// The register-level access to memory-mapped peripherals: the crate's only
 /// unsafe code besides the HardFault handler cortex-m-rt requires.
@@ -88,23 +86,14 @@ mod uart_registers {
     pub const CTRL_RX_ENABLE: u32 = 1 << 1;
 }
 
-/// The board's peripherals, as the application uses them.
-pub struct Board {
-    /// The host link.
-    pub uart: Uart,
-    /// Instruction counter and millisecond clock.
-    pub clock: Clock,
-}
-
-impl Board {
-    /// Takes the core peripherals and sets them up; `None` if already taken.
-    pub fn take() -> Option<Self> {
-        let peripherals = cortex_m::Peripherals::take()?;
-        Some(Board {
-            uart: Uart::new(),
-            clock: Clock::new(peripherals.SYST),
-        })
-    }
+/// Takes the core peripherals and sets them up; `None` if already taken.
+pub(super) fn take() -> Option<Board> {
+    let peripherals = cortex_m::Peripherals::take()?;
+    Some(Board {
+        uart: Uart::new(),
+        clock: Clock::new(peripherals.SYST),
+        advisory: NoLine,
+    })
 }
 
 /// The host link's UART: CMSDK APB UART0, polled, 115,200 baud on hardware
@@ -304,25 +293,9 @@ impl decoy_controller::serve::Clock for Clock {
     }
 }
 
-/// The board's name in Hello.
-#[cfg(feature = "board-mps2-an386")]
-const NAME: &str = "mps2-an386";
-/// The board's name in Hello.
-#[cfg(feature = "board-mps2-an500")]
-const NAME: &str = "mps2-an500";
-
-/// The board as Hello describes it: its name and the 25 MHz core clock.
-pub const INFO: decoy_link::BoardInfo = decoy_link::BoardInfo {
-    name: match decoy_link::BoardName::new(NAME) {
-        Some(name) => name,
-        None => panic!("a board name is 1 to 24 printable ASCII bytes"),
-    },
-    core_clock_hz: CORE_CLOCK_HZ,
-};
-
 impl decoy_controller::InstructionCounter for Clock {
     /// Instructions since the clock started, wrapping at 2^32, in multiples of
-    /// [`INSTRUCTIONS_PER_TICK`].
+    /// `INSTRUCTIONS_PER_TICK`.
     #[inline(always)]
     fn now(&self) -> u32 {
         (self.ticks() as u32).wrapping_mul(INSTRUCTIONS_PER_TICK)

@@ -18,7 +18,7 @@
 //! PLL setup waits forever for its ready bits. USART1's divider is then computed
 //! for 16 MHz, which QEMU ignores (it moves bytes as fast as its chardev does),
 //! while QEMU runs SysTick at 168 MHz whatever is configured. Without `qemu` (the
-//! real part) the core runs from the PLL at [`CORE_CLOCK_HZ`] off an [`HSE_HZ`]
+//! real part) the core runs from the PLL at [`CORE_CLOCK_HZ`] off an `HSE_HZ`
 //! crystal (the Netduino Plus 2's); that path cannot run under QEMU and is
 //! untested here.
 //!
@@ -30,8 +30,8 @@
 //! counts. The clocks, the GPIO and the advisory pin stay on the HAL in both
 //! builds.
 //!
-//! Memory. The real part's map is `memory-stm32f405.x` (flash 1 MiB at 0x0800_0000,
-//! SRAM 128 KiB at 0x2000_0000). The 64 KiB CCM at 0x1000_0000 is not used: QEMU
+//! Memory. The real part's map is its row in `firmware/boards.toml` (flash 1 MiB
+//! at 0x0800_0000, SRAM 128 KiB at 0x2000_0000). The 64 KiB CCM at 0x1000_0000 is not used: QEMU
 //! does not map it (an access is a BusFault), and the firmware fits the SRAM.
 //!
 //! Failures: a panic or a HardFault logs what it can, then, under QEMU (feature
@@ -42,7 +42,8 @@
 
 use core::cell::{Cell, RefCell};
 
-use super::common;
+use super::{Board, CORE_CLOCK_HZ, common};
+use crate::advisory::LinePin;
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
@@ -51,65 +52,54 @@ use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config as RccConfig;
 
-#[cfg(all(feature = "defmt-semihosting", feature = "rtt"))]
-compile_error!("choose one defmt transport: `defmt-semihosting` (QEMU) or `rtt` (hardware)");
-#[cfg(not(any(feature = "defmt-semihosting", feature = "rtt")))]
-compile_error!("a defmt transport is needed: feature `defmt-semihosting` or `rtt`");
-
-#[cfg(feature = "rtt")]
-use defmt_rtt as _;
-#[cfg(feature = "defmt-semihosting")]
-use defmt_semihosting as _;
-
 /// SysTick's reload value: the full 24-bit range.
 const SYSTICK_RELOAD: u32 = 0x00FF_FFFF;
-/// The core clock (SysTick's source), Hz: the STM32F405's maximum, and what QEMU's
-/// `netduinoplus2` runs SysTick at.
-pub const CORE_CLOCK_HZ: u32 = 168_000_000;
 /// The external crystal of the real board (without feature `qemu`), Hz.
+#[cfg(not(feature = "qemu"))]
 pub const HSE_HZ: u32 = 25_000_000;
 /// SysTick ticks per millisecond.
 const TICKS_PER_MS: u64 = CORE_CLOCK_HZ as u64 / 1000;
 /// The host link's baud rate.
 pub const BAUD_RATE: u32 = 115_200;
 
-/// Under `-icount shift=0` one instruction is 1 ns and SysTick ticks at 168 MHz, so
-/// [`TICK_GROUP`] ticks (125 ns) are exactly [`INSTRUCTIONS_PER_GROUP`]
-/// instructions: 1e9 / 168e6 = 125 / 21 instructions per tick.
-pub const INSTRUCTIONS_PER_GROUP: u32 = 125;
+/// The greatest common divisor of `a` and `b` (Euclid's).
+const fn gcd(mut a: u32, mut b: u32) -> u32 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+/// Under `-icount shift=0` one instruction is 1 ns and SysTick ticks at the core
+/// clock (168 MHz), so [`TICK_GROUP`] ticks (125 ns) are exactly
+/// [`INSTRUCTIONS_PER_GROUP`] instructions: 1e9 / 168e6 = 125 / 21 instructions
+/// per tick.
+pub const INSTRUCTIONS_PER_GROUP: u32 = 1_000_000_000 / gcd(1_000_000_000, CORE_CLOCK_HZ);
 /// Ticks in one group of [`INSTRUCTIONS_PER_GROUP`] instructions.
-pub const TICK_GROUP: u32 = 21;
+pub const TICK_GROUP: u32 = CORE_CLOCK_HZ / gcd(1_000_000_000, CORE_CLOCK_HZ);
 
 /// The advisory line's pin (PA5, push-pull output).
 pub type AdvisoryPin = PA5<Output<PushPull>>;
 
-/// The board's peripherals, as the application uses them.
-pub struct Board {
-    /// The host link.
-    pub uart: Uart,
-    /// Instruction counter and millisecond clock.
-    pub clock: Clock,
-    /// The advisory line to the mission computer, deasserted (low) at boot.
-    pub advisory: AdvisoryPin,
+impl LinePin for AdvisoryPin {
+    const WIRED: bool = true;
 }
 
-impl Board {
-    /// Takes the core and device peripherals and sets them up; `None` if already
-    /// taken or if USART1 cannot be set up for the bus clock (`usart1::Port::new`).
-    pub fn take() -> Option<Self> {
-        let core = cortex_m::Peripherals::take()?;
-        let device = pac::Peripherals::take()?;
-        let mut rcc = device.RCC.freeze(clock_config());
-        let gpioa = device.GPIOA.split(&mut rcc);
-        let mut advisory = gpioa.pa5.into_push_pull_output();
-        advisory.set_low();
-        let port = usart1::Port::new(device.USART1, gpioa.pa9, gpioa.pa10, &mut rcc)?;
-        Some(Board {
-            uart: Uart { port },
-            clock: Clock::new(core.SYST),
-            advisory,
-        })
-    }
+/// Takes the core and device peripherals and sets them up; `None` if already
+/// taken or if USART1 cannot be set up for the bus clock (`usart1::Port::new`).
+pub(super) fn take() -> Option<Board> {
+    let core = cortex_m::Peripherals::take()?;
+    let device = pac::Peripherals::take()?;
+    let mut rcc = device.RCC.freeze(clock_config());
+    let gpioa = device.GPIOA.split(&mut rcc);
+    let mut advisory = gpioa.pa5.into_push_pull_output();
+    advisory.set_low();
+    let port = usart1::Port::new(device.USART1, gpioa.pa9, gpioa.pa10, &mut rcc)?;
+    Some(Board {
+        uart: Uart { port },
+        clock: Clock::new(core.SYST),
+        advisory,
+    })
 }
 
 /// The clock tree under QEMU: the HSI as it comes out of reset (QEMU does not
@@ -541,15 +531,3 @@ impl decoy_controller::InstructionCounter for Clock {
             .wrapping_add(self.rest_ticks.get() * INSTRUCTIONS_PER_GROUP / TICK_GROUP)
     }
 }
-
-/// The board's name in Hello.
-const NAME: &str = "stm32f405";
-
-/// The board as Hello describes it: its name and the 168 MHz core clock.
-pub const INFO: decoy_link::BoardInfo = decoy_link::BoardInfo {
-    name: match decoy_link::BoardName::new(NAME) {
-        Some(name) => name,
-        None => panic!("a board name is 1 to 24 printable ASCII bytes"),
-    },
-    core_clock_hz: CORE_CLOCK_HZ,
-};

@@ -19,7 +19,7 @@ use benches::report::{
 use decoy_hil::firmware;
 use decoy_hil::flight;
 use decoy_hil::link::Session;
-use decoy_hil::qemu::Board;
+use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::step_cost::StepCost;
 use decoy_hil::sweep;
 
@@ -72,16 +72,25 @@ fn run() -> Result<(), String> {
         .solver;
     let embedded = (solver.segments_embedded, solver.grading_ratio_embedded);
     let sizes = report::firmware_segments(embedded.0);
+    // The report's firmware tables: the default board (the M4, f32) and the
+    // first f64 board of firmware/boards.toml (the M7).
+    let f64_board = Board::with_precision(Precision::F64)
+        .first()
+        .copied()
+        .ok_or("no f64 board in firmware/boards.toml")?;
     let (firmware, firmware_m7) = if firmware_runs {
         (
-            sizes.iter().map(|&n| firmware_row(Board::M4, n)).collect(),
-            sizes.iter().map(|&n| firmware_row(Board::M7, n)).collect(),
+            sizes
+                .iter()
+                .map(|&n| firmware_row(Board::default(), n))
+                .collect(),
+            sizes.iter().map(|&n| firmware_row(f64_board, n)).collect(),
         )
     } else {
         (Vec::new(), Vec::new())
     };
     let step_cost = if firmware_runs {
-        [Board::M4, Board::M7].map(|board| {
+        [Board::default(), f64_board].map(|board| {
             let cost = decoy_hil::step_cost::measure(board).map(|f| StepCost::of(&f));
             match &cost {
                 Ok(c) => println!(
@@ -113,10 +122,7 @@ fn run() -> Result<(), String> {
     };
 
     let envelope = if firmware_runs {
-        [Board::M4, Board::Stm32f405, Board::M7]
-            .into_iter()
-            .map(envelope_board)
-            .collect()
+        Board::all().iter().copied().map(envelope_board).collect()
     } else {
         Vec::new()
     };
@@ -159,10 +165,9 @@ fn run() -> Result<(), String> {
 /// The envelope sweep's full grid on `board` (two QEMU sessions at once), each
 /// flight summarised.
 fn envelope_board(board: Board) -> EnvelopeBoard {
-    let bound = if board == Board::M7 {
-        report::M7_FRAME_BOUND
-    } else {
-        report::F32_FRAME_BOUND
+    let bound = match board.precision() {
+        Precision::F64 => report::M7_FRAME_BOUND,
+        Precision::F32 => report::F32_FRAME_BOUND,
     };
     let flights = (|| -> Result<Vec<EnvelopeFlight>, String> {
         let config = decoy_config::SystemConfig::builtin().map_err(|e| e.to_string())?;
@@ -203,12 +208,7 @@ fn envelope_board(board: Board) -> EnvelopeBoard {
         println!("envelope: {board}: {e}");
     }
     EnvelopeBoard {
-        board: match board {
-            Board::M4 => "M4",
-            Board::Stm32f405 => "STM32F405",
-            Board::M7 => "M7",
-        }
-        .to_owned(),
+        board: board.label().to_owned(),
         bound,
         flights,
     }
@@ -217,14 +217,14 @@ fn envelope_board(board: Board) -> EnvelopeBoard {
 /// Builds the firmware for `board` with `segments` segments and runs it once under
 /// QEMU.
 fn firmware_row(board: Board, segments: usize) -> FirmwareRow {
-    println!("firmware: {board:?}, {segments} segments: building and running under QEMU");
+    println!("firmware: {board}, {segments} segments: building and running under QEMU");
     let grading = decoy_config::SystemConfig::builtin()
         .map(|config| grading_for(&config, segments))
         .unwrap_or(f64::NAN);
     let outcome = firmware_counts(board, segments);
     match &outcome {
         Ok(c) => println!(
-            "firmware: {board:?}, {segments} segments: control step {} max, {} mean; \
+            "firmware: {board}, {segments} segments: control step {} max, {} mean; \
              solver {} max, {} mean per RK4 step; {} to {} RK4 steps per control step",
             c.frame_max,
             c.frame_mean,
@@ -233,7 +233,7 @@ fn firmware_row(board: Board, segments: usize) -> FirmwareRow {
             c.rk4_steps.0,
             c.rk4_steps.1
         ),
-        Err(e) => println!("firmware: {board:?}, {segments} segments: {e}"),
+        Err(e) => println!("firmware: {board}, {segments} segments: {e}"),
     }
     FirmwareRow {
         segments,

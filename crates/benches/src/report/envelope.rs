@@ -9,13 +9,30 @@ use decoy_plots::{Aspect, Plot, Series};
 
 use super::*;
 
-/// The bound every frame over the envelope must meet on the M4 and the
-/// STM32F405 (issue 22).
+/// The bound every frame over the envelope must meet on the f32 boards (the M4
+/// and the STM32F405; issue 22).
 pub const F32_FRAME_BOUND: u32 = 90_000;
-/// The M7's (f64) stated bound.
+/// The f64 boards' (the M7's) stated bound.
 pub const M7_FRAME_BOUND: u32 = 160_000;
-/// The boards of the sweep, as the report names them (its tables' columns).
-pub const BOARDS: [&str; 3] = ["M4", "STM32F405", "M7"];
+/// The boards of the sweep, as the report names them (its tables' columns):
+/// every board's label in `firmware/boards.toml`, in the table's order.
+pub fn boards() -> Vec<&'static str> {
+    decoy_hil::qemu::Board::all()
+        .iter()
+        .map(|b| b.spec().label())
+        .collect()
+}
+
+/// A table's separator line: the label column, then one right-aligned column
+/// per board.
+fn separator(boards: usize) -> String {
+    format!("|---|{}", "---:|".repeat(boards))
+}
+
+/// The row of a table with nothing measured.
+fn not_run(boards: usize) -> String {
+    format!("| not run |{}", " - |".repeat(boards))
+}
 
 /// One flight of the sweep on one board, as measured.
 #[derive(Clone, Debug, PartialEq)]
@@ -208,17 +225,17 @@ pub(super) fn render_envelope(s: &mut String, inputs: &Inputs) -> std::fmt::Resu
     bands.sort_unstable();
     bands.dedup();
     write!(s, "| altitude band |")?;
-    for name in BOARDS {
+    for name in boards() {
         write!(s, " {name} worst |")?;
     }
     writeln!(s)?;
-    writeln!(s, "|---|---:|---:|---:|")?;
+    writeln!(s, "{}", separator(boards().len()))?;
     if bands.is_empty() {
-        writeln!(s, "| not run | - | - | - |")?;
+        writeln!(s, "{}", not_run(boards().len()))?;
     }
     for band in &bands {
         write!(s, "| {band}-{} km |", band + 1)?;
-        for name in BOARDS {
+        for name in boards() {
             match board(name).and_then(|b| b.bands().into_iter().find(|(k, _)| k == band)) {
                 Some((_, w)) => write!(s, " {} |", thousands(u64::from(w)))?,
                 None => write!(s, " - |")?,
@@ -274,11 +291,11 @@ pub(super) fn render_envelope(s: &mut String, inputs: &Inputs) -> std::fmt::Resu
     )?;
     writeln!(s)?;
     write!(s, "| manoeuvre |")?;
-    for name in BOARDS {
+    for name in boards() {
         write!(s, " {name} worst / mean |")?;
     }
     writeln!(s)?;
-    writeln!(s, "|---|---:|---:|---:|")?;
+    writeln!(s, "{}", separator(boards().len()))?;
     let mut shipped: Vec<&str> = Vec::new();
     for f in inputs
         .envelope
@@ -290,11 +307,11 @@ pub(super) fn render_envelope(s: &mut String, inputs: &Inputs) -> std::fmt::Resu
         }
     }
     if shipped.is_empty() {
-        writeln!(s, "| not run | - | - | - |")?;
+        writeln!(s, "{}", not_run(boards().len()))?;
     }
     for label in shipped {
         write!(s, "| {label} |")?;
-        for name in BOARDS {
+        for name in boards() {
             match board(name)
                 .and_then(|b| b.flights.as_ref().ok())
                 .and_then(|f| f.iter().find(|f| f.label == label))
