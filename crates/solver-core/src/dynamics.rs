@@ -9,6 +9,13 @@
 //!    reference that the tests show diverging with N.
 //! 3. [`accelerations`]: segment and decoy angular accelerations from the tensions.
 //!
+//! The back sweep of pass 2 is written once (`back_sweep`), generic over what is
+//! done with each segment's derivative as it is found (a `SegmentSink`, inlined and
+//! monomorphised for each use): the separate pass ([`solve_tensions`]), passes 2
+//! and 3 fused ([`solve_tensions_and_accelerations`]), and the RK4 stages formed in
+//! the sweep ([`solve_tensions_first_stage`], [`solve_tensions_to_stage`]). Every use
+//! does each segment's arithmetic in the same order, so gives the same bits.
+//!
 //! Notation (docs/design.md §3): T_j is the force the upstream body exerts on the downstream
 //! body at joint j; segment i runs from joint i-1 to joint i with unit direction
 //! e_i, mass m_i, length l_i, projector P_i = I - e_i e_iᵀ. For every joint the
@@ -736,14 +743,9 @@ impl<T: Real> Sym3<T> {
     }
 }
 
-/// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0).
-#[inline]
-fn last_joint<T: Real, const N: usize>(model: &Model<T, N>) -> usize {
-    last_joint_of(model, model.segment_count())
-}
-
-/// [`last_joint`] of the model's segment count `n` read once by the caller (the
-/// optimiser then sees last <= n <= N: no bounds check on the arrays).
+/// The last joint with an unknown force: N with a decoy, N-1 for a free end (T_N = 0),
+/// of the model's segment count `n` read once by the caller (the optimiser then sees
+/// last <= n <= N: no bounds check on the arrays).
 #[inline(always)]
 fn last_joint_of<T: Real, const N: usize>(model: &Model<T, N>, n: usize) -> usize {
     (if model.has_decoy() { n } else { n - 1 }).min(N)
@@ -781,18 +783,227 @@ pub fn solve_tensions<T: Real, const N: usize>(
     ws: &mut Workspace<T, N>,
 ) -> Result<(), SolveError> {
     let (model, state, ws) = opaque((model, state, ws));
-    let last = last_joint(model);
-    let directions = &state.directions;
-    let t = forward_sweep(model, state, ws)?;
-    set_joint_force(ws, last, t);
-    let mut t = t;
+    back_sweep(model, ws, Forces { state })
+}
+
+/// What [`back_sweep`] does with each segment's derivative as it is found: the one
+/// part in which its uses differ ([`Forces`], [`Accelerations`], [`FirstStage`],
+/// [`ToStage`]). Every method is inlined and the sweep is monomorphised for each
+/// sink, so each use compiles to one loop fused with its sink's work, as if written
+/// out by hand (the firmware's instruction counts are those of the hand-fused
+/// copies, or a few fewer).
+///
+/// A sink's rows are its entries of the segments (references into its arrays): the
+/// loop walks them by index together with the workspace's arrays, one base address
+/// per array.
+trait SegmentSink<T: Real, const N: usize> {
+    /// Every force T_j kept in the workspace and probed for finiteness; otherwise
+    /// only T_0 and T_N (which the decoy's equations read) are kept, and nothing is
+    /// probed (a non-finite force then makes the derivative non-finite, which the
+    /// RK4 step's final check finds).
+    const KEEP: bool;
+    /// The sink's entries of one segment.
+    type Row<'r>;
+    /// The rows of a range of segment indices, in order.
+    type Rows<'r>: DoubleEndedIterator<Item = Self::Row<'r>> + ExactSizeIterator
+    where
+        Self: 'r;
+    /// What a row holds that its write needs besides the direction.
+    type Read: Copy;
+    /// The values every row's write uses (stage factor, weight).
+    type Factors: Copy;
+
+    /// The state evaluated: its directions e_i.
+    fn state(&self) -> &State<T, N>;
+    /// The factors of [`SegmentSink::write`].
+    fn factors(&self) -> Self::Factors;
+    /// The rows of segment indices `range`.
+    fn rows(&mut self, range: core::ops::Range<usize>) -> Self::Rows<'_>;
+    /// The row of segment index `i` (below the segment count), outside the loop:
+    /// the first segment, and the last one of a free end.
+    fn row(&mut self, i: usize) -> Self::Row<'_>;
+    /// The row's direction e_i (of the state evaluated).
+    fn direction(row: &Self::Row<'_>) -> Vec3<T>;
+    /// What the row's write needs besides the direction. In the loop it is read,
+    /// with the direction, before anything is stored (the stores may alias the
+    /// loads for all the optimiser knows).
+    fn read(row: &Self::Row<'_>) -> Self::Read;
+    /// Segment i's derivative, de_i/dt = `de` and dw_i/dt = `dw`, into its row
+    /// (`e` its direction, `read` what [`SegmentSink::read`] read of it).
+    fn write(
+        row: Self::Row<'_>,
+        e: Vec3<T>,
+        read: Self::Read,
+        factors: Self::Factors,
+        de: Vec3<T>,
+        dw: Vec3<T>,
+    );
+    /// The decoy's part once every force is found (T_N, T_0 in the workspace).
+    fn decoy(&mut self, model: &Model<T, N>, ws: &Workspace<T, N>);
+}
+
+/// Pass 2 and the segments' part of pass 3, written once for every use: the
+/// forward sweep ([`forward_sweep`]), then the back sweep T_j = z_j - X_j T_{j+1}
+/// ([`back_substitute`]) from joint last-1 down to joint 0, handing each segment's
+/// derivative to `sink` as soon as both its forces are known:
+///
+/// ```text
+///   de_i/dt = w_i x e_i,   dw_i/dt = -(6/(m_i l_i)) e_i x (T_{i-1} + T_i)
+/// ```
+///
+/// (segment i+1, index i, between T_i upstream and T_{i+1}; for a free end the
+/// last segment's downstream T_N is zero). T_last and T_0 are always kept, the
+/// forces between them as the sink says ([`SegmentSink::KEEP`]), and then the
+/// decoy's part is the sink's. Each segment's arithmetic is that of the separate
+/// passes ([`solve_tensions`] then [`accelerations`]), in the same order: the same
+/// bits whatever the sink.
+#[inline(always)]
+fn back_sweep<T: Real, const N: usize, S: SegmentSink<T, N>>(
+    model: &Model<T, N>,
+    ws: &mut Workspace<T, N>,
+    mut sink: S,
+) -> Result<(), SolveError> {
+    let n = model.segment_count();
+    let last = last_joint_of(model, n);
+    let gains = model.rate_gains_all();
+    let mut t = forward_sweep(model, sink.state(), ws)?;
     let mut probe = t.x + t.y + t.z;
-    for j in (0..last).rev() {
-        t = back_substitute(&ws.pivots[j], &directions[j], &t);
-        probe += t.x + t.y + t.z;
-        set_joint_force(ws, j, t);
+    let factors = sink.factors();
+    // T_{j+1} while T_j is found; for a free end the last segment's downstream
+    // force T_N is zero.
+    let mut downstream = if last == n {
+        ws.joint_force[n - 1] = t;
+        t
+    } else {
+        let zero = Vec3::zeros();
+        ws.joint_force[n - 1] = zero;
+        if last > 0 {
+            ws.joint_force[last - 1] = t;
+        }
+        let we = ws.joints[n - 1].direction_rate;
+        let row = sink.row(n - 1);
+        let (e, read) = (S::direction(&row), S::read(&row));
+        let dw = -e.cross(&(t + zero)) * gains[n - 1];
+        S::write(row, e, read, factors, we, dw);
+        t
+    };
+    // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
+    if last > 0 {
+        let range = 1..last;
+        // Through `opaque`: the pivots' own base address in a register, so that their
+        // fields are reached by small offsets (see `opaque`).
+        let rows = opaque(&ws.pivots[range.clone()])
+            .iter()
+            .zip(opaque(&ws.joints[range.clone()]))
+            .zip(&gains[range.clone()])
+            .zip(sink.rows(range))
+            .zip(ws.joint_force[..last - 1].iter_mut())
+            .rev();
+        for ((((pivot, joint), gain), row), force) in rows {
+            // Copies first: the stores below may alias for all the optimiser knows.
+            let (pivot, we, gain) = (*pivot, joint.direction_rate, *gain);
+            let (e, read) = (S::direction(&row), S::read(&row));
+            t = back_substitute(&pivot, &e, &t);
+            if S::KEEP {
+                probe += t.x + t.y + t.z;
+            }
+            // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
+            let dw = -e.cross(&(t + downstream)) * gain;
+            S::write(row, e, read, factors, we, dw);
+            downstream = t;
+            if S::KEEP {
+                *force = t;
+            }
+        }
+        let we = ws.joints[0].direction_rate;
+        let row = sink.row(0);
+        let e = S::direction(&row);
+        t = back_substitute(&ws.pivots[0], &e, &t);
+        if S::KEEP {
+            probe += t.x + t.y + t.z;
+        }
+        let dw = -e.cross(&(t + downstream)) * gains[0];
+        // No store since the row was taken: its other values are read as late as
+        // they are needed (fewer values live across the substitution).
+        let read = S::read(&row);
+        S::write(row, e, read, factors, we, dw);
     }
-    finish_tensions(model, ws, probe)
+    ws.connection_force = t;
+    let result = if S::KEEP {
+        finish_tensions(model, ws, probe)
+    } else {
+        Ok(())
+    };
+    sink.decoy(model, ws);
+    result
+}
+
+/// Two arrays' entries `range` walked together (a sink's rows).
+type Pair<'r, T> = core::iter::Zip<core::slice::Iter<'r, Vec3<T>>, core::slice::Iter<'r, Vec3<T>>>;
+/// Two arrays' entries `range` walked together, to write (a sink's rows).
+type PairMut<'r, T> =
+    core::iter::Zip<core::slice::IterMut<'r, Vec3<T>>, core::slice::IterMut<'r, Vec3<T>>>;
+
+/// [`Pair`] of `a` and `b` over `range`.
+#[inline(always)]
+fn pair<'r, T: Real, const N: usize>(
+    a: &'r [Vec3<T>; N],
+    b: &'r [Vec3<T>; N],
+    range: core::ops::Range<usize>,
+) -> Pair<'r, T> {
+    a[range.clone()].iter().zip(&b[range])
+}
+
+/// [`PairMut`] of `a` and `b` over `range`.
+#[inline(always)]
+fn pair_mut<'r, T: Real, const N: usize>(
+    a: &'r mut [Vec3<T>; N],
+    b: &'r mut [Vec3<T>; N],
+    range: core::ops::Range<usize>,
+) -> PairMut<'r, T> {
+    a[range.clone()].iter_mut().zip(b[range].iter_mut())
+}
+
+/// The sink of [`solve_tensions`]: every force kept and probed, no derivative.
+struct Forces<'a, T: Real, const N: usize> {
+    state: &'a State<T, N>,
+}
+
+impl<T: Real, const N: usize> SegmentSink<T, N> for Forces<'_, T, N> {
+    const KEEP: bool = true;
+    type Row<'r> = &'r Vec3<T>;
+    type Rows<'r>
+        = core::slice::Iter<'r, Vec3<T>>
+    where
+        Self: 'r;
+    type Read = ();
+    type Factors = ();
+
+    #[inline(always)]
+    fn state(&self) -> &State<T, N> {
+        self.state
+    }
+    #[inline(always)]
+    fn factors(&self) {}
+    #[inline(always)]
+    fn rows(&mut self, range: core::ops::Range<usize>) -> Self::Rows<'_> {
+        self.state.directions[range].iter()
+    }
+    #[inline(always)]
+    fn row(&mut self, i: usize) -> &Vec3<T> {
+        // i is n - 1 or 0 (both below N), restated: no bounds check.
+        &self.state.directions[i.min(N - 1)]
+    }
+    #[inline(always)]
+    fn direction(e: &&Vec3<T>) -> Vec3<T> {
+        **e
+    }
+    #[inline(always)]
+    fn read(_: &&Vec3<T>) {}
+    #[inline(always)]
+    fn write(_: &Vec3<T>, _: Vec3<T>, _: (), _: (), _: Vec3<T>, _: Vec3<T>) {}
+    #[inline(always)]
+    fn decoy(&mut self, _: &Model<T, N>, _: &Workspace<T, N>) {}
 }
 
 /// Passes 2 and 3 in one: [`solve_tensions`] with the segment accelerations of
@@ -834,73 +1045,75 @@ fn tensions_and_accelerations<T: Real, const N: usize, const KEEP: bool>(
     out: &mut Derivative<T, N>,
 ) -> Result<(), SolveError> {
     let (model, state, ws, out) = opaque((model, state, ws, out));
-    let n = model.segment_count();
-    let last = last_joint_of(model, n);
-    let directions = &state.directions;
-    let gains = model.rate_gains_all();
-    let mut t = forward_sweep(model, state, ws)?;
-    let mut probe = t.x + t.y + t.z;
-    // T_{j+1} while T_j is found; for a free end the last segment's downstream
-    // force T_N is zero.
-    let mut downstream = if last == n {
-        ws.joint_force[n - 1] = t;
-        t
-    } else {
-        let zero = Vec3::zeros();
-        ws.joint_force[n - 1] = zero;
-        if last > 0 {
-            ws.joint_force[last - 1] = t;
-        }
-        let e = directions[n - 1];
-        out.directions[n - 1] = ws.joints[n - 1].direction_rate;
-        out.rates[n - 1] = -e.cross(&(t + zero)) * gains[n - 1];
-        t
-    };
-    // Joints last-1 down to 1 (T_j into joint_force[j-1]), then joint 0.
-    if last > 0 {
-        let range = 1..last;
-        // Through `opaque`: the pivots' own base address in a register, so that their
-        // fields are reached by small offsets (see `opaque`).
-        let rows = opaque(&ws.pivots[range.clone()])
-            .iter()
-            .zip(&directions[range.clone()])
-            .zip(opaque(&ws.joints[range.clone()]))
-            .zip(&gains[range.clone()])
-            .zip(out.directions[range.clone()].iter_mut())
-            .zip(out.rates[range].iter_mut())
-            .zip(ws.joint_force[..last - 1].iter_mut())
-            .rev();
-        for ((((((pivot, e), joint), gain), de), dw), force) in rows {
-            // Copies first: the stores below may alias for all the optimiser knows.
-            let (pivot, e, we, gain) = (*pivot, *e, joint.direction_rate, *gain);
-            t = back_substitute(&pivot, &e, &t);
-            if KEEP {
-                probe += t.x + t.y + t.z;
-            }
-            // Segment j+1 (index j) between T_j (upstream) and T_{j+1}.
-            *de = we;
-            *dw = -e.cross(&(t + downstream)) * gain;
-            downstream = t;
-            if KEEP {
-                *force = t;
-            }
-        }
-        let e = &directions[0];
-        t = back_substitute(&ws.pivots[0], e, &t);
-        if KEEP {
-            probe += t.x + t.y + t.z;
-        }
-        out.directions[0] = ws.joints[0].direction_rate;
-        out.rates[0] = -e.cross(&(t + downstream)) * gains[0];
+    back_sweep(model, ws, Accelerations::<T, N, KEEP> { state, out })
+}
+
+/// The sink of [`solve_tensions_and_accelerations`]: each segment's derivative into
+/// `out`, then the decoy's ([`accelerations`]'s arithmetic).
+struct Accelerations<'a, T: Real, const N: usize, const KEEP: bool> {
+    state: &'a State<T, N>,
+    out: &'a mut Derivative<T, N>,
+}
+
+impl<T: Real, const N: usize, const KEEP: bool> SegmentSink<T, N>
+    for Accelerations<'_, T, N, KEEP>
+{
+    const KEEP: bool = KEEP;
+    type Row<'r> = (&'r Vec3<T>, (&'r mut Vec3<T>, &'r mut Vec3<T>));
+    type Rows<'r>
+        = core::iter::Zip<core::slice::Iter<'r, Vec3<T>>, PairMut<'r, T>>
+    where
+        Self: 'r;
+    type Read = ();
+    type Factors = ();
+
+    #[inline(always)]
+    fn state(&self) -> &State<T, N> {
+        self.state
     }
-    ws.connection_force = t;
-    let result = if KEEP {
-        finish_tensions(model, ws, probe)
-    } else {
-        Ok(())
-    };
-    decoy_accelerations(model, state, ws, out);
-    result
+    #[inline(always)]
+    fn factors(&self) {}
+    #[inline(always)]
+    fn rows(&mut self, range: core::ops::Range<usize>) -> Self::Rows<'_> {
+        let out = &mut *self.out;
+        self.state.directions[range.clone()].iter().zip(pair_mut(
+            &mut out.directions,
+            &mut out.rates,
+            range,
+        ))
+    }
+    #[inline(always)]
+    fn row(&mut self, i: usize) -> Self::Row<'_> {
+        // i is n - 1 or 0 (both below N), restated: no bounds check.
+        let i = i.min(N - 1);
+        let out = &mut *self.out;
+        (
+            &self.state.directions[i],
+            (&mut out.directions[i], &mut out.rates[i]),
+        )
+    }
+    #[inline(always)]
+    fn direction((e, _): &Self::Row<'_>) -> Vec3<T> {
+        **e
+    }
+    #[inline(always)]
+    fn read(_: &Self::Row<'_>) {}
+    #[inline(always)]
+    fn write(
+        (_, (de_out, dw_out)): Self::Row<'_>,
+        _: Vec3<T>,
+        _: (),
+        _: (),
+        de: Vec3<T>,
+        dw: Vec3<T>,
+    ) {
+        *de_out = de;
+        *dw_out = dw;
+    }
+    #[inline(always)]
+    fn decoy(&mut self, model: &Model<T, N>, ws: &Workspace<T, N>) {
+        decoy_accelerations(model, self.state, ws, self.out);
+    }
 }
 
 /// One step of the back sweep: T_j = z_j - X_j T_{j+1}, with
@@ -1067,15 +1280,6 @@ fn eliminate<T: Real>(
     Ok((update, T::lit(4.0) * k))
 }
 
-#[inline(always)]
-fn set_joint_force<T: Real, const N: usize>(ws: &mut Workspace<T, N>, j: usize, t: Vec3<T>) {
-    if j == 0 {
-        ws.connection_force = t;
-    } else {
-        ws.joint_force[j - 1] = t;
-    }
-}
-
 /// Clears T_N for a free end and checks every force is finite.
 ///
 /// `probe` is the sum of every component of the forces T_0..T_last just computed: finite
@@ -1117,7 +1321,7 @@ pub fn solve_tensions_shooting<T: Real, const N: usize>(
     state: &State<T, N>,
     ws: &mut Workspace<T, N>,
 ) -> Result<(), SolveError> {
-    let last = last_joint(model);
+    let last = last_joint_of(model, model.segment_count());
     let inverse_masses = model.inverse_masses();
     let masses = model.masses();
     // Affine carriers for T_{j-1} and T_j: (U, u).
@@ -1279,93 +1483,118 @@ pub fn solve_tensions_to_stage<T: Real, const N: usize>(
         weight,
     } = next;
     let (base, sum, weight) = opaque((base, sum, weight));
-    let n = model.segment_count();
-    let last = last_joint_of(model, n);
-    let gains = model.rate_gains_all();
-    let mut t = forward_sweep(model, stage, ws)?;
-    // Segment index j's derivative (de, dw) into the stage and the sum.
-    let update = |stage: &mut State<T, N>,
-                  sum: &mut Derivative<T, N>,
-                  j: usize,
-                  de: Vec3<T>,
-                  dw: Vec3<T>| {
-        // j is n - 1 or 0 (both below N), restated: no bounds check.
-        let j = j.min(N - 1);
-        stage.directions[j] = base.directions[j] + de * h;
-        stage.rates[j] = base.rates[j] + dw * h;
-        sum.directions[j] += de * weight;
-        sum.rates[j] += dw * weight;
+    let sink = ToStage {
+        stage,
+        base,
+        sum,
+        h,
+        weight,
     };
-    let mut downstream = if last == n {
-        ws.joint_force[n - 1] = t;
-        t
-    } else {
-        let zero = Vec3::zeros();
-        ws.joint_force[n - 1] = zero;
-        if last > 0 {
-            ws.joint_force[last - 1] = t;
+    back_sweep(model, ws, sink)
+}
+
+/// The sink of [`solve_tensions_to_stage`]: each segment's derivative k turned
+/// into its entries of the next stage, `stage = base + h k`, in the state
+/// evaluated itself, and of the weighted sum, `sum = sum + weight k`; then the
+/// decoy's.
+struct ToStage<'a, T: Real, const N: usize> {
+    /// The state evaluated, overwritten by the next stage.
+    stage: &'a mut State<T, N>,
+    /// The state the stage starts from.
+    base: &'a State<T, N>,
+    /// The weighted sum of the stages' derivatives.
+    sum: &'a mut Derivative<T, N>,
+    /// The stage factor.
+    h: T,
+    /// The derivative's weight in the sum.
+    weight: T,
+}
+
+impl<T: Real, const N: usize> SegmentSink<T, N> for ToStage<'_, T, N> {
+    const KEEP: bool = false;
+    type Row<'r> = (
+        (
+            (&'r mut Vec3<T>, &'r mut Vec3<T>),
+            (&'r Vec3<T>, &'r Vec3<T>),
+        ),
+        (&'r mut Vec3<T>, &'r mut Vec3<T>),
+    );
+    type Rows<'r>
+        = core::iter::Zip<core::iter::Zip<PairMut<'r, T>, Pair<'r, T>>, PairMut<'r, T>>
+    where
+        Self: 'r;
+    /// e0, w0 of the base, the sum's entries.
+    type Read = (Vec3<T>, Vec3<T>, Vec3<T>, Vec3<T>);
+    /// h, weight.
+    type Factors = (T, T);
+
+    #[inline(always)]
+    fn state(&self) -> &State<T, N> {
+        self.stage
+    }
+    #[inline(always)]
+    fn factors(&self) -> (T, T) {
+        (self.h, self.weight)
+    }
+    #[inline(always)]
+    fn rows(&mut self, range: core::ops::Range<usize>) -> Self::Rows<'_> {
+        let (stage, base, sum) = (&mut *self.stage, self.base, &mut *self.sum);
+        pair_mut(&mut stage.directions, &mut stage.rates, range.clone())
+            .zip(pair(&base.directions, &base.rates, range.clone()))
+            .zip(pair_mut(&mut sum.directions, &mut sum.rates, range))
+    }
+    #[inline(always)]
+    fn row(&mut self, i: usize) -> Self::Row<'_> {
+        // i is n - 1 or 0 (both below N), restated: no bounds check.
+        let i = i.min(N - 1);
+        let (stage, base, sum) = (&mut *self.stage, self.base, &mut *self.sum);
+        (
+            (
+                (&mut stage.directions[i], &mut stage.rates[i]),
+                (&base.directions[i], &base.rates[i]),
+            ),
+            (&mut sum.directions[i], &mut sum.rates[i]),
+        )
+    }
+    #[inline(always)]
+    fn direction((((e, _), _), _): &Self::Row<'_>) -> Vec3<T> {
+        **e
+    }
+    #[inline(always)]
+    fn read(((_, (e0, w0)), (se, sw)): &Self::Row<'_>) -> Self::Read {
+        (**e0, **w0, **se, **sw)
+    }
+    #[inline(always)]
+    fn write(
+        (((e_out, w_out), _), (se, sw)): Self::Row<'_>,
+        _: Vec3<T>,
+        (e0, w0, s_e, s_w): Self::Read,
+        (h, weight): (T, T),
+        de: Vec3<T>,
+        dw: Vec3<T>,
+    ) {
+        *e_out = e0 + de * h;
+        *w_out = w0 + dw * h;
+        *se = s_e + de * weight;
+        *sw = s_w + dw * weight;
+    }
+    #[inline(always)]
+    fn decoy(&mut self, model: &Model<T, N>, ws: &Workspace<T, N>) {
+        let (dq, dw) = decoy_derivative(model, self.stage, ws);
+        let (h, weight) = (self.h, self.weight);
+        for ((o, b), (s, d)) in self
+            .stage
+            .decoy_attitude
+            .iter_mut()
+            .zip(&self.base.decoy_attitude)
+            .zip(self.sum.decoy_attitude.iter_mut().zip(&dq))
+        {
+            *o = *b + *d * h;
+            *s += *d * weight;
         }
-        let e = stage.directions[n - 1];
-        let dw = -e.cross(&(t + zero)) * gains[n - 1];
-        update(stage, sum, n - 1, ws.joints[n - 1].direction_rate, dw);
-        t
-    };
-    if last > 0 {
-        let range = 1..last;
-        let rows = opaque(&ws.pivots[range.clone()])
-            .iter()
-            .zip(opaque(&ws.joints[range.clone()]))
-            .zip(&gains[range.clone()])
-            .zip(
-                stage.directions[range.clone()]
-                    .iter_mut()
-                    .zip(stage.rates[range.clone()].iter_mut()),
-            )
-            .zip(
-                base.directions[range.clone()]
-                    .iter()
-                    .zip(&base.rates[range.clone()]),
-            )
-            .zip(
-                sum.directions[range.clone()]
-                    .iter_mut()
-                    .zip(sum.rates[range].iter_mut()),
-            )
-            .rev();
-        for (((((pivot, joint), gain), (e_out, w_out)), (e0, w0)), (se, sw)) in rows {
-            // Copies first: the stores below may alias for all the optimiser knows.
-            let (pivot, we, gain, e) = (*pivot, joint.direction_rate, *gain, *e_out);
-            let (e0, w0, s_e, s_w) = (*e0, *w0, *se, *sw);
-            t = back_substitute(&pivot, &e, &t);
-            let dw = -e.cross(&(t + downstream)) * gain;
-            *e_out = e0 + we * h;
-            *w_out = w0 + dw * h;
-            *se = s_e + we * weight;
-            *sw = s_w + dw * weight;
-            downstream = t;
-        }
-        let e = stage.directions[0];
-        t = back_substitute(&ws.pivots[0], &e, &t);
-        let dw = -e.cross(&(t + downstream)) * gains[0];
-        update(stage, sum, 0, ws.joints[0].direction_rate, dw);
+        self.stage.decoy_rate = self.base.decoy_rate + dw * h;
+        self.sum.decoy_rate += dw * weight;
     }
-    ws.connection_force = t;
-    if !model.has_decoy() {
-        ws.joint_force[n - 1] = Vec3::zeros();
-    }
-    let (dq, dw) = decoy_derivative(model, stage, ws);
-    for ((o, b), (s, d)) in stage
-        .decoy_attitude
-        .iter_mut()
-        .zip(&base.decoy_attitude)
-        .zip(sum.decoy_attitude.iter_mut().zip(&dq))
-    {
-        *o = *b + *d * h;
-        *s += *d * weight;
-    }
-    stage.decoy_rate = base.decoy_rate + dw * h;
-    sum.decoy_rate += dw * weight;
-    Ok(())
 }
 
 /// Passes 2 and 3 as [`solve_tensions_and_accelerations`] at `state` (RK4's first
@@ -1400,6 +1629,8 @@ pub fn solve_tensions_first_stage_unkept<T: Real, const N: usize>(
     tensions_first_stage::<T, N, false>(model, state, ws, out, stage, h)
 }
 
+/// [`solve_tensions_first_stage`], keeping and probing every force (`KEEP`) or
+/// only T_0 and T_N.
 #[inline(always)]
 fn tensions_first_stage<T: Real, const N: usize, const KEEP: bool>(
     model: &Model<T, N>,
@@ -1410,100 +1641,118 @@ fn tensions_first_stage<T: Real, const N: usize, const KEEP: bool>(
     h: T,
 ) -> Result<(), SolveError> {
     let (model, state, ws, out, stage) = opaque((model, state, ws, out, stage));
-    let n = model.segment_count();
-    let last = last_joint_of(model, n);
-    let directions = &state.directions;
-    let gains = model.rate_gains_all();
-    let mut t = forward_sweep(model, state, ws)?;
-    let mut probe = t.x + t.y + t.z;
-    // Segment index j's derivative (de, dw) into `out` and the stage.
-    let write = |out: &mut Derivative<T, N>, stage: &mut State<T, N>, j: usize, de, dw| {
-        // j is n - 1 or 0 (both below N), restated: no bounds check.
-        let j = j.min(N - 1);
-        out.directions[j] = de;
-        out.rates[j] = dw;
-        stage.directions[j] = state.directions[j] + de * h;
-        stage.rates[j] = state.rates[j] + dw * h;
-    };
-    let mut downstream = if last == n {
-        ws.joint_force[n - 1] = t;
-        t
-    } else {
-        let zero = Vec3::zeros();
-        ws.joint_force[n - 1] = zero;
-        if last > 0 {
-            ws.joint_force[last - 1] = t;
-        }
-        let e = directions[n - 1];
-        let dw = -e.cross(&(t + zero)) * gains[n - 1];
-        write(out, stage, n - 1, ws.joints[n - 1].direction_rate, dw);
-        t
-    };
-    if last > 0 {
-        let range = 1..last;
-        let rows = opaque(&ws.pivots[range.clone()])
-            .iter()
-            .zip(opaque(&ws.joints[range.clone()]))
-            .zip(&gains[range.clone()])
-            .zip(
-                directions[range.clone()]
-                    .iter()
-                    .zip(&state.rates[range.clone()]),
-            )
-            .zip(
-                out.directions[range.clone()]
-                    .iter_mut()
-                    .zip(out.rates[range.clone()].iter_mut()),
-            )
-            .zip(
-                stage.directions[range.clone()]
-                    .iter_mut()
-                    .zip(stage.rates[range].iter_mut()),
-            )
-            .zip(ws.joint_force[..last - 1].iter_mut())
-            .rev();
-        for ((((((pivot, joint), gain), (e, w)), (de, dw_out)), (e_out, w_out)), force) in rows {
-            // Copies first: the stores below may alias for all the optimiser knows.
-            let (pivot, we, gain, e, w) = (*pivot, joint.direction_rate, *gain, *e, *w);
-            t = back_substitute(&pivot, &e, &t);
-            if KEEP {
-                probe += t.x + t.y + t.z;
-            }
-            let dw = -e.cross(&(t + downstream)) * gain;
-            *de = we;
-            *dw_out = dw;
-            *e_out = e + we * h;
-            *w_out = w + dw * h;
-            downstream = t;
-            if KEEP {
-                *force = t;
-            }
-        }
-        let e = directions[0];
-        t = back_substitute(&ws.pivots[0], &e, &t);
-        if KEEP {
-            probe += t.x + t.y + t.z;
-        }
-        let dw = -e.cross(&(t + downstream)) * gains[0];
-        write(out, stage, 0, ws.joints[0].direction_rate, dw);
+    back_sweep(
+        model,
+        ws,
+        FirstStage::<T, N, KEEP> {
+            state,
+            out,
+            stage,
+            h,
+        },
+    )
+}
+
+/// The sink of [`solve_tensions_first_stage`]: each segment's derivative k1 into
+/// `out` and its entries of the second stage, `stage = state + h k1`; then the
+/// decoy's.
+struct FirstStage<'a, T: Real, const N: usize, const KEEP: bool> {
+    /// The state evaluated (y).
+    state: &'a State<T, N>,
+    /// k1.
+    out: &'a mut Derivative<T, N>,
+    /// The second stage's state.
+    stage: &'a mut State<T, N>,
+    /// The stage factor.
+    h: T,
+}
+
+impl<T: Real, const N: usize, const KEEP: bool> SegmentSink<T, N> for FirstStage<'_, T, N, KEEP> {
+    const KEEP: bool = KEEP;
+    type Row<'r> = (
+        (&'r Vec3<T>, &'r Vec3<T>),
+        (
+            (&'r mut Vec3<T>, &'r mut Vec3<T>),
+            (&'r mut Vec3<T>, &'r mut Vec3<T>),
+        ),
+    );
+    type Rows<'r>
+        = core::iter::Zip<Pair<'r, T>, core::iter::Zip<PairMut<'r, T>, PairMut<'r, T>>>
+    where
+        Self: 'r;
+    /// w of the state.
+    type Read = Vec3<T>;
+    /// h.
+    type Factors = T;
+
+    #[inline(always)]
+    fn state(&self) -> &State<T, N> {
+        self.state
     }
-    ws.connection_force = t;
-    let result = if KEEP {
-        finish_tensions(model, ws, probe)
-    } else {
-        Ok(())
-    };
-    decoy_accelerations(model, state, ws, out);
-    for ((o, b), d) in stage
-        .decoy_attitude
-        .iter_mut()
-        .zip(&state.decoy_attitude)
-        .zip(&out.decoy_attitude)
-    {
-        *o = *b + *d * h;
+    #[inline(always)]
+    fn factors(&self) -> T {
+        self.h
     }
-    stage.decoy_rate = state.decoy_rate + out.decoy_rate * h;
-    result
+    #[inline(always)]
+    fn rows(&mut self, range: core::ops::Range<usize>) -> Self::Rows<'_> {
+        let (state, out, stage) = (self.state, &mut *self.out, &mut *self.stage);
+        pair(&state.directions, &state.rates, range.clone()).zip(
+            pair_mut(&mut out.directions, &mut out.rates, range.clone()).zip(pair_mut(
+                &mut stage.directions,
+                &mut stage.rates,
+                range,
+            )),
+        )
+    }
+    #[inline(always)]
+    fn row(&mut self, i: usize) -> Self::Row<'_> {
+        // i is n - 1 or 0 (both below N), restated: no bounds check.
+        let i = i.min(N - 1);
+        let (state, out, stage) = (self.state, &mut *self.out, &mut *self.stage);
+        (
+            (&state.directions[i], &state.rates[i]),
+            (
+                (&mut out.directions[i], &mut out.rates[i]),
+                (&mut stage.directions[i], &mut stage.rates[i]),
+            ),
+        )
+    }
+    #[inline(always)]
+    fn direction(((e, _), _): &Self::Row<'_>) -> Vec3<T> {
+        **e
+    }
+    #[inline(always)]
+    fn read(((_, w), _): &Self::Row<'_>) -> Vec3<T> {
+        **w
+    }
+    #[inline(always)]
+    fn write(
+        (_, ((de_out, dw_out), (e_out, w_out))): Self::Row<'_>,
+        e: Vec3<T>,
+        w: Vec3<T>,
+        h: T,
+        de: Vec3<T>,
+        dw: Vec3<T>,
+    ) {
+        *de_out = de;
+        *dw_out = dw;
+        *e_out = e + de * h;
+        *w_out = w + dw * h;
+    }
+    #[inline(always)]
+    fn decoy(&mut self, model: &Model<T, N>, ws: &Workspace<T, N>) {
+        decoy_accelerations(model, self.state, ws, self.out);
+        let (state, out, stage, h) = (self.state, &*self.out, &mut *self.stage, self.h);
+        for ((o, b), d) in stage
+            .decoy_attitude
+            .iter_mut()
+            .zip(&state.decoy_attitude)
+            .zip(&out.decoy_attitude)
+        {
+            *o = *b + *d * h;
+        }
+        stage.decoy_rate = state.decoy_rate + out.decoy_rate * h;
+    }
 }
 
 /// [`evaluate`] at `state` (RK4's first stage) with the second stage's state
