@@ -32,6 +32,7 @@ use std::process::ExitCode;
 
 mod bridge_cmd;
 mod progress;
+mod scenario_arg;
 mod signals;
 mod studies;
 
@@ -45,6 +46,7 @@ use decoy_sim::pendulum::{
 use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use progress::Progress;
+use scenario_arg::ScenarioArg;
 use serde::Serialize;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
 
@@ -104,8 +106,8 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct HilArgs {
-    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE")]
+    /// A shipped scenario or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
     scenario: String,
     /// The board: m4 (Cortex-M4F, f32, mps2-an386), m7 (Cortex-M7, f64, mps2-an500) or stm32f405 (STM32F405, f32, netduinoplus2).
     #[arg(long, value_enum, default_value_t = BoardArg::M4)]
@@ -179,8 +181,8 @@ struct TrimArgs {
 
 #[derive(Args, Debug)]
 struct SimulateArgs {
-    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE")]
+    /// A shipped scenario or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
     scenario: String,
     /// Number of cable segments (default: the scenario's, else the configuration's solver.segments_host).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]

@@ -8,3 +8,9 @@
 //! the solver, so that every layer may depend on it.
 #![no_std]
 #![deny(missing_docs)]
+
+pub mod manoeuvre;
+pub use manoeuvre::{
+    BUILTIN_ALTITUDE_M, BuiltinFlight, Manoeuvre, ManoeuvreInfo, Need, Parameter,
+    STREAMED_PROFILE_CODE,
+};
