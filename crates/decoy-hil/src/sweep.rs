@@ -518,7 +518,7 @@ mod tests {
             assert!(steady.len() >= 3 * altitudes.len());
             assert_eq!(
                 cases.iter().filter(|c| c.group == Group::Shipped).count(),
-                8
+                flight::SHIPPED_MANOEUVRES.len()
             );
             assert!(cases.iter().filter(|c| c.group == Group::RateLimit).count() >= 6);
             assert_eq!(

@@ -177,9 +177,16 @@ fn scenario_kinds_parse_with_the_messages_of_a_derived_enum() {
         assert_eq!(parse(&format!("\"{}\"", k.name())).unwrap().kind, k);
     }
     let message = |kind: &str| parse(kind).unwrap_err().to_string();
+    let expected: Vec<String> = ScenarioKind::ALL
+        .iter()
+        .map(|k| format!("`{}`", k.name()))
+        .collect();
     assert_eq!(
         message("\"PullUp\""),
-        "scenario, line 2: unknown variant `PullUp`, expected one of `steady`, `acceleration`, `pull-up`, `turn`, `recorded`"
+        format!(
+            "scenario, line 2: unknown variant `PullUp`, expected one of {}",
+            expected.join(", ")
+        )
     );
     assert_eq!(message("3"), "scenario, line 2: wanted string or table");
     assert_eq!(
