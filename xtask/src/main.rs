@@ -15,10 +15,13 @@
 //!   ELF` is the firmware's cargo runner (`firmware/qemu-run.sh`).
 //! - `check-refs`: the references stage alone ([`refs`]): every repository file
 //!   and section the text cites exists.
+//! - `check-layering`: the layering stage alone ([`layering`]): the crates'
+//!   dependencies, no `#[path]`, no file cycle ([`modules`]).
 
 mod apt;
 mod firmware;
 mod layering;
+mod modules;
 mod process;
 mod python;
 mod qemu;
@@ -95,6 +98,8 @@ enum Cmd {
     /// Check that every repository file and section the text cites exists (the
     /// references stage of `test`, alone).
     CheckRefs,
+    /// The layering stage alone: crate dependencies, `#[path]`, file cycles.
+    CheckLayering,
     /// A board's firmware (firmware/boards.toml): build, lint or run it.
     Firmware {
         #[command(subcommand)]
@@ -171,6 +176,7 @@ fn main() -> ExitCode {
         Cmd::BenchReport => bench_report(&root).and_then(|()| soak(&root, SOAK_DURATION)),
         Cmd::Soak { duration } => soak(&root, &duration),
         Cmd::CheckRefs => refs::check(&root),
+        Cmd::CheckLayering => layering::check(&root),
         Cmd::Firmware { command } => match firmware_command(&root, command) {
             // The runner's exit code is QEMU's.
             Ok(code) => return ExitCode::from(code),

@@ -45,7 +45,7 @@ use benches::{
 };
 use gungraun::{library_benchmark, library_benchmark_group, main};
 use solver_core::dense::{DenseSolution, evaluate_dense};
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::{
     AirColumn, AircraftState, Derivative, PointKinematics, Real, SolveError, Solver, TensionMethod,
     Uniform, Vec3,

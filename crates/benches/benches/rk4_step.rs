@@ -49,7 +49,7 @@ use criterion::{
     measurement::WallTime,
 };
 use solver_core::dense::evaluate_dense;
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::{
     AircraftState, Real, SegmentLayout, SolveError, Solver, State, TensionMethod, Uniform, Vec3,
 };

@@ -16,7 +16,7 @@ use std::hint::black_box;
 use solver_core::dynamics::{
     accelerations, cable_drag, decoy_aero, evaluate, prepare, solve_tensions,
 };
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::{
     AirColumn, Derivative, FlightPath, Model, PointKinematics, Real, Solver, State, TensionMethod,
     Vec3, Workspace,

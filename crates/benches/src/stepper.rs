@@ -29,7 +29,7 @@
 use crate::on_large_stack;
 use solver_core::dense::evaluate_dense;
 use solver_core::dynamics::{self, accelerations, prepare};
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::{
     AirColumn, Derivative, DerivativeSource, FlightPath, Model, PointKinematics, Real, Rk4,
     SolveError, Solver, State, Workspace,

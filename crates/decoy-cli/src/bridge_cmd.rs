@@ -1,5 +1,7 @@
 //! `decoy bridge`, `decoy bridge-layout` and `decoy feed`: the host bridge
-//! (crate `host-bridge`, docs/bridge.md); the CLI parses and prints.
+//! (crate `host-bridge`, docs/bridge.md; its qemu backend and `decoy feed` are
+//! `decoy_stream::qemu_backend` and `decoy_stream::feed`); the CLI parses and
+//! prints.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -7,18 +9,18 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
+use cpu_affinity::{Cpus, current_list, pin_process, shown};
 use decoy_sim::Scenario;
-use host_bridge::affinity::{Cpus, current_list, pin_process, shown};
-use host_bridge::backend::{
-    BackendKind, BackendOptions, Precision, describe_backend, make_backend,
-};
+use decoy_stream::feed::{FeedError, FeedOptions, FeedRun, answer_timeout, run_feed};
+use decoy_stream::fly::Mode;
+use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
+use host_bridge::backend::{BackendOptions, Precision, describe_backend, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
-use host_bridge::feed::{FeedError, FeedMode, FeedOptions, FeedRun, answer_timeout, run_feed};
 use host_bridge::services::{check_instance, iox_config, quiet_iceoryx_log};
 
+use crate::failure::{Failure, usage};
 use crate::progress::Progress;
 use crate::scenario_arg::ScenarioArg;
-use crate::{Failure, usage};
 
 /// The instance when none is named.
 pub const DEFAULT_INSTANCE: &str = "default";
@@ -119,11 +121,19 @@ fn bridge_failure(e: host_bridge::BridgeError) -> Failure {
     }
 }
 
+fn affinity_failure(e: cpu_affinity::AffinityError) -> Failure {
+    if e.is_usage() {
+        Failure::Usage(e.to_string())
+    } else {
+        Failure::Solver(e.to_string())
+    }
+}
+
 /// `--cpu`: this process (and what it starts) on those CPUs only.
 fn pin(cpu: Option<&str>) -> Result<(), Failure> {
     if let Some(text) = cpu {
-        let cpus = Cpus::parse(text).map_err(bridge_failure)?;
-        pin_process(&cpus).map_err(bridge_failure)?;
+        let cpus = Cpus::parse(text).map_err(affinity_failure)?;
+        pin_process(&cpus).map_err(affinity_failure)?;
     }
     Ok(())
 }
@@ -134,11 +144,8 @@ pub fn bridge_command(
     json: bool,
 ) -> Result<String, Failure> {
     check_instance(&args.instance).map_err(bridge_failure)?;
-    let kind = match args.backend {
-        BackendArg::Host => BackendKind::Host,
-        BackendArg::Qemu => BackendKind::Qemu,
-    };
-    if kind == BackendKind::Qemu && config.is_some() {
+    let qemu = args.backend == BackendArg::Qemu;
+    if qemu && config.is_some() {
         return Err(usage(
             "--config does not apply to the qemu backend: the firmware is built from config/reference-system.toml",
         ));
@@ -150,21 +157,29 @@ pub fn bridge_command(
     pin(args.cpu.as_deref())?;
     quiet_iceoryx_log();
     let iox = iox_config(None, None).map_err(bridge_failure)?;
-    let options = BackendOptions {
-        kind,
-        board: args.board,
-        precision: args.precision.map(|p| match p {
-            PrecisionArg::F32 => Precision::F32,
-            PrecisionArg::F64 => Precision::F64,
-        }),
-        segments: args.segments,
-        grading: args.grading,
-        trim_at_once: false,
-    };
-    if kind == BackendKind::Qemu {
+    let precision = args.precision.map(|p| match p {
+        PrecisionArg::F32 => Precision::F32,
+        PrecisionArg::F64 => Precision::F64,
+    });
+    let backend = if qemu {
         eprintln!("decoy bridge: building and booting the firmware under QEMU ...");
+        let options = QemuOptions {
+            board: args.board,
+            precision,
+            segments: args.segments,
+            grading: args.grading,
+        };
+        qemu_backend(&config, &options)
+    } else {
+        let options = BackendOptions {
+            precision,
+            segments: args.segments,
+            grading: args.grading,
+            trim_at_once: false,
+        };
+        host_backend(&config, &options)
     }
-    let backend = make_backend(&config, &options).map_err(bridge_failure)?;
+    .map_err(bridge_failure)?;
     let info = backend.info().clone();
     let bridge = BridgeOptions {
         instance: args.instance.clone(),
@@ -254,8 +269,8 @@ pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Resul
     let options = FeedOptions {
         instance: args.instance.clone(),
         mode: match args.mode {
-            ModeArg::Lockstep => FeedMode::Lockstep,
-            ModeArg::Free => FeedMode::Free,
+            ModeArg::Lockstep => Mode::Lockstep,
+            ModeArg::Free => Mode::Free,
         },
         realtime: args.realtime,
         t_end: args.t_end,
@@ -264,9 +279,9 @@ pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Resul
         plots: !args.no_plots,
         timeout,
     };
-    // SIGINT and SIGTERM stop the flight at the next frame: host-bridge's
-    // handlers, chained after the client node's iceoryx2 handler (which would
-    // replace ones installed before it).
+    // SIGINT and SIGTERM stop the flight at the next frame: the pipeline's
+    // handlers (`decoy_stream::signals`), chained after the client node's
+    // iceoryx2 handler (which would replace ones installed before it).
     let mut bar = Progress::new("feeding the bridge", json);
     let result = run_feed(config, &scenario, &options, &iox, |f| bar.update(f));
     bar.finish();

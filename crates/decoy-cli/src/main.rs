@@ -15,15 +15,16 @@
 //! - `decoy report`: regenerates `docs/paper-reproduction.md` and its figures.
 //! - `decoy hil`: flies a scenario on the decoy controller firmware under QEMU,
 //!   frame by frame over the decoy link, beside the host's solution
-//!   (`decoy_hil::hil_run`).
+//!   (`decoy_stream::hil`).
 //! - `decoy bridge`, `decoy bridge-layout`, `decoy feed`: the host bridge over
-//!   iceoryx2 (`host_bridge`, docs/bridge.md).
+//!   iceoryx2 (`host_bridge`, docs/bridge.md; `decoy feed` is
+//!   `decoy_stream::feed`).
 //!
 //! Human-readable output by default, `--json` for machines. Errors are one line
 //! `error: ...` on stderr; the exit code is 2 for usage and configuration errors,
 //! 1 when the solver fails, and 130 or 143 when SIGINT or SIGTERM stopped
 //! `decoy simulate`, `decoy hil` or `decoy feed` (which then write what they
-//! flew; a second signal ends them at once: `signals`).
+//! flew; a second signal ends them at once: `decoy_stream::signals`).
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -32,23 +33,24 @@ use std::process::ExitCode;
 
 mod board_arg;
 mod bridge_cmd;
+mod failure;
 mod progress;
 mod scenario_arg;
-mod signals;
 mod studies;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use decoy_config::{ConfigError, SystemConfig};
-use decoy_hil::hil_run::{HilOptions, HilRun};
+use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
 use decoy_sim::pendulum::{
     PendulumError, PendulumMethod, PendulumReport, PendulumRequest, run_pendulum,
 };
 use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
-use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
+use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, describe_layout};
+use decoy_stream::hil::{HilError, HilOptions, HilRun, run_hil};
+use decoy_stream::signals::Interrupts;
+use failure::{Failure, to_json, usage};
 use progress::Progress;
 use scenario_arg::ScenarioArg;
-use serde::Serialize;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
 
 /// Stack of the worker thread (the fixed-capacity solver types are large values).
@@ -224,67 +226,6 @@ enum Method {
     Dense,
 }
 
-/// Why a command failed, and so its exit code.
-#[derive(Debug)]
-enum Failure {
-    /// Bad command line or configuration: exit code 2.
-    Usage(String),
-    /// The solver could not produce a result: exit code 1.
-    Solver(String),
-    /// A signal stopped the run (its outputs are written): exit code 130
-    /// (SIGINT) or 143 (SIGTERM), [`signals::exit_code`].
-    Interrupted {
-        /// What stopped where, and where the outputs are.
-        message: String,
-        /// The exit code.
-        code: u8,
-    },
-}
-
-impl Failure {
-    fn exit_code(&self) -> u8 {
-        match self {
-            Failure::Usage(_) => 2,
-            Failure::Solver(_) => 1,
-            Failure::Interrupted { code, .. } => *code,
-        }
-    }
-    fn message(&self) -> &str {
-        match self {
-            Failure::Usage(m) | Failure::Solver(m) | Failure::Interrupted { message: m, .. } => m,
-        }
-    }
-    /// The signal `signal` stopped the run: `message` says where.
-    fn interrupted(signal: &str, message: String) -> Self {
-        Failure::Interrupted {
-            message,
-            code: signals::exit_code(signal),
-        }
-    }
-}
-
-impl From<SimError> for Failure {
-    fn from(e: SimError) -> Self {
-        if let SimError::Interrupted { signal, .. } = &e {
-            Failure::interrupted(signal, e.to_string())
-        } else if e.is_usage() {
-            Failure::Usage(e.to_string())
-        } else {
-            Failure::Solver(e.to_string())
-        }
-    }
-}
-
-impl From<ConfigError> for Failure {
-    fn from(e: ConfigError) -> Self {
-        Failure::Usage(e.to_string())
-    }
-}
-
-fn usage(message: impl Into<String>) -> Failure {
-    Failure::Usage(message.into())
-}
-
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -426,8 +367,10 @@ fn simulate_command(
         out_dir: args.out.clone(),
         plots: !args.no_plots,
     };
-    // SIGINT and SIGTERM stop the run at a step boundary (module `signals`).
-    let interrupts = signals::Interrupts::install()?;
+    // SIGINT and SIGTERM stop the run at a step boundary (`decoy_stream::signals`).
+    let interrupts = Interrupts::install().map_err(|e| {
+        Failure::Solver(format!("cannot install the SIGINT/SIGTERM handlers: {e}"))
+    })?;
     let mut bar = Progress::new("simulating", json);
     let result = decoy_sim::simulate_until(
         config,
@@ -624,21 +567,13 @@ fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<Stri
         plots: !args.no_plots,
         firmware: args.firmware.clone(),
     };
-    // SIGINT and SIGTERM stop the flight at the next frame (module `signals`).
-    let interrupts = signals::Interrupts::install()?;
+    // SIGINT and SIGTERM stop the flight at the next frame (the pipeline's
+    // handlers, `decoy_stream::signals`).
     let mut bar = Progress::new("flying on the firmware", json);
-    let result = decoy_hil::hil_run::run_hil_until(
-        config,
-        &scenario,
-        &options,
-        |f| bar.update(f),
-        || interrupts.received(),
-    );
+    let result = run_hil(config, &scenario, &options, |f| bar.update(f));
     bar.finish();
     let run = result.map_err(|e| match &e {
-        decoy_hil::hil_run::HilError::Interrupted { signal, .. } => {
-            Failure::interrupted(signal, e.to_string())
-        }
+        HilError::Interrupted { signal, .. } => Failure::interrupted(signal, e.to_string()),
         _ if e.is_usage() => Failure::Usage(e.to_string()),
         _ => Failure::Solver(e.to_string()),
     })?;
@@ -903,11 +838,4 @@ fn extreme(values: &[f64], better: impl Fn(f64, f64) -> bool) -> (usize, f64) {
         .fold((0, values[0]), |best, (j, v)| {
             if better(v, best.1) { (j, v) } else { best }
         })
-}
-
-fn to_json<T: Serialize>(value: &T) -> String {
-    let mut text =
-        serde_json::to_string(value).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-    text.push('\n');
-    text
 }

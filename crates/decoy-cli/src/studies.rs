@@ -1,26 +1,26 @@
-//! `decoy sweep`, `decoy study` and `decoy report` (library: `decoy_sim::sweep`,
-//! `decoy_sim::study`, `decoy_sim::report`; outputs in `docs/sweeps.md`).
+//! `decoy sweep`, `decoy study` and `decoy report` (the library is the crate
+//! `decoy-studies`: `sweep`, `study`, `report`; outputs in `docs/sweeps.md`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 use decoy_config::SystemConfig;
-use decoy_sim::report::{ReportOptions, Verdict, write_report};
-use decoy_sim::study::{StudySpec, discretisation_study, write_study};
-use decoy_sim::sweep::{
+use decoy_sim::trim::host_layout;
+use decoy_studies::report::{ReportOptions, Verdict, write_report};
+use decoy_studies::study::{StudySpec, discretisation_study, write_study};
+use decoy_studies::sweep::{
     PullUpSpec, PullUpSweep, StaticMarginSpec, StaticMarginSweep, pull_up_sweep,
     static_margin_sweep, write_pull_up_sweep, write_static_margin_sweep,
 };
-use decoy_sim::sweep::{
+use decoy_studies::sweep::{
     SettlingSpec, SettlingSweep, StationVariable, SteadySweep, SteadySweepSpec, SteadyVariable,
     SweepRange, settling_sweep, steady_sweep, write_settling_sweep, write_steady_sweep,
 };
-use decoy_sim::trim::host_layout;
 use serde::Serialize;
 
 use crate::progress::Progress;
-use crate::{Failure, to_json, usage};
+use crate::failure::{Failure, to_json, usage};
 
 /// The command that regenerates the report, as the report quotes it.
 pub const REPORT_COMMAND: &str = "cargo run --release -p decoy-cli --bin decoy -- report";

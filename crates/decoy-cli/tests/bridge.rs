@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use bridge_types::{AircraftState, Header, command, health, kind};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::from_link_frame;
-use host_bridge::local::Isolated;
+use bridge_local::Isolated;
 use serde_json::Value;
 
 const DECOY: &str = env!("CARGO_BIN_EXE_decoy");
@@ -522,7 +522,7 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
 /// cannot be used is a usage error (exit 2) before anything starts.
 #[test]
 fn cpu_puts_the_bridge_and_its_client_on_one_core() {
-    let cpu = host_bridge::affinity::Cpus::of_this_thread()
+    let cpu = cpu_affinity::Cpus::of_this_thread()
         .unwrap()
         .list()[0]
         .to_string();
@@ -580,7 +580,7 @@ fn cpu_puts_the_bridge_and_its_client_on_one_core() {
     ];
     // CPUs this process may not run on (on a machine with all 1,024, none):
     // alone, and beside one it may use (which the kernel would silently keep).
-    let allowed = host_bridge::affinity::Cpus::of_this_thread().unwrap();
+    let allowed = cpu_affinity::Cpus::of_this_thread().unwrap();
     if let Some(absent) = (0..1024).find(|c| !allowed.list().contains(c)) {
         refused.push((
             "bridge",

@@ -16,6 +16,7 @@ use crate::lookahead::Lookahead;
 use crate::monitor::{ManagementConfig, Measures, Monitors};
 use crate::path::{FramePath, PathEnd, steady_flight};
 use crate::validate::{is_finite, validate_streamed};
+use crate::wave::{wave_rate_of, wave_steps};
 use decoy_link::{
     Advisories, AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello,
     HostMessage, Management, OutputFrame, PROTOCOL_VERSION, Profile, RejectReason, Rejected,
@@ -25,18 +26,13 @@ use decoy_link::{Decoder, FrameError};
 
 /// The longest RK4 step, s: a frame interval dt is integrated in
 /// n = ceil(dt / MAX_STEP_S - 1e-9) steps of dt / n, or more where the
-/// wave-speed limit asks ([`WAVE_STEP_FACTOR`]). 2.5 ms (four steps per 10 ms
+/// wave-speed limit asks ([`crate::wave::WAVE_STEP_FACTOR`]). 2.5 ms (four steps per 10 ms
 /// frame) is the accuracy step of the embedded model (12 graded 1.26): through a
 /// snatch load it keeps the peak tension within 2 % of the host's converged
 /// solution (issue 14, firmware/README.md "The worst frame and the accuracy"),
 /// and the wave-speed limit of its 1.73 m shortest segment is not reached by
 /// any shipped manoeuvre.
 pub const MAX_STEP_S: f64 = 0.0025;
-/// Safety factor of the wave-speed step limit: every RK4 step is at most
-/// `WAVE_STEP_FACTOR` l_i / c_i for every segment i, c_i = sqrt(T_i / mu) the
-/// transverse wave speed at its larger end tension: a thin rod pulled at both
-/// ends swings at sqrt(12) c/l, and RK4 is stable to about 2.8 rad per step.
-pub const WAVE_STEP_FACTOR: f64 = 0.8;
 /// Most RK4 steps one frame may take onboard (a floor of 0.5 ms on a 10 ms
 /// frame; `ControllerConfig::max_steps_per_frame`'s value for the embedded
 /// model).
@@ -1101,7 +1097,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
 
     /// The RK4 steps for a frame `interval` seconds after the last one, whose
     /// [`nominal_steps`] are `nominal`: those and, with the tensions of the last
-    /// evaluation (the previous frame's outputs), at most [`WAVE_STEP_FACTOR`]
+    /// evaluation (the previous frame's outputs), at most [`crate::wave::WAVE_STEP_FACTOR`]
     /// l_i / c_i on every segment; at most `max_steps_per_frame`. In steady
     /// flight the first limit decides (four steps per 10 ms frame for the
     /// reference system); a snatch load (the cable jerked taut after a pull-up)
@@ -1117,7 +1113,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     /// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
     /// segment i, with the tensions of the solver's last evaluation.
     fn last_wave_rate(&self) -> T {
-        crate::lookahead::wave_rate_of(&self.solver)
+        wave_rate_of(&self.solver)
     }
 
     /// `steps` RK4 steps over `path` ending exactly at `t1` and the output
@@ -1142,7 +1138,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 .steps_on(path, steps, t1)
                 .and_then(|()| solver.outputs(path).map(drop));
             let wanted = match attempt {
-                Ok(()) => wave_steps(path.span_s(), crate::lookahead::wave_rate_of(solver), max),
+                Ok(()) => wave_steps(path.span_s(), wave_rate_of(solver), max),
                 Err(_) => 2 * steps,
             };
             if wanted <= steps || steps >= max {
@@ -1316,23 +1312,6 @@ fn nominal_steps(interval: f64) -> u32 {
         }
     }
     lo as u32 + 1
-}
-
-/// The steps of `dt` the wave-speed limit asks for at the wave-speed rate `rate`
-/// (max_i c_i / l_i, 1/s): ceil(dt rate / [`WAVE_STEP_FACTOR`]); 0 if not finite
-/// (saturating at `max` + 1).
-fn wave_steps<T: Real>(dt: f64, rate: T, max: u32) -> u32 {
-    // In T (f64 is emulated on the M4F); an exact integer here is a tie of no
-    // consequence either way.
-    let steps = (T::lit(dt) * rate * T::lit(1.0 / WAVE_STEP_FACTOR)).ceil();
-    if !steps.finite() {
-        return 0;
-    }
-    if steps > T::from_count(u64::from(max)) {
-        max + 1
-    } else {
-        steps.truncated_index() as u32
-    }
 }
 
 /// True when every value of an Output frame is finite (the decoy's position,

@@ -17,6 +17,8 @@
 //!   and the aircraft (the host's `decoy simulate` uses the same code).
 //! - [`monitor`]: the decoy-management monitors (posture, collision, tension,
 //!   exhaust): margins, levels with hysteresis, worst margins and counts.
+//! - [`wave`]: the wave-speed step limit (the stepping rule's input), which the
+//!   controller and the look-ahead share.
 //! - [`lookahead`]: the prediction flown forward with the aircraft holding its
 //!   manoeuvre, in fixed slices per frame.
 //! - [`controller`]: [`Controller`], the pure state machine.
@@ -42,6 +44,7 @@ pub mod params;
 pub mod path;
 pub mod serve;
 pub mod validate;
+pub mod wave;
 
 pub use controller::{
     CONTROL_PERIOD_US, Controller, ControllerConfig, ControllerError, ControllerSnapshot,

@@ -22,7 +22,7 @@
 //! holds: [`HeldManoeuvre::departs_from`]), so a new one completes every horizon / (steps per frame x step)
 //! frames; a violation it finds on the way is reported at once (the advisory
 //! does not wait for the rest of the horizon). Each step is at most `prediction_max_step_s` and at most the
-//! controller's wave-speed limit ([`crate::controller::WAVE_STEP_FACTOR`]) at the
+//! controller's wave-speed limit ([`crate::wave::WAVE_STEP_FACTOR`]) at the
 //! copy's last tensions. The predicted state is measured on every third step
 //! (and at the horizon's end): at most 18 ms between the samples of the margins
 //! (the measures cost about a fifth of a step; the slice's instruction budget). A step that fails ends the prediction at the time reached.
@@ -46,9 +46,9 @@ use solver_core::{
     Vec3,
 };
 
-use crate::controller::WAVE_STEP_FACTOR;
 use crate::geometry::Geometry;
 use crate::monitor::{ManagementConfig, Measures, tension_margin_of};
+use crate::wave::{WAVE_STEP_FACTOR, wave_rate_of};
 use decoy_schema::{PerRequirement, Requirement};
 
 /// The shortest look-ahead step, s: a step that fails at this length ends the
@@ -566,27 +566,6 @@ pub fn coarse_state<T: Real, const N: usize, const P: usize>(
     copy.decoy_attitude = state.decoy_attitude;
     copy.decoy_rate = state.decoy_rate;
     copy
-}
-
-/// max_i c_i / l_i (1/s), c_i = sqrt(T_i / mu) at the larger end tension of
-/// segment i, with the tensions of the solver's last evaluation: the stepping
-/// rule's input, the controller's and the look-ahead's.
-pub(crate) fn wave_rate_of<T: Real, const N: usize>(solver: &Solver<T, N>) -> T {
-    let model = solver.model();
-    let out = solver.last_outputs();
-    // max_i T_i^2 / l_i^4 from the squared joint forces (two roots in all):
-    // then max_i c_i / l_i = sqrt(sqrt(max) / mu).
-    // (Compare-and-select rather than `max`, which is a libm call on the M4F.)
-    let larger = |a: T, b: T| if b > a { b } else { a };
-    let mut worst = T::zero();
-    let mut upstream = out.joint_force(0).norm_squared();
-    for (l, force) in model.lengths().iter().zip(out.downstream_joint_forces()) {
-        let downstream = force.norm_squared();
-        let l2 = *l * *l;
-        worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
-        upstream = downstream;
-    }
-    (worst.square_root() / model.params().cable.linear_density).square_root()
 }
 
 #[cfg(test)]

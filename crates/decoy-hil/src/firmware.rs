@@ -23,6 +23,10 @@ pub use decoy_boards::BINARY;
 /// The bare-metal target of the firmware (every board's).
 pub use decoy_boards::TARGET;
 
+/// Time limit of a firmware build (`decoy hil`, the bridge's qemu backend, the
+/// step-cost measurement).
+pub const BUILD_TIMEOUT: Duration = Duration::from_secs(900);
+
 /// The environment variable naming the checkout whose `firmware/` is built (for
 /// a `decoy` installed away from its checkout).
 pub const SOURCE_ENV: &str = "DECOY_SOURCE_DIR";

@@ -4,9 +4,9 @@
 //! (`firmware/`, a workspace of its own), boots it under QEMU with deterministic
 //! instruction counting (`-icount`), talks the decoy link (`decoy_link`) to it over
 //! its UART, and compares its answers with the same controller
-//! (`decoy_controller`) run on the host. `decoy hil` ([`hil_run`]), the benches'
-//! firmware rows and the HIL tests (`crates/hil-tests`, which holds only tests)
-//! use it.
+//! (`decoy_controller`) run on the host. `decoy hil` (`decoy_stream::hil`), the
+//! bridge's qemu backend (`decoy_stream::qemu_backend`), the benches' firmware
+//! rows and the HIL tests (`crates/hil-tests`, which holds only tests) use it.
 //!
 //! - [`qemu`]: run a program with a time limit, killed on timeout and on drop;
 //!   the QEMU command line of the boards ([`qemu::Board`], the boards of
@@ -23,7 +23,6 @@
 //! - [`reference`]: the host reference, the firmware's controller in this process
 //!   in the firmware's precision; every build computes the target's maths (libm),
 //!   so its answers equal the firmware's bit for bit.
-//! - [`hil_run`]: `decoy hil`.
 //! - [`step_cost`]: the firmware's `examples/step_cost.rs`, the instructions of one
 //!   RK4 step on the target.
 #![deny(missing_docs)]
@@ -31,7 +30,6 @@
 pub mod defmt;
 pub mod firmware;
 pub mod flight;
-pub mod hil_run;
 pub mod link;
 pub mod panic_sites;
 pub mod qemu;

@@ -172,7 +172,7 @@ impl SimError {
     }
 
     /// `self` as the failure of one point of a sweep.
-    pub(crate) fn at(self, point: impl Into<String>) -> Self {
+    pub fn at(self, point: impl Into<String>) -> Self {
         SimError::AtPoint {
             point: point.into(),
             source: Box::new(self),
@@ -180,7 +180,7 @@ impl SimError {
     }
 
     /// An [`SimError::InvalidInput`].
-    pub(crate) fn invalid(
+    pub fn invalid(
         origin: impl Into<String>,
         field: impl Into<String>,
         message: impl Into<String>,

@@ -19,13 +19,8 @@
 //!   directory hold one run's files only (every command that writes one calls
 //!   it), and every file is written whole (`decoy_plots::atomic`).
 //! - [`trace()`]: the same run kept in memory (optionally from a perturbed trim),
-//!   for the studies below.
-//! - [`sweep`]: the paper's steady-flight sweeps (speed, altitude; Figs. 15-22)
-//!   and the towing-point and CG settling sweeps (Figs. 23-24) (`decoy sweep`).
-//! - [`study`]: the discretisation study (Figs. 13-14) and the choice of the
-//!   embedded model (`decoy study discretisation`).
-//! - [`report`]: `docs/paper-reproduction.md`, every claim of the paper against
-//!   what the project computes (`decoy report`; outputs in `docs/sweeps.md`).
+//!   for the studies (crate `decoy-studies`: the sweeps, the discretisation
+//!   study and the paper reproduction report, built on these runs).
 //!
 //! Output frame: the *flight-path frame* ([`FlightPathFrame`]) at each instant,
 //! origin at the aircraft reference point, x along the aircraft's velocity, y
@@ -50,10 +45,7 @@
 //!    `summary` ([`Summary`], [`summarize`]);
 //! 5. `plots`;
 //! 6. `run` ([`simulate`]: the integration loop and the output directory);
-//! 7. `trace` (a run in memory);
-//! 8. `sweep` (`mod.rs`: ranges and table/plot helpers; `steady`, `settling`),
-//!    then `study`, then `report` (`mod.rs`: the entry point; `data`, `claims`,
-//!    `figures`, `render`).
+//! 7. `trace` (a run in memory).
 //!
 //! ```no_run
 //! use decoy_config::SystemConfig;
@@ -84,12 +76,9 @@ mod plots;
 pub mod profile;
 pub mod record;
 pub mod recorded;
-pub mod report;
 pub mod run;
 pub mod scenario;
-pub mod study;
 pub mod summary;
-pub mod sweep;
 pub mod trace;
 pub mod trim;
 

@@ -8,7 +8,7 @@
 
 use serde::Serialize;
 use solver_core::dense::{DenseDerivative, evaluate_dense};
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::{
     AircraftState, Model, Rk4, Solver, State, Uniform, Vec3, pendulum_energy,
     pendulum_initial_state, reference_pendulum,

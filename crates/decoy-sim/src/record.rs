@@ -325,7 +325,7 @@ impl CsvFile {
 /// Time from which the connection tension of `samples` (the rows of
 /// `timeseries.csv`) stays within the settling band about its last value; `None`
 /// unless it then stayed there for [`SETTLING_HOLD_S`].
-pub(crate) fn settling_time(samples: &[Sample]) -> Option<f64> {
+pub fn settling_time(samples: &[Sample]) -> Option<f64> {
     let last = samples.last()?;
     let final_tension = last.tension_connection;
     let band = SETTLING_BAND * final_tension.abs();

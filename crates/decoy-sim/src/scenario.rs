@@ -789,7 +789,9 @@ fn check_options(o: &RunOptions) -> Result<(), SimError> {
     Ok(())
 }
 
-pub(crate) type Invalid<'a> = dyn Fn(&str, String) -> SimError + 'a;
+/// How a check names a bad value: the field (key or flag) and what is wrong
+/// with it, as a [`SimError`] of the origin the caller knows.
+pub type Invalid<'a> = dyn Fn(&str, String) -> SimError + 'a;
 
 pub(crate) fn check_finite(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), SimError> {
     if v.is_finite() {
@@ -826,7 +828,8 @@ fn check_non_negative(invalid: &Invalid<'_>, field: &str, v: f64) -> Result<(), 
     }
 }
 
-pub(crate) fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Result<(), SimError> {
+/// An altitude within [`ALTITUDE_RANGE_M`].
+pub fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Result<(), SimError> {
     let (lo, hi) = ALTITUDE_RANGE_M;
     if h.is_finite() && (lo..=hi).contains(&h) {
         Ok(())
@@ -838,7 +841,8 @@ pub(crate) fn check_altitude(invalid: &Invalid<'_>, field: &str, h: f64) -> Resu
     }
 }
 
-pub(crate) fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(), SimError> {
+/// A Mach number above 0 and at most [`MAX_MACH`].
+pub fn check_mach(invalid: &Invalid<'_>, field: &str, m: f64) -> Result<(), SimError> {
     if m.is_finite() && m > 0.0 && m <= MAX_MACH {
         Ok(())
     } else {
@@ -866,7 +870,8 @@ fn check_rate(invalid: &Invalid<'_>, field: &str, w: f64) -> Result<(), SimError
     }
 }
 
-pub(crate) fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Result<(), SimError> {
+/// A segment count from 1 to [`MAX_SEGMENTS`].
+pub fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Result<(), SimError> {
     if (1..=MAX_SEGMENTS).contains(&n) {
         Ok(())
     } else {
@@ -877,7 +882,8 @@ pub(crate) fn check_segments(invalid: &Invalid<'_>, field: &str, n: usize) -> Re
     }
 }
 
-pub(crate) fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Result<(), SimError> {
+/// A grading ratio within [`GRADING_RANGE`].
+pub fn check_grading(invalid: &Invalid<'_>, field: &str, r: f64) -> Result<(), SimError> {
     let (lo, hi) = GRADING_RANGE;
     if r.is_finite() && (lo..=hi).contains(&r) {
         Ok(())

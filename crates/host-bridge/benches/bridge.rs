@@ -27,12 +27,14 @@ use bridge_types::{AircraftState, Answer, event};
 use decoy_config::SystemConfig;
 use decoy_hil::flight::scenario_frames;
 use decoy_link::{AircraftStateFrame, HostMessage};
-use host_bridge::affinity::{Cpus, pin_process};
-use host_bridge::backend::{BackendKind, BackendOptions, Precision, make_backend};
-use host_bridge::bridge::{BridgeOptions, Percentiles, run_bridge};
+use bridge_local::Isolated;
+use cpu_affinity::{Cpus, pin_process};
+use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
+use host_bridge::backend::{Backend, BackendOptions, Precision, host_backend};
+use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::from_link_frame;
-use host_bridge::local::Isolated;
+use host_bridge::timing::Percentiles;
 use host_bridge::services::{
     Ipc, Services, create_status_service, iox_config, node, quiet_iceoryx_log,
 };
@@ -242,7 +244,7 @@ fn solver_time(
     std::thread::Builder::new()
         .stack_size(64 << 20)
         .spawn(move || {
-            let mut b = make_backend(
+            let mut b = host_backend(
                 &config,
                 &BackendOptions {
                     precision: Some(precision),
@@ -278,18 +280,22 @@ fn serve(kind: &str) {
         return;
     }
     let system = SystemConfig::builtin().unwrap();
-    let options = match kind {
-        "host-f32-embedded" => BackendOptions::default(),
-        "host-f64-300" => BackendOptions {
+    let host = |options: BackendOptions| {
+        move |system: &SystemConfig| -> Box<dyn Backend + Send> {
+            host_backend(system, &options).unwrap()
+        }
+    };
+    let make: Box<dyn FnOnce(&SystemConfig) -> Box<dyn Backend + Send> + Send> = match kind {
+        "host-f32-embedded" => Box::new(host(BackendOptions::default())),
+        "host-f64-300" => Box::new(host(BackendOptions {
             precision: Some(Precision::F64),
             segments: Some(300),
             grading: Some(1.0),
             ..BackendOptions::default()
-        },
-        "qemu" => BackendOptions {
-            kind: BackendKind::Qemu,
-            ..BackendOptions::default()
-        },
+        })),
+        "qemu" => Box::new(|system: &SystemConfig| {
+            qemu_backend(system, &QemuOptions::default()).unwrap()
+        }),
         other => panic!("unknown server {other}"),
     };
     let bridge = BridgeOptions {
@@ -301,7 +307,7 @@ fn serve(kind: &str) {
     std::thread::Builder::new()
         .stack_size(64 << 20)
         .spawn(move || {
-            let backend = make_backend(&system, &options).unwrap();
+            let backend = make(&system);
             run_bridge(&bridge, backend, |_| {}).unwrap();
         })
         .unwrap()

@@ -40,9 +40,9 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use bridge_types::{AircraftState, Command as BridgeCommand, Header, command, kind, result};
-use host_bridge::bridge::Percentiles;
+use host_bridge::timing::Percentiles;
 use host_bridge::client::BridgeClient;
-use host_bridge::local::Isolated;
+use bridge_local::Isolated;
 use host_bridge::services::quiet_iceoryx_log;
 use host_bridge::timing::LatencyHistogram;
 use serde_json::{Value, json};

@@ -1,31 +1,23 @@
-//! What answers the states: the controller in this process (`host`) or the
-//! firmware under QEMU over its UART (`qemu`). Both take the decoy link's
-//! messages, so the bridge maps every request the same way for both.
-
-use std::time::Duration;
+//! What answers the states: a [`Backend`], which takes the decoy link's
+//! messages, so the bridge maps every request the same way whatever answers
+//! it. The host backend (`decoy bridge --backend host`) is here: the
+//! controller in this process. The qemu backend, the firmware under QEMU over
+//! its UART, is `decoy_stream::qemu_backend` (it builds and boots the firmware
+//! as `decoy hil` does, which a client of the bridge need not compile).
 
 use decoy_config::SystemConfig;
 use decoy_controller::{Controller, NoCounter};
-use decoy_hil::link::{LinkError, Session};
-use decoy_hil::qemu::Board;
-use decoy_link::{DeviceMessage, HostMessage, PROTOCOL_VERSION, StatusFlags};
+use decoy_link::{DeviceMessage, HostMessage, PROTOCOL_VERSION};
 use solver_core::{Real, SegmentLayout};
 
 use crate::BridgeError;
 
-/// Segment capacity of the host controller up to 64 segments (decoy-hil's, the firmware's).
-pub const SMALL_CAPACITY: usize = decoy_hil::flight::CONTROLLER_CAPACITY;
+/// Segment capacity of the host controller up to 64 segments (that of
+/// `decoy_hil::flight::CONTROLLER_CAPACITY`, the host reference of `decoy hil`:
+/// a test of decoy-stream checks that they agree).
+pub const SMALL_CAPACITY: usize = 64;
 /// Segment capacity of the host controller above 64 segments.
 pub const LARGE_CAPACITY: usize = 512;
-
-/// Which backend.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BackendKind {
-    /// `decoy_controller::Controller` in the bridge's process.
-    Host,
-    /// The firmware under QEMU, over the decoy link.
-    Qemu,
-}
 
 /// The solver's scalar.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,15 +38,10 @@ impl Precision {
     }
 }
 
-/// How to build a backend.
-#[derive(Clone, Debug)]
+/// How to build the host backend.
+#[derive(Clone, Debug, Default)]
 pub struct BackendOptions {
-    /// Host or QEMU.
-    pub kind: BackendKind,
-    /// The board of the qemu backend (its precision is the board's:
-    /// `firmware/boards.toml`).
-    pub board: Board,
-    /// The host backend's precision (None: f32; the qemu backend's is its board's).
+    /// The precision (None: f32).
     pub precision: Option<Precision>,
     /// Segments (None: the configuration's embedded count).
     pub segments: Option<usize>,
@@ -65,19 +52,6 @@ pub struct BackendOptions {
     /// accuracy reference that must start its run where an f32 controller does
     /// (`decoy_hil::flight::accuracy_controller`). False: the onboard slice.
     pub trim_at_once: bool,
-}
-
-impl Default for BackendOptions {
-    fn default() -> Self {
-        BackendOptions {
-            kind: BackendKind::Host,
-            board: Board::default(),
-            precision: None,
-            segments: None,
-            grading: None,
-            trim_at_once: false,
-        }
-    }
 }
 
 /// What a backend runs (the status's model part).
@@ -230,100 +204,5 @@ pub fn host_backend(
         (Precision::F32, false) => host::<f32, LARGE_CAPACITY>(config, segments, grading, at_once),
         (Precision::F64, true) => host::<f64, SMALL_CAPACITY>(config, segments, grading, at_once),
         (Precision::F64, false) => host::<f64, LARGE_CAPACITY>(config, segments, grading, at_once),
-    }
-}
-
-struct QemuBackend {
-    session: Session,
-    info: ModelInfo,
-    /// Silence reports the firmware sent on its own (its link went quiet).
-    pub silences: u64,
-}
-
-impl Backend for QemuBackend {
-    fn handle(&mut self, message: HostMessage) -> Result<DeviceMessage, BridgeError> {
-        let link = &mut self.session.link;
-        link.send(&message).map_err(link_failure)?;
-        loop {
-            let answer = link.recv().map_err(link_failure)?;
-            // The firmware's own silence report (DEGRADED set; the answer to a
-            // command never has it, the command having ended the silence) came
-            // before the answer: skip it.
-            if let DeviceMessage::Status(s) = &answer
-                && s.flags & StatusFlags::DEGRADED != 0
-            {
-                self.silences += 1;
-                continue;
-            }
-            return Ok(answer);
-        }
-    }
-    fn info(&self) -> &ModelInfo {
-        &self.info
-    }
-}
-
-fn link_failure(e: LinkError) -> BridgeError {
-    BridgeError::Backend(format!("the firmware link: {e}"))
-}
-
-/// Builds (or finds) the firmware for `options.board` and boots it under QEMU.
-pub fn qemu_backend(
-    config: &SystemConfig,
-    options: &BackendOptions,
-) -> Result<Box<dyn Backend + Send>, BridgeError> {
-    let board = options.board;
-    let board_precision = match board.precision() {
-        decoy_hil::qemu::Precision::F32 => Precision::F32,
-        decoy_hil::qemu::Precision::F64 => Precision::F64,
-    };
-    if let Some(p) = options.precision
-        && p != board_precision
-    {
-        return Err(BridgeError::Usage(format!(
-            "the {board} firmware computes in f{}; --precision f{} needs the other board",
-            board_precision.bits(),
-            p.bits()
-        )));
-    }
-    let configured = config.solver.segments_embedded;
-    let segments = options.segments.unwrap_or(configured);
-    if let Some(g) = options.grading
-        && g != config.solver.grading_ratio_embedded
-    {
-        return Err(BridgeError::Usage(format!(
-            "the firmware's segments are graded {} (the configuration's solver.grading_ratio_embedded), not {g}",
-            config.solver.grading_ratio_embedded
-        )));
-    }
-    let elf = decoy_hil::hil_run::build_firmware(board, segments, configured)
-        .map_err(|e| BridgeError::Backend(e.to_string()))?;
-    let mut session = Session::start(&elf, board).map_err(link_failure)?;
-    session.link.set_timeout(Duration::from_secs(5));
-    let hello = session.hello;
-    Ok(Box::new(QemuBackend {
-        info: ModelInfo {
-            backend: bridge_types::backend::QEMU,
-            board: hello.board.as_str().to_owned(),
-            precision_bits: hello.precision_bits,
-            segments: hello.segments,
-            capacity: hello.capacity,
-            grading_ratio: config.solver.grading_ratio_embedded,
-            link_protocol_version: hello.protocol_version,
-            elf: Some(elf.display().to_string()),
-        },
-        session,
-        silences: 0,
-    }))
-}
-
-/// The backend `options` asks for.
-pub fn make_backend(
-    config: &SystemConfig,
-    options: &BackendOptions,
-) -> Result<Box<dyn Backend + Send>, BridgeError> {
-    match options.kind {
-        BackendKind::Host => host_backend(config, options),
-        BackendKind::Qemu => qemu_backend(config, options),
     }
 }

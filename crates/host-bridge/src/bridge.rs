@@ -26,7 +26,7 @@ use crate::BridgeError;
 use crate::backend::{Backend, ModelInfo};
 use crate::convert;
 use crate::services::{Ipc, Services, StatusService, create_status_service, node};
-use crate::timing::LatencyHistogram;
+use crate::timing::{LatencyHistogram, Percentiles};
 
 /// A run with no valid state for this long is reported degraded (the
 /// controller's own link-silence time, on the bridge's clock).
@@ -64,39 +64,6 @@ impl Timing {
     #[cfg(test)]
     fn heap_bytes(&self) -> usize {
         self.all.heap_bytes() + self.window.heap_bytes()
-    }
-}
-
-/// Percentiles of a set of durations, us.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct Percentiles {
-    /// Median.
-    pub p50: f64,
-    /// 99th percentile.
-    pub p99: f64,
-    /// 99.9th percentile.
-    pub p999: f64,
-    /// Largest.
-    pub max: f64,
-}
-
-impl Percentiles {
-    /// The percentiles of `values` (nearest rank); zeros when empty.
-    pub fn of(values: &mut [f64]) -> Self {
-        if values.is_empty() {
-            return Percentiles::default();
-        }
-        values.sort_by(f64::total_cmp);
-        let rank = |p: f64| {
-            let i = ((p * values.len() as f64).ceil() as usize).clamp(1, values.len());
-            values[i - 1]
-        };
-        Percentiles {
-            p50: rank(0.50),
-            p99: rank(0.99),
-            p999: rank(0.999),
-            max: values[values.len() - 1],
-        }
     }
 }
 
@@ -146,7 +113,7 @@ impl BridgeSummary {
             self.precision_bits,
             self.segments,
             self.grading_ratio,
-            crate::affinity::shown(&self.cpus),
+            cpu_affinity::shown(&self.cpus),
             self.ended_by,
             self.uptime_s
         );
@@ -807,7 +774,7 @@ pub fn run_bridge(
         (None, Ok(_)) => "stop request",
         (None, Err(e)) => return Err(BridgeError::Ipc(format!("the WaitSet failed: {e:?}"))),
     };
-    let summary = engine.summary(ended_by, crate::affinity::current_list());
+    let summary = engine.summary(ended_by, cpu_affinity::current_list());
     drop(tick);
     drop(wake);
     drop(waitset);
@@ -876,14 +843,6 @@ impl Drop for Signals {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn percentiles_by_nearest_rank() {
-        let mut v: Vec<f64> = (1..=1000).map(f64::from).collect();
-        let p = Percentiles::of(&mut v);
-        assert_eq!((p.p50, p.p99, p.p999, p.max), (500.0, 990.0, 999.0, 1000.0));
-        assert_eq!(Percentiles::of(&mut []), Percentiles::default());
-    }
 
     /// Issue 27: the bridge's service-time record (every answer's, for the
     /// summary and the status line) holds the same memory after a million

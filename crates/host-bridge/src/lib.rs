@@ -1,35 +1,37 @@
 //! # host-bridge: avionics simulations drive the decoy controller over iceoryx2
 //!
-//! `decoy bridge` serves one decoy controller (a [`backend::Backend`]: the
-//! controller in this process, or the firmware under QEMU over its UART) to any
-//! number of clients over iceoryx2 shared memory; `decoy feed` flies a scenario
-//! through it. docs/bridge.md describes the services, the lockstep rule and the
-//! wire types (crate `bridge-types`, which depends on nothing of the solver).
+//! The bridge's server and its client. `decoy bridge` serves one decoy
+//! controller (a [`backend::Backend`]: the controller in this process, or the
+//! firmware under QEMU over its UART, `decoy_stream::qemu_backend`) to any
+//! number of clients over iceoryx2 shared memory; a client ([`client`]) drives
+//! it (`decoy feed` is `decoy_stream::feed`, a client among others).
+//! docs/bridge.md describes the services, the lockstep rule and the wire types
+//! (crate `bridge-types`, which depends on nothing of the solver).
+//!
+//! A Rust program that only talks to a bridge depends on this crate alone: it
+//! compiles nothing of the scenarios, the firmware's build, QEMU or the
+//! plotting (`cargo xtask test`'s layering stage checks it). A bridge on a
+//! thread for tests, benchmarks and examples is the crate `bridge-local`; the
+//! CPU affinity (`--cpu`) the crate `cpu-affinity`.
 //!
 //! - [`services`]: the services of an instance, opened with the same settings by
 //!   the bridge and its clients; the iceoryx2 configuration (prefix, root).
 //! - [`convert`]: the one mapping between the wire types and the decoy link's
 //!   messages (so validation is exactly the controller's).
-//! - [`backend`]: the host and qemu backends.
+//! - [`backend`]: the [`backend::Backend`] trait and the host backend.
 //! - [`bridge`]: the bridge's event loop (a WaitSet: no busy loop), counters,
 //!   health, status, summary.
 //! - [`client`]: a client (lockstep with a deadline, free-running, commands,
 //!   outputs, status).
-//! - [`feed`]: `decoy feed`.
-//! - [`local`]: a bridge on a thread, in an iceoryx2 setup of its own (tests,
-//!   benchmarks, examples).
-//! - [`affinity`]: `--cpu`, the bridge and its clients on chosen cores.
 //! - [`timing`]: durations in a fixed histogram (the service times, the
-//!   benchmark's round trips): bounded memory however long a bridge runs.
+//!   benchmark's round trips): bounded memory however long a bridge runs;
+//!   their percentiles.
 #![deny(missing_docs)]
 
-pub mod affinity;
 pub mod backend;
 pub mod bridge;
 pub mod client;
 pub mod convert;
-pub mod feed;
-pub mod local;
 pub mod services;
 pub mod timing;
 
@@ -48,10 +50,6 @@ pub enum BridgeError {
     NoAnswer(String),
     /// The backend failed (QEMU, the firmware link).
     Backend(String),
-    /// Writing an output failed.
-    Output(String),
-    /// An operating-system call failed (the CPU affinity).
-    System(String),
 }
 
 impl BridgeError {
@@ -68,9 +66,7 @@ impl fmt::Display for BridgeError {
             | BridgeError::Ipc(m)
             | BridgeError::NoBridge(m)
             | BridgeError::NoAnswer(m)
-            | BridgeError::Backend(m)
-            | BridgeError::Output(m)
-            | BridgeError::System(m) => f.write_str(m),
+            | BridgeError::Backend(m) => f.write_str(m),
         }
     }
 }

@@ -13,8 +13,40 @@
 use std::time::Duration;
 
 use hdrhistogram::Histogram;
+use serde::Serialize;
 
-use crate::bridge::Percentiles;
+/// Percentiles of a set of durations, us.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Percentiles {
+    /// Median.
+    pub p50: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// 99.9th percentile.
+    pub p999: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+impl Percentiles {
+    /// The percentiles of `values` (nearest rank); zeros when empty.
+    pub fn of(values: &mut [f64]) -> Self {
+        if values.is_empty() {
+            return Percentiles::default();
+        }
+        values.sort_by(f64::total_cmp);
+        let rank = |p: f64| {
+            let i = ((p * values.len() as f64).ceil() as usize).clamp(1, values.len());
+            values[i - 1]
+        };
+        Percentiles {
+            p50: rank(0.50),
+            p99: rank(0.99),
+            p999: rank(0.999),
+            max: values[values.len() - 1],
+        }
+    }
+}
 
 /// Durations recorded in a fixed histogram (see the module's documentation).
 #[derive(Clone, Debug)]
@@ -110,6 +142,14 @@ impl LatencyHistogram {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn percentiles_by_nearest_rank() {
+        let mut v: Vec<f64> = (1..=1000).map(f64::from).collect();
+        let p = Percentiles::of(&mut v);
+        assert_eq!((p.p50, p.p99, p.p999, p.max), (500.0, 990.0, 999.0, 1000.0));
+        assert_eq!(Percentiles::of(&mut []), Percentiles::default());
+    }
 
     /// The nearest-rank percentiles of `values` (the exact reference).
     fn exact(values: &[f64]) -> Percentiles {

@@ -5,7 +5,7 @@ use std::process::Command;
 
 use decoy_config::SystemConfig;
 use host_bridge::backend::BackendOptions;
-use host_bridge::local::{Isolated, LocalBridge};
+use bridge_local::{Isolated, LocalBridge};
 
 /// The example's binary: `cargo test -p host-bridge` builds it beside the tests
 /// (target/<profile>/examples/); a run of this test alone builds it.

@@ -12,7 +12,7 @@ use decoy_link::{Command, DeviceMessage, HostMessage, RejectReason, StatusFlags}
 use decoy_sim::options::RunOptions;
 use decoy_sim::scenario::Scenario;
 use host_bridge::backend::{BackendOptions, Precision, host_backend};
-use host_bridge::local::BRIDGE_STACK_BYTES;
+use bridge_local::BRIDGE_STACK_BYTES;
 
 /// Frame spacings, s: the control period, a slow client, the protocol's limit.
 const SPACINGS_S: [f64; 3] = [0.01, 0.05, 0.1];

@@ -17,7 +17,7 @@ use host_bridge::BridgeError;
 use host_bridge::backend::{BackendOptions, Precision};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::{from_link_frame, output_from_link};
-use host_bridge::local::{Isolated, LocalBridge};
+use bridge_local::{Isolated, LocalBridge};
 use solver_core::profiles::LevelAcceleration;
 
 fn frames(count: u32) -> Vec<AircraftStateFrame> {

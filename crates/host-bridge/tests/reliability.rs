@@ -15,10 +15,10 @@ use std::time::{Duration, Instant};
 use bridge_types::{AircraftState, Command, Header, command, event, kind, reason, result};
 use decoy_config::SystemConfig;
 use host_bridge::BridgeError;
-use host_bridge::backend::{BackendOptions, Precision, make_backend};
+use host_bridge::backend::{BackendOptions, Precision, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::client::BridgeClient;
-use host_bridge::local::{BRIDGE_STACK_BYTES, Isolated, LocalBridge};
+use bridge_local::{BRIDGE_STACK_BYTES, Isolated, LocalBridge};
 use host_bridge::services::{Services, node, quiet_iceoryx_log};
 use iceoryx2::prelude::*;
 
@@ -361,7 +361,7 @@ fn spawn_bridge(
     std::thread::Builder::new()
         .stack_size(BRIDGE_STACK_BYTES)
         .spawn(move || {
-            let backend = make_backend(
+            let backend = host_backend(
                 &SystemConfig::builtin().unwrap(),
                 &BackendOptions::default(),
             )?;

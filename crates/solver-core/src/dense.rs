@@ -238,7 +238,7 @@ pub fn evaluate_dense<T: Real, const N: usize>(
 }
 
 /// The dense Kane derivative along a flight path, as a [`DerivativeSource`] for
-/// [`crate::rk4::Rk4`]: each stage samples the path ([`connection_and_air`], no
+/// [`crate::rk4::Rk4`]: each stage samples the path ([`crate::motion::connection_and_air`], no
 /// cache) and evaluates [`evaluate_dense`] (which allocates its matrices).
 #[derive(Clone, Copy, Debug)]
 pub struct DenseDerivative<'a, T: Real, const N: usize, P: ?Sized> {

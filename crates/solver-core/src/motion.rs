@@ -2,7 +2,9 @@
 
 use nalgebra::UnitQuaternion;
 
+use crate::atmosphere::AirColumn;
 use crate::error::InputError;
+use crate::model::Model;
 use crate::scalar::{Real, Vec3, vec_finite};
 
 /// The aircraft's state at one instant (the flight path prescribes it).
@@ -177,6 +179,21 @@ impl<T: Real> FlightPath<T> for Uniform<T> {
         s.velocity = self.initial.velocity + self.initial.acceleration * t;
         s
     }
+}
+
+/// Validates an aircraft state and derives the connection-point kinematics and the
+/// air column the solver uses there ([`AirColumn::about`]).
+pub fn connection_and_air<T: Real, const N: usize>(
+    model: &Model<T, N>,
+    aircraft: &AircraftState<T>,
+) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
+    aircraft.validate()?;
+    let connection = aircraft.point(&model.params().connection_point);
+    let air = AirColumn::about(
+        &model.params().environment.atmosphere,
+        -connection.position.z,
+    )?;
+    Ok((connection, air))
 }
 
 #[cfg(test)]

@@ -603,7 +603,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
 
 /// The inputs of an evaluation from the connection point's kinematics
 /// ([`FlightPath::point_at`]): the air column about its altitude, from the
-/// solver's cache `air` ([`connection_and_air`]'s result for the default
+/// solver's cache `air` ([`crate::motion::connection_and_air`]'s result for the default
 /// `point_at`).
 #[inline(always)]
 fn inputs_at<T: Real, const N: usize>(
@@ -614,21 +614,6 @@ fn inputs_at<T: Real, const N: usize>(
     let altitude = -connection.position.z;
     let column = air.column(&model.params().environment.atmosphere, altitude)?;
     Ok((connection, column))
-}
-
-/// Validates an aircraft state and derives the connection-point kinematics and the
-/// air column the solver uses there ([`AirColumn::about`]).
-pub fn connection_and_air<T: Real, const N: usize>(
-    model: &Model<T, N>,
-    aircraft: &AircraftState<T>,
-) -> Result<(PointKinematics<T>, AirColumn<T>), InputError> {
-    aircraft.validate()?;
-    let connection = aircraft.point(&model.params().connection_point);
-    let air = AirColumn::about(
-        &model.params().environment.atmosphere,
-        -connection.position.z,
-    )?;
-    Ok((connection, air))
 }
 
 /// Decoy outputs of one evaluation.

@@ -41,9 +41,8 @@ use crate::atmosphere::AirColumn;
 use crate::dynamics::{cable_drag, decoy_aero};
 use crate::error::TrimError;
 use crate::model::Model;
-use crate::motion::{AircraftState, PointKinematics};
+use crate::motion::{AircraftState, PointKinematics, connection_and_air};
 use crate::scalar::{Mat3, Real, Vec3, norm};
-use crate::solver::connection_and_air;
 use crate::state::State;
 
 /// Passes over the chain before the altitudes must have settled.

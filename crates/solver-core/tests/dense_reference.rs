@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use solver_core::dense::evaluate_dense;
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::*;
 
 fn relative_difference(a: &[Vec3<f64>], b: &[Vec3<f64>]) -> f64 {

@@ -238,7 +238,7 @@ fn degenerate_state_names_the_joint() {
         initial: AircraftState::fixed(Vec3::zeros()),
     };
     // Direct evaluation on the bad state reports the joint where elimination failed.
-    let (connection, air) = solver_core::solver::connection_and_air(
+    let (connection, air) = solver_core::motion::connection_and_air(
         solver.model(),
         &AircraftState::fixed(Vec3::zeros()),
     )

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use solver_core::dense::evaluate_dense;
-use solver_core::solver::connection_and_air;
+use solver_core::motion::connection_and_air;
 use solver_core::*;
 
 /// Relative error of the joint forces of `method` against the dense f64 reference.

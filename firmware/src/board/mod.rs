@@ -3,7 +3,7 @@
 //! crate `decoy-boards`), links its memory map, sets `cfg(board_module = "...")`
 //! to its module here and writes its Hello name, core clock and whether it has
 //! the advisory line as constants ([`NAME`], [`CORE_CLOCK_HZ`],
-//! [`ADVISORY_LINE`]).
+//! [`ADVISORY_LINE`]; `row.rs`).
 //!
 //! Every board module implements the same interface, so that the application
 //! has no board `cfg`:
@@ -15,8 +15,8 @@
 //! - `AdvisoryPin`, the advisory line to the mission computer
 //!   ([`crate::advisory::LinePin`]: a pin, or [`crate::advisory::NoLine`] on a
 //!   board without the line, whose updates compile to nothing);
-//! - `take() -> Option<Board>`, which sets them up, and `uart_off()`, the
-//!   failure path's safe state.
+//! - `take()`, which sets them up (`None` if it cannot: [`Board::take`]), and
+//!   `uart_off()`, the failure path's safe state.
 //!
 //! | module | boards (`firmware/boards.toml`) |
 //! |---|---|
@@ -24,17 +24,24 @@
 //! | `stm32f4.rs` | STM32F405, Cortex-M4F 168 MHz (QEMU `netduinoplus2` with `qemu`), through `stm32f4xx-hal` |
 //!
 //! A new board is a row of `firmware/boards.toml` and its Cargo feature; a new
-//! module is a file here and its two lines below. What every board shares (the
-//! failure path with its panic and HardFault handlers, stack painting, the
-//! blocking `embedded-io` loops, the defmt transport) is `common.rs`.
+//! module is a file here and its two lines below. What every board shares is
+//! `common.rs` (stack painting, the blocking `embedded-io` loops, the defmt
+//! transport) and `failure.rs` (the failure path with its panic and HardFault
+//! handlers).
 
 use crate::advisory::LinePin;
 
-include!(concat!(env!("OUT_DIR"), "/board.rs"));
+/// The board's row of `firmware/boards.toml`.
+mod row;
+pub use row::{ADVISORY_LINE, CORE_CLOCK_HZ, NAME};
 
-/// The failure path, stack painting and the UART loops every board shares.
+/// Stack painting and the UART loops every board shares.
 mod common;
-pub use common::{fail, paint_stack, stack_high_water, stack_size};
+pub use common::{paint_stack, stack_high_water, stack_size};
+
+/// The failure path every board shares.
+mod failure;
+pub use failure::fail;
 
 #[cfg(board_module = "mps2")]
 mod mps2;
@@ -65,7 +72,12 @@ impl Board {
     /// Takes the peripherals and sets them up; `None` if already taken or if the
     /// board cannot be set up (the module says when).
     pub fn take() -> Option<Self> {
-        module::take()
+        let (uart, clock, advisory) = module::take()?;
+        Some(Board {
+            uart,
+            clock,
+            advisory,
+        })
     }
 }
 

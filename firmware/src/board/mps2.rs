@@ -21,7 +21,8 @@
 
 use core::cell::{Cell, RefCell};
 
-use super::{Board, CORE_CLOCK_HZ, common};
+use super::common;
+use super::row::CORE_CLOCK_HZ;
 use crate::advisory::NoLine;
 
 use cortex_m::peripheral::SYST;
@@ -86,14 +87,11 @@ mod uart_registers {
     pub const CTRL_RX_ENABLE: u32 = 1 << 1;
 }
 
-/// Takes the core peripherals and sets them up; `None` if already taken.
-pub(super) fn take() -> Option<Board> {
+/// Takes the core peripherals and sets up the UART, the clock and the advisory
+/// pin (`Board::take`); `None` if already taken.
+pub(super) fn take() -> Option<(Uart, Clock, AdvisoryPin)> {
     let peripherals = cortex_m::Peripherals::take()?;
-    Some(Board {
-        uart: Uart::new(),
-        clock: Clock::new(peripherals.SYST),
-        advisory: NoLine,
-    })
+    Some((Uart::new(), Clock::new(peripherals.SYST), NoLine))
 }
 
 /// The host link's UART: CMSDK APB UART0, polled, 115,200 baud on hardware

@@ -42,7 +42,8 @@
 
 use core::cell::{Cell, RefCell};
 
-use super::{Board, CORE_CLOCK_HZ, common};
+use super::common;
+use super::row::CORE_CLOCK_HZ;
 use crate::advisory::LinePin;
 
 use cortex_m::peripheral::SYST;
@@ -87,7 +88,7 @@ impl LinePin for AdvisoryPin {
 
 /// Takes the core and device peripherals and sets them up; `None` if already
 /// taken or if USART1 cannot be set up for the bus clock (`usart1::Port::new`).
-pub(super) fn take() -> Option<Board> {
+pub(super) fn take() -> Option<(Uart, Clock, AdvisoryPin)> {
     let core = cortex_m::Peripherals::take()?;
     let device = pac::Peripherals::take()?;
     let mut rcc = device.RCC.freeze(clock_config());
@@ -95,11 +96,7 @@ pub(super) fn take() -> Option<Board> {
     let mut advisory = gpioa.pa5.into_push_pull_output();
     advisory.set_low();
     let port = usart1::Port::new(device.USART1, gpioa.pa9, gpioa.pa10, &mut rcc)?;
-    Some(Board {
-        uart: Uart { port },
-        clock: Clock::new(core.SYST),
-        advisory,
-    })
+    Some((Uart { port }, Clock::new(core.SYST), advisory))
 }
 
 /// The clock tree under QEMU: the HSI as it comes out of reset (QEMU does not
