@@ -119,10 +119,7 @@ pub fn check(root: &Path) -> Result<()> {
     }
 
     for krate in DEV_ONLY {
-        let dependents = cargo_tree(
-            root,
-            &["-i", krate, "-e", "normal,build", "--workspace"],
-        )?;
+        let dependents = cargo_tree(root, &["-i", krate, "-e", "normal,build", "--workspace"])?;
         for line in dependents.lines().skip(1).filter(|l| !l.trim().is_empty()) {
             violations.push(format!(
                 "{} depends on {krate}, which only tests, benchmarks and examples may use",

@@ -178,7 +178,8 @@ impl Graph {
                 let (uses, end) = parse_use(&tokens, i + 1);
                 let here = walker.current();
                 for u in uses {
-                    let Some(target) = absolute(&here, &u.path, &self.modules, &self.aliases) else {
+                    let Some(target) = absolute(&here, &u.path, &self.modules, &self.aliases)
+                    else {
                         continue;
                     };
                     if u.glob {
@@ -234,7 +235,10 @@ impl Graph {
                     let mut child = here.clone();
                     child.push(first.clone());
                     self.modules.contains_key(&child)
-                        || self.aliases.get(&here).is_some_and(|a| a.contains_key(first))
+                        || self
+                            .aliases
+                            .get(&here)
+                            .is_some_and(|a| a.contains_key(first))
                 })
             {
                 let (path, end) = read_path(tokens, i);

@@ -7,9 +7,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
+use cpu_affinity::{Cpus, current_list, pin_process, shown};
 use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
-use cpu_affinity::{Cpus, current_list, pin_process, shown};
 use decoy_sim::Scenario;
 use decoy_stream::feed::{FeedError, FeedOptions, FeedRun, answer_timeout, run_feed};
 use decoy_stream::fly::Mode;

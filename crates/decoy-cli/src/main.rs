@@ -368,9 +368,8 @@ fn simulate_command(
         plots: !args.no_plots,
     };
     // SIGINT and SIGTERM stop the run at a step boundary (`decoy_stream::signals`).
-    let interrupts = Interrupts::install().map_err(|e| {
-        Failure::Solver(format!("cannot install the SIGINT/SIGTERM handlers: {e}"))
-    })?;
+    let interrupts = Interrupts::install()
+        .map_err(|e| Failure::Solver(format!("cannot install the SIGINT/SIGTERM handlers: {e}")))?;
     let mut bar = Progress::new("simulating", json);
     let result = decoy_sim::simulate_until(
         config,

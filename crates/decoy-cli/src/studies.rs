@@ -19,8 +19,8 @@ use decoy_studies::sweep::{
 };
 use serde::Serialize;
 
-use crate::progress::Progress;
 use crate::failure::{Failure, to_json, usage};
+use crate::progress::Progress;
 
 /// The command that regenerates the report, as the report quotes it.
 pub const REPORT_COMMAND: &str = "cargo run --release -p decoy-cli --bin decoy -- report";

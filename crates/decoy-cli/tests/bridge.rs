@@ -9,10 +9,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
+use bridge_local::Isolated;
 use bridge_types::{AircraftState, Header, command, health, kind};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::from_link_frame;
-use bridge_local::Isolated;
 use serde_json::Value;
 
 const DECOY: &str = env!("CARGO_BIN_EXE_decoy");
@@ -522,10 +522,7 @@ fn feed_writes_the_hil_files_lockstep_and_free() {
 /// cannot be used is a usage error (exit 2) before anything starts.
 #[test]
 fn cpu_puts_the_bridge_and_its_client_on_one_core() {
-    let cpu = cpu_affinity::Cpus::of_this_thread()
-        .unwrap()
-        .list()[0]
-        .to_string();
+    let cpu = cpu_affinity::Cpus::of_this_thread().unwrap().list()[0].to_string();
     let iso = Isolated::new().unwrap();
     let child = bridge(&iso, "pinned", &["--cpu", &cpu, "--json"]);
     let tasks: Vec<_> = std::fs::read_dir(format!("/proc/{}/task", child.id()))

@@ -61,7 +61,8 @@ impl StepCost {
 /// logged; the error says what failed (build, run, decoding, or the log).
 pub fn measure(board: Board) -> Result<Vec<StepCostFrame>, String> {
     defmt::require().map_err(|e| e.to_string())?;
-    let elf = firmware::build_example(board, EXAMPLE, firmware::BUILD_TIMEOUT).map_err(|e| e.to_string())?;
+    let elf = firmware::build_example(board, EXAMPLE, firmware::BUILD_TIMEOUT)
+        .map_err(|e| e.to_string())?;
     let run = Qemu::new()
         .board(board)
         .timeout(Duration::from_secs(120))

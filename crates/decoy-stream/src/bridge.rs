@@ -92,7 +92,9 @@ impl FrameAnswer for Answer {
 mod tests {
     use super::*;
     use decoy_link::{Management, StatusFrame};
-    use host_bridge::convert::{initialising_answer, output_answer, output_from_link, rejected_answer};
+    use host_bridge::convert::{
+        initialising_answer, output_answer, output_from_link, rejected_answer,
+    };
 
     /// Each kind of wire answer reads as the answer it is, the frame it
     /// answers named by its own sequence number.

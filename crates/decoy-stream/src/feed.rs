@@ -25,7 +25,7 @@ use serde::Serialize;
 
 use crate::fly::Mode;
 use crate::run::{
-    self, Device, DeviceError, Flight, Model, PlotTitles, StreamError, StreamOptions,
+    self, Device, DeviceError, Flight, Model, PlotTitles, Replays, StreamError, StreamOptions,
 };
 
 /// What `decoy feed` runs.
@@ -213,11 +213,7 @@ impl Device for Bridge<'_> {
         Ok((client, model))
     }
 
-    fn replay(
-        &self,
-        model: &Model,
-        messages: &[HostMessage],
-    ) -> Result<(Vec<DeviceMessage>, Vec<DeviceMessage>), FeedError> {
+    fn replay(&self, model: &Model, messages: &[HostMessage]) -> Result<Replays, FeedError> {
         let precision = if model.precision_bits == 64 {
             Precision::F64
         } else {
@@ -225,10 +221,10 @@ impl Device for Bridge<'_> {
         };
         // The f64 accuracy reference trims in the first frame (as the f32
         // controller does); the same-precision replay is the bridge's controller.
-        Ok((
-            self.replay_in(Precision::F64, true, messages)?,
-            self.replay_in(precision, false, messages)?,
-        ))
+        Ok(Replays {
+            host64: self.replay_in(Precision::F64, true, messages)?,
+            same: self.replay_in(precision, false, messages)?,
+        })
     }
 
     fn plot_titles(&self, name: &str) -> PlotTitles {

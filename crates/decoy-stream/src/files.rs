@@ -107,7 +107,6 @@ pub fn write_timeseries(
         .map_err(|e| format!("cannot write {}: {e}", path.display()))
 }
 
-
 /// Draws the instructions of every control step against time (the trim frame
 /// left out), with the target for comparison.
 pub fn instructions_plot(

@@ -23,7 +23,11 @@ pub fn check_segments(segments: usize) -> Result<(), String> {
 /// Builds the firmware for `board` with `segments` segments (checked with
 /// [`check_segments`] first): the configured build when that is the
 /// configuration's count `configured`, else a variant; returns its ELF.
-pub fn build_firmware(board: Board, segments: usize, configured: usize) -> Result<PathBuf, BuildError> {
+pub fn build_firmware(
+    board: Board,
+    segments: usize,
+    configured: usize,
+) -> Result<PathBuf, BuildError> {
     if segments == configured {
         firmware::build_board(board, BUILD_TIMEOUT)
     } else {

@@ -27,7 +27,7 @@ use crate::files::instructions_plot;
 use crate::firmware::{build_firmware, check_segments};
 use crate::fly::Mode;
 use crate::run::{
-    self, Device, DeviceError, Flight, Model, PlotTitles, Row, StreamError, StreamOptions,
+    self, Device, DeviceError, Flight, Model, PlotTitles, Replays, Row, StreamError, StreamOptions,
 };
 
 /// What `decoy hil` runs.
@@ -323,11 +323,7 @@ impl Device for Firmware {
         self.log = log.log;
     }
 
-    fn replay(
-        &self,
-        model: &Model,
-        messages: &[HostMessage],
-    ) -> Result<(Vec<DeviceMessage>, Vec<DeviceMessage>), HilError> {
+    fn replay(&self, model: &Model, messages: &[HostMessage]) -> Result<Replays, HilError> {
         let host64 = {
             let mut c = flight::accuracy_controller(&self.config).map_err(FirmwareError::Host)?;
             flight::replay(&mut c, messages)
@@ -336,7 +332,7 @@ impl Device for Firmware {
         let same = Reference::for_config(&self.config, model.precision_bits)
             .and_then(|mut r| r.replay(messages))
             .map_err(FirmwareError::Reference)?;
-        Ok((host64, same))
+        Ok(Replays { host64, same })
     }
 
     fn plot_titles(&self, name: &str) -> PlotTitles {

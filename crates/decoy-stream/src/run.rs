@@ -26,8 +26,8 @@ use decoy_hil::flight::{self, Agreement, InstructionStats};
 use decoy_link::{Command, DeviceMessage, HostMessage, OutputFrame};
 use decoy_sim::atomic::write_atomically;
 use decoy_sim::{
-    RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary, clear_output_dir,
-    format_time, summarize, write_comparison_plots, write_management_plot,
+    RunOptions, Sample, Scenario, ScenarioKind, SimError, Summary, clear_output_dir, format_time,
+    summarize, write_comparison_plots, write_management_plot,
 };
 use serde::Serialize;
 
@@ -144,14 +144,13 @@ pub trait Device {
         &self,
         model: &Model,
         messages: &[HostMessage],
-    ) -> Result<(Vec<DeviceMessage>, Vec<DeviceMessage>), StreamError<Self::Error>>;
+    ) -> Result<Replays, StreamError<Self::Error>>;
 
     /// The plots' titles for scenario `name`.
     fn plot_titles(&self, name: &str) -> PlotTitles;
 
     /// `summary.json`.
-    fn summary(&self, flight: Flight<'_, <Self::Transport as Transport>::Answer>)
-    -> Self::Summary;
+    fn summary(&self, flight: Flight<'_, <Self::Transport as Transport>::Answer>) -> Self::Summary;
 
     /// The device's own files, written after `summary.json` into `dir`
     /// (`firmware.log`; by default none).
@@ -166,6 +165,16 @@ pub trait Device {
         let _ = (name, rows, dir);
         Ok(Vec::new())
     }
+}
+
+/// The host's two replays of what a device's controller took, one answer per
+/// message each ([`Device::replay`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replays {
+    /// The f64 accuracy reference, which completes its trim in the first frame.
+    pub host64: Vec<DeviceMessage>,
+    /// The device's controller in its own precision.
+    pub same: Vec<DeviceMessage>,
 }
 
 /// One frame of `timeseries.csv`: the frame, the device's output and the f64
@@ -366,9 +375,13 @@ pub fn run<D: Device>(
     let frames = flight::scenario_frames(&plan.profile, frame_count);
     transport.reset().map_err(D::Error::from)?;
     let flown = match options.mode {
-        Mode::Lockstep => {
-            fly::lockstep(&mut transport, &frames, options.realtime, progress, &signals)
-        }
+        Mode::Lockstep => fly::lockstep(
+            &mut transport,
+            &frames,
+            options.realtime,
+            progress,
+            &signals,
+        ),
         Mode::Free => match transport.free_running() {
             Some(free) => fly::free_running(free, &frames, options.realtime, progress, &signals),
             None => {
@@ -386,7 +399,7 @@ pub fn run<D: Device>(
     let seen: Vec<HostMessage> = std::iter::once(HostMessage::Command(Command::ResetToTrim))
         .chain(flown.seen().into_iter().map(HostMessage::State))
         .collect();
-    let (host64, same) = device.replay(&model, &seen)?;
+    let Replays { host64, same } = device.replay(&model, &seen)?;
     let answered = flown.answered();
     let outputs: Vec<OutputFrame> = answered.iter().filter_map(|a| a.output()).collect();
     let output_messages: Vec<DeviceMessage> =

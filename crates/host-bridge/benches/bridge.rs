@@ -23,21 +23,21 @@
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
+use bridge_local::Isolated;
 use bridge_types::{AircraftState, Answer, event};
+use cpu_affinity::{Cpus, pin_process};
 use decoy_config::SystemConfig;
 use decoy_hil::flight::scenario_frames;
 use decoy_link::{AircraftStateFrame, HostMessage};
-use bridge_local::Isolated;
-use cpu_affinity::{Cpus, pin_process};
 use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
 use host_bridge::backend::{Backend, BackendOptions, Precision, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::from_link_frame;
-use host_bridge::timing::Percentiles;
 use host_bridge::services::{
     Ipc, Services, create_status_service, iox_config, node, quiet_iceoryx_log,
 };
+use host_bridge::timing::Percentiles;
 use iceoryx2::prelude::*;
 use solver_core::profiles::LevelTurn;
 
@@ -272,6 +272,9 @@ fn solver_time(
         .unwrap()
 }
 
+/// How a server builds its backend once its thread runs.
+type MakeBackend = Box<dyn FnOnce(&SystemConfig) -> Box<dyn Backend + Send> + Send>;
+
 /// The server side, in its own process.
 fn serve(kind: &str) {
     let config = iox_config(None, None).unwrap();
@@ -285,7 +288,7 @@ fn serve(kind: &str) {
             host_backend(system, &options).unwrap()
         }
     };
-    let make: Box<dyn FnOnce(&SystemConfig) -> Box<dyn Backend + Send> + Send> = match kind {
+    let make: MakeBackend = match kind {
         "host-f32-embedded" => Box::new(host(BackendOptions::default())),
         "host-f64-300" => Box::new(host(BackendOptions {
             precision: Some(Precision::F64),
@@ -293,9 +296,9 @@ fn serve(kind: &str) {
             grading: Some(1.0),
             ..BackendOptions::default()
         })),
-        "qemu" => Box::new(|system: &SystemConfig| {
-            qemu_backend(system, &QemuOptions::default()).unwrap()
-        }),
+        "qemu" => {
+            Box::new(|system: &SystemConfig| qemu_backend(system, &QemuOptions::default()).unwrap())
+        }
         other => panic!("unknown server {other}"),
     };
     let bridge = BridgeOptions {

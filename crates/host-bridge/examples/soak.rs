@@ -39,12 +39,12 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use bridge_types::{AircraftState, Command as BridgeCommand, Header, command, kind, result};
-use host_bridge::timing::Percentiles;
-use host_bridge::client::BridgeClient;
 use bridge_local::Isolated;
+use bridge_types::{AircraftState, Command as BridgeCommand, Header, command, kind, result};
+use host_bridge::client::BridgeClient;
 use host_bridge::services::quiet_iceoryx_log;
 use host_bridge::timing::LatencyHistogram;
+use host_bridge::timing::Percentiles;
 use serde_json::{Value, json};
 
 const INSTANCE: &str = "soak";

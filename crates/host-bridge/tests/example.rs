@@ -3,9 +3,9 @@
 
 use std::process::Command;
 
+use bridge_local::{Isolated, LocalBridge};
 use decoy_config::SystemConfig;
 use host_bridge::backend::BackendOptions;
-use bridge_local::{Isolated, LocalBridge};
 
 /// The example's binary: `cargo test -p host-bridge` builds it beside the tests
 /// (target/<profile>/examples/); a run of this test alone builds it.

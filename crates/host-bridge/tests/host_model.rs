@@ -6,13 +6,13 @@
 //! `decoy bridge` runs (its 300-segment controller on a thread with the bridge's
 //! stack); the frames are the built-in scenarios' aircraft states.
 
+use bridge_local::BRIDGE_STACK_BYTES;
 use decoy_config::SystemConfig;
 use decoy_hil::flight::{SHIPPED_MANOEUVRES, state_frame};
 use decoy_link::{Command, DeviceMessage, HostMessage, RejectReason, StatusFlags};
 use decoy_sim::options::RunOptions;
 use decoy_sim::scenario::Scenario;
 use host_bridge::backend::{BackendOptions, Precision, host_backend};
-use bridge_local::BRIDGE_STACK_BYTES;
 
 /// Frame spacings, s: the control period, a slow client, the protocol's limit.
 const SPACINGS_S: [f64; 3] = [0.01, 0.05, 0.1];

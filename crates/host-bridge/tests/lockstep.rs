@@ -6,6 +6,7 @@
 
 use std::time::Duration;
 
+use bridge_local::{Isolated, LocalBridge};
 use bridge_types::{
     AircraftState, Answer, Command, Header, command, health, kind, profile, reason, result,
 };
@@ -17,7 +18,6 @@ use host_bridge::BridgeError;
 use host_bridge::backend::{BackendOptions, Precision};
 use host_bridge::client::BridgeClient;
 use host_bridge::convert::{from_link_frame, output_from_link};
-use bridge_local::{Isolated, LocalBridge};
 use solver_core::profiles::LevelAcceleration;
 
 fn frames(count: u32) -> Vec<AircraftStateFrame> {

@@ -12,13 +12,13 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use bridge_local::{BRIDGE_STACK_BYTES, Isolated, LocalBridge};
 use bridge_types::{AircraftState, Command, Header, command, event, kind, reason, result};
 use decoy_config::SystemConfig;
 use host_bridge::BridgeError;
 use host_bridge::backend::{BackendOptions, Precision, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::client::BridgeClient;
-use bridge_local::{BRIDGE_STACK_BYTES, Isolated, LocalBridge};
 use host_bridge::services::{Services, node, quiet_iceoryx_log};
 use iceoryx2::prelude::*;
 
@@ -191,7 +191,6 @@ fn heavy() -> BackendOptions {
         segments: Some(300),
         grading: Some(1.0),
         trim_at_once: true,
-        ..BackendOptions::default()
     }
 }
 
