@@ -1,8 +1,8 @@
 //! The module graph of a crate, file by file, and its cycles (the layering
 //! stage, [`crate::layering`]).
 //!
-//! The nodes are the crate's files: its root (`src/lib.rs`, `src/main.rs`, a
-//! `src/bin/` file) and every file a `mod NAME;` brings in (`NAME.rs` or
+//! The nodes are the crate's files: its root (`lib.rs` or `main.rs` in `src`, a
+//! file of `src/bin`) and every file a `mod NAME;` brings in (`NAME.rs` or
 //! `NAME/mod.rs` beside or below its parent). File `a` depends on file `b` when
 //! `a`'s code names something of `b` through a path the compiler resolves
 //! inside the crate: `crate::...`, `super::...`, `self::...`, or a path that
@@ -76,7 +76,7 @@ pub struct Graph {
 }
 
 impl Graph {
-    /// The graph of the crate whose root file is `root` (`src/lib.rs`).
+    /// The graph of the crate whose root file is `root` (a package's `lib.rs`).
     pub fn of_crate(root: &Path) -> Result<Self, String> {
         let mut graph = Graph {
             files: Vec::new(),
@@ -333,8 +333,8 @@ impl Graph {
     }
 }
 
-/// The crate roots under `dir` (a package directory): `src/lib.rs`,
-/// `src/main.rs`, each `src/bin/NAME.rs` and `src/bin/NAME/main.rs`.
+/// The crate roots under `dir` (a package directory): `lib.rs` and `main.rs`
+/// in its `src`, and each `NAME.rs` and `NAME/main.rs` in `src/bin`.
 pub fn crate_roots(dir: &Path) -> Vec<PathBuf> {
     let src = dir.join("src");
     let mut roots: Vec<PathBuf> = ["lib.rs", "main.rs"]
