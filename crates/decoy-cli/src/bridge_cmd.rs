@@ -4,23 +4,22 @@
 //! prints.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use cpu_affinity::{Cpus, current_list, pin_process, shown};
 use decoy_config::SystemConfig;
 use decoy_hil::qemu::Board;
 use decoy_sim::Scenario;
-use decoy_stream::feed::{FeedError, FeedOptions, FeedRun, answer_timeout, run_feed};
+use decoy_stream::feed::{FeedOptions, FeedRun, answer_timeout, run_feed};
 use decoy_stream::fly::Mode;
 use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
 use host_bridge::backend::{BackendOptions, Precision, describe_backend, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
 use host_bridge::services::{check_instance, iox_config, quiet_iceoryx_log};
 
-use crate::failure::{Failure, usage};
+use crate::failure::{Failure, summary_json, usage};
 use crate::progress::Progress;
-use crate::scenario_arg::ScenarioArg;
+use crate::stream_args::StreamArgs;
 
 /// The instance when none is named.
 pub const DEFAULT_INSTANCE: &str = "default";
@@ -55,27 +54,14 @@ pub struct FeedArgs {
     /// The bridge instance to feed.
     #[arg(long, value_name = "NAME", default_value = DEFAULT_INSTANCE)]
     instance: String,
-    /// A shipped scenario or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
-    scenario: String,
-    /// Flight-path rotation rate of a pull-up or turn, rad/s.
-    #[arg(long, value_name = "W", allow_negative_numbers = true)]
-    rate: Option<f64>,
+    #[command(flatten)]
+    stream: StreamArgs,
     /// lockstep: each state waits for its answer; free: publish and collect the outputs.
     #[arg(long, value_enum, default_value_t = ModeArg::Lockstep)]
     mode: ModeArg,
     /// Send a frame every 10 ms of wall-clock time (default: flat out).
     #[arg(long)]
     realtime: bool,
-    /// Simulated time, s (default: the scenario's).
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
-    t_end: Option<f64>,
-    /// Output directory (default: out/feed-NAME).
-    #[arg(long, value_name = "DIR")]
-    out: Option<PathBuf>,
-    /// Do not draw the plots.
-    #[arg(long)]
-    no_plots: bool,
     /// Deadline of each answer, s.
     #[arg(
         long,
@@ -205,10 +191,7 @@ pub fn bridge_command(
     })
     .map_err(bridge_failure)?;
     if json {
-        let mut text = serde_json::to_string_pretty(&summary)
-            .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
-        text.push('\n');
-        Ok(text)
+        summary_json(&summary)
     } else {
         Ok(summary.text())
     }
@@ -262,22 +245,18 @@ pub fn layout_command(json: bool) -> Result<String, Failure> {
 pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Result<String, Failure> {
     check_instance(&args.instance).map_err(bridge_failure)?;
     let timeout = answer_timeout(args.timeout).map_err(bridge_failure)?;
-    let scenario = Scenario::load(&args.scenario)?;
+    let scenario = Scenario::load(&args.stream.scenario)?;
     pin(args.cpu.as_deref())?;
     quiet_iceoryx_log();
     let iox = iox_config(None, None).map_err(bridge_failure)?;
+    let mode = match args.mode {
+        ModeArg::Lockstep => Mode::Lockstep,
+        ModeArg::Free => Mode::Free,
+    };
     let options = FeedOptions {
         instance: args.instance.clone(),
-        mode: match args.mode {
-            ModeArg::Lockstep => Mode::Lockstep,
-            ModeArg::Free => Mode::Free,
-        },
-        realtime: args.realtime,
-        t_end: args.t_end,
-        rate: args.rate,
-        out_dir: args.out.clone(),
-        plots: !args.no_plots,
         timeout,
+        stream: args.stream.options(mode, args.realtime),
     };
     // SIGINT and SIGTERM stop the flight at the next frame: the pipeline's
     // handlers (`decoy_stream::signals`), chained after the client node's
@@ -285,16 +264,9 @@ pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Resul
     let mut bar = Progress::new("feeding the bridge", json);
     let result = run_feed(config, &scenario, &options, &iox, |f| bar.update(f));
     bar.finish();
-    let run = result.map_err(|e| match &e {
-        FeedError::Interrupted { signal, .. } => Failure::interrupted(signal, e.to_string()),
-        _ if e.is_usage() => Failure::Usage(e.to_string()),
-        _ => Failure::Solver(e.to_string()),
-    })?;
+    let run = result?;
     if json {
-        let mut text = serde_json::to_string_pretty(&run.summary)
-            .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
-        text.push('\n');
-        return Ok(text);
+        return summary_json(&run.summary);
     }
     Ok(feed_text(&run))
 }

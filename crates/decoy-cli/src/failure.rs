@@ -3,6 +3,7 @@
 
 use decoy_config::ConfigError;
 use decoy_sim::SimError;
+use decoy_stream::run::{DeviceError, StreamError};
 use decoy_stream::signals::exit_code;
 use serde::Serialize;
 
@@ -59,6 +60,20 @@ impl From<SimError> for Failure {
     }
 }
 
+/// A streamed run's failure (`decoy hil`, `decoy feed`), the same way for
+/// every device: a signal's exit code, a usage error, or the run's failure.
+impl<E: DeviceError> From<StreamError<E>> for Failure {
+    fn from(e: StreamError<E>) -> Self {
+        if let StreamError::Interrupted { signal, .. } = &e {
+            Failure::interrupted(signal, e.to_string())
+        } else if e.is_usage() {
+            Failure::Usage(e.to_string())
+        } else {
+            Failure::Solver(e.to_string())
+        }
+    }
+}
+
 impl From<ConfigError> for Failure {
     fn from(e: ConfigError) -> Self {
         Failure::Usage(e.to_string())
@@ -68,6 +83,15 @@ impl From<ConfigError> for Failure {
 /// A usage error (exit code 2) saying `message`.
 pub fn usage(message: impl Into<String>) -> Failure {
     Failure::Usage(message.into())
+}
+
+/// A run's summary as `--json` prints it: pretty JSON and a newline, as its
+/// `summary.json` holds it.
+pub fn summary_json<T: Serialize>(summary: &T) -> Result<String, Failure> {
+    let mut text = serde_json::to_string_pretty(summary)
+        .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
+    text.push('\n');
+    Ok(text)
 }
 
 /// `value` as one line of JSON and a newline (a value serde cannot write: an

@@ -36,6 +36,7 @@ mod bridge_cmd;
 mod failure;
 mod progress;
 mod scenario_arg;
+mod stream_args;
 mod studies;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -46,12 +47,14 @@ use decoy_sim::pendulum::{
 };
 use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, describe_layout};
-use decoy_stream::hil::{HilError, HilOptions, HilRun, run_hil};
+use decoy_stream::fly::Mode;
+use decoy_stream::hil::{HilOptions, HilRun, run_hil};
 use decoy_stream::signals::Interrupts;
-use failure::{Failure, to_json, usage};
+use failure::{Failure, summary_json, to_json, usage};
 use progress::Progress;
 use scenario_arg::ScenarioArg;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
+use stream_args::StreamArgs;
 
 /// Stack of the worker thread (the fixed-capacity solver types are large values).
 const WORKER_STACK_BYTES: usize = 64 << 20;
@@ -109,27 +112,14 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct HilArgs {
-    /// A shipped scenario or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
-    scenario: String,
+    #[command(flatten)]
+    stream: StreamArgs,
     /// The board (firmware/boards.toml).
     #[arg(long, value_name = "NAME", value_parser = board_arg::BoardParser, default_value_t = Board::default())]
     board: Board,
     /// Cable segments (default: the configuration's solver.segments_embedded; another count builds a firmware variant).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     segments: Option<usize>,
-    /// Simulated time, s (default: the scenario's).
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
-    t_end: Option<f64>,
-    /// Flight-path rotation rate of a pull-up or turn, rad/s.
-    #[arg(long, value_name = "W", allow_negative_numbers = true)]
-    rate: Option<f64>,
-    /// Output directory (default: out/hil-NAME).
-    #[arg(long, value_name = "DIR")]
-    out: Option<PathBuf>,
-    /// Do not draw the plots.
-    #[arg(long)]
-    no_plots: bool,
     /// Boot this firmware ELF instead of building one (default: build the firmware
     /// of the checkout this `decoy` was built from, or of $DECOY_SOURCE_DIR).
     #[arg(long, value_name = "ELF")]
@@ -391,10 +381,7 @@ fn simulate_command(
         ));
     }
     if json {
-        let mut text = serde_json::to_string_pretty(&run.summary)
-            .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
-        text.push('\n');
-        return Ok(text);
+        return summary_json(&run.summary);
     }
     Ok(simulate_text(config, &scenario, &run, args))
 }
@@ -556,31 +543,21 @@ fn write_management(s: &mut String, m: &decoy_sim::ManagementSummary) {
 // ---------------------------------------------------------------- hil
 
 fn hil_command(config: &SystemConfig, args: &HilArgs, json: bool) -> Result<String, Failure> {
-    let scenario = Scenario::load(&args.scenario)?;
+    let scenario = Scenario::load(&args.stream.scenario)?;
     let options = HilOptions {
         board: args.board,
         segments: args.segments,
-        t_end: args.t_end,
-        rate: args.rate,
-        out_dir: args.out.clone(),
-        plots: !args.no_plots,
         firmware: args.firmware.clone(),
+        stream: args.stream.options(Mode::Lockstep, false),
     };
     // SIGINT and SIGTERM stop the flight at the next frame (the pipeline's
     // handlers, `decoy_stream::signals`).
     let mut bar = Progress::new("flying on the firmware", json);
     let result = run_hil(config, &scenario, &options, |f| bar.update(f));
     bar.finish();
-    let run = result.map_err(|e| match &e {
-        HilError::Interrupted { signal, .. } => Failure::interrupted(signal, e.to_string()),
-        _ if e.is_usage() => Failure::Usage(e.to_string()),
-        _ => Failure::Solver(e.to_string()),
-    })?;
+    let run = result?;
     if json {
-        let mut text = serde_json::to_string_pretty(&run.summary)
-            .map_err(|e| Failure::Solver(format!("cannot print the summary: {e}")))?;
-        text.push('\n');
-        return Ok(text);
+        return summary_json(&run.summary);
     }
     Ok(hil_text(config, &run))
 }

@@ -9,7 +9,6 @@
 //! segment standing for it before the output directory is cleared, and
 //! planned with the bridge's layout once its status is read.
 
-use std::path::PathBuf;
 use std::time::Duration;
 
 use bridge_types::{Answer, Status, field_text};
@@ -23,7 +22,6 @@ use host_bridge::client::BridgeClient;
 use host_bridge::timing::Percentiles;
 use serde::Serialize;
 
-use crate::fly::Mode;
 use crate::run::{
     self, Device, DeviceError, Flight, Model, PlotTitles, Replays, StreamError, StreamOptions,
 };
@@ -33,33 +31,19 @@ use crate::run::{
 pub struct FeedOptions {
     /// The bridge instance.
     pub instance: String,
-    /// Lockstep or free-running.
-    pub mode: Mode,
-    /// Pace the frames at real time (10 ms apart) instead of flat out.
-    pub realtime: bool,
-    /// Simulated time, s (default: the scenario's).
-    pub t_end: Option<f64>,
-    /// Flight-path rotation rate of a pull-up or turn, rad/s.
-    pub rate: Option<f64>,
-    /// Output directory (default `out/feed-<scenario>`).
-    pub out_dir: Option<PathBuf>,
-    /// Draw the plots.
-    pub plots: bool,
     /// Deadline of each answer.
     pub timeout: Duration,
+    /// What every streamed run takes (the default output directory is
+    /// `out/feed-<scenario>`).
+    pub stream: StreamOptions,
 }
 
 impl Default for FeedOptions {
     fn default() -> Self {
         FeedOptions {
             instance: "default".to_owned(),
-            mode: Mode::Lockstep,
-            realtime: false,
-            t_end: None,
-            rate: None,
-            out_dir: None,
-            plots: true,
             timeout: host_bridge::client::ANSWER_TIMEOUT,
+            stream: StreamOptions::default(),
         }
     }
 }
@@ -249,8 +233,8 @@ impl Device for Bridge<'_> {
             board: field_text(&self.status.board),
             precision_bits: self.status.precision_bits,
             grading_ratio: self.status.grading_ratio,
-            mode: self.options.mode.name().to_owned(),
-            realtime: self.options.realtime,
+            mode: self.options.stream.mode.name().to_owned(),
+            realtime: self.options.stream.realtime,
             client_cpus: cpu_affinity::current_list(),
             frames_sent: flown.sent.len(),
             frames_answered: answered,
@@ -286,15 +270,7 @@ pub fn run_feed(
         iox,
         status: Status::default(),
     };
-    let stream = StreamOptions {
-        t_end: options.t_end,
-        rate: options.rate,
-        out_dir: options.out_dir.clone(),
-        plots: options.plots,
-        mode: options.mode,
-        realtime: options.realtime,
-    };
-    run::run(scenario, &stream, &mut device, progress)
+    run::run(scenario, &options.stream, &mut device, progress)
 }
 
 #[cfg(test)]

@@ -25,43 +25,23 @@ use serde::Serialize;
 
 use crate::files::instructions_plot;
 use crate::firmware::{build_firmware, check_segments};
-use crate::fly::Mode;
 use crate::run::{
     self, Device, DeviceError, Flight, Model, PlotTitles, Replays, Row, StreamError, StreamOptions,
 };
 
 /// What `decoy hil` runs.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct HilOptions {
     /// The board (and firmware build).
     pub board: Board,
     /// Cable segments; `None`: the configuration's `solver.segments_embedded`
     /// (another count builds a firmware variant).
     pub segments: Option<usize>,
-    /// Simulated time, s (default: the scenario's).
-    pub t_end: Option<f64>,
-    /// Flight-path rotation rate of a pull-up or turn, rad/s.
-    pub rate: Option<f64>,
-    /// Output directory (default `out/hil-<scenario>`).
-    pub out_dir: Option<PathBuf>,
-    /// Draw the plots.
-    pub plots: bool,
     /// A firmware ELF to boot instead of building one (`--firmware`).
     pub firmware: Option<PathBuf>,
-}
-
-impl Default for HilOptions {
-    fn default() -> Self {
-        HilOptions {
-            board: Board::default(),
-            segments: None,
-            t_end: None,
-            rate: None,
-            out_dir: None,
-            plots: true,
-            firmware: None,
-        }
-    }
+    /// What every streamed run takes (the default output directory is
+    /// `out/hil-<scenario>`; the UART is flown in lockstep only).
+    pub stream: StreamOptions,
 }
 
 /// `decoy hil`'s `summary.json`: `decoy simulate`'s summary of the firmware's run
@@ -442,15 +422,7 @@ pub fn run_hil(
         log: String::new(),
         marks: None,
     };
-    let stream = StreamOptions {
-        t_end: options.t_end,
-        rate: options.rate,
-        out_dir: options.out_dir.clone(),
-        plots: options.plots,
-        mode: Mode::Lockstep,
-        realtime: false,
-    };
-    let run = run::run(scenario, &stream, &mut device, progress)?;
+    let run = run::run(scenario, &options.stream, &mut device, progress)?;
     Ok(HilRun {
         summary: run.summary,
         out_dir: run.out_dir,
