@@ -642,7 +642,8 @@ pub fn paired_rows(
 pub use decoy_sim::INSTRUCTIONS_PLOT;
 
 /// Draws the instructions of every control step against time (the trim frame
-/// left out), with the target for comparison.
+/// left out), with the board's frame budget ([`crate::budgets::frame`]) for
+/// comparison.
 fn instructions_plot(
     name: &str,
     board: Board,
@@ -661,10 +662,11 @@ fn instructions_plot(
         y: steps.iter().map(|o| f64::from(o.instructions)).collect(),
     }];
     if let (Some(first), Some(last)) = (t.first(), t.last()) {
+        let budget = crate::budgets::frame(board);
         series.push(decoy_plots::Series {
-            label: format!("target {INSTRUCTIONS_TARGET}"),
+            label: format!("budget {} ({})", budget.limit, budget.source),
             x: vec![*first, *last],
-            y: vec![f64::from(INSTRUCTIONS_TARGET); 2],
+            y: vec![f64::from(budget.limit); 2],
         });
     }
     let plot = decoy_plots::Plot {
@@ -679,9 +681,6 @@ fn instructions_plot(
         .map(Vec::from)
         .map_err(|e| HilError::Output(format!("the {INSTRUCTIONS_PLOT} plot: {e}")))
 }
-
-/// The target of instructions per 10 ms control step, drawn for comparison.
-pub const INSTRUCTIONS_TARGET: u32 = 100_000;
 
 /// One output as a `decoy simulate` sample (flight-path frame, degrees; angles
 /// relative to the flight-path frame; the closest point's position along the
