@@ -4,6 +4,9 @@
 //! - `decoy-link` (the protocol) depends on nothing of the solver;
 //! - `bridge-types` (the host bridge's wire types) depends on nothing of the
 //!   solver, the protocol or the controller;
+//! - both may depend on `decoy-schema`, the shared vocabulary (the manoeuvres,
+//!   ...), which depends on serde only: were it to reach the solver, the two
+//!   checks above would fail through it;
 //! - no crate depends on `hil-tests` (tests only; the library is `decoy-hil`);
 //! - no `#[path]` includes anywhere in the sources.
 

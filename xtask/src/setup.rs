@@ -181,15 +181,16 @@ pub fn setup(root: &Path, scope: Scope) -> Result<Option<Toolchain>> {
     Ok(toolchain)
 }
 
-/// The Python environment `.venv/` (the bridge's Python client, JSBSim, plots, pytest).
+/// The Python environment `.venv/` (the bridge's Python client, the solver's
+/// package `decoy`, JSBSim, plots, pytest).
 fn python_env(root: &Path, report: &mut Report) -> Result<()> {
     match crate::python::ensure(root)? {
-        crate::python::Outcome::Present(pinned) => {
-            report.present.push(format!("Python .venv ({pinned})"))
+        crate::python::Outcome::Present(holds) => {
+            report.present.push(format!("Python .venv ({holds})"))
         }
-        crate::python::Outcome::Installed(pinned) => report
-            .installed
-            .push(format!("Python .venv ({pinned}, decoy_bridge editable)")),
+        crate::python::Outcome::Installed(holds) => {
+            report.installed.push(format!("Python .venv ({holds})"))
+        }
     }
     Ok(())
 }

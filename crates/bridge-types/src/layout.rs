@@ -2,6 +2,7 @@
 //! layout (`size_of`, `align_of`, `offset_of!`), so a mirror in another language
 //! can be checked field by field against the real thing.
 
+use decoy_schema::Manoeuvre;
 use decoy_schema::{CSV_FILES, CsvFile, Requirement};
 use serde::Serialize;
 
@@ -371,14 +372,9 @@ pub fn layouts() -> LayoutDescription {
     ] {
         codes.push(("command", name, u64::from(c)));
     }
-    for (name, c) in [
-        ("streamed", profile::STREAMED),
-        ("steady", profile::STEADY),
-        ("acceleration", profile::ACCELERATION),
-        ("pull_up", profile::PULL_UP),
-        ("turn", profile::TURN),
-    ] {
-        codes.push(("profile", name, u64::from(c)));
+    codes.push(("profile", "streamed", u64::from(profile::STREAMED)));
+    for m in Manoeuvre::ALL {
+        codes.push(("profile", m.ident(), u64::from(profile::of(m))));
     }
     for (name, bit) in flag::ALL {
         codes.push(("flag", name, u64::from(bit)));

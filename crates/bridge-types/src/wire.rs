@@ -439,18 +439,27 @@ pub mod command {
     pub const PING: u16 = 3;
 }
 
-/// [`Command::profile`] codes (docs/protocol.md `Profile`).
+/// [`Command::profile`] codes (docs/protocol.md `Profile`): the streamed
+/// kinematics, or one of `decoy_schema`'s manoeuvres flown built in, numbered
+/// as the decoy link numbers them. `decoy bridge-layout --json` lists each
+/// under its identifier (`pull_up`).
 pub mod profile {
+    use decoy_schema::{Manoeuvre, STREAMED_PROFILE_CODE};
+
     /// The states' kinematics (the normal mode).
-    pub const STREAMED: u16 = 0;
-    /// Steady level flight, 9 km, Mach 0.8.
-    pub const STEADY: u16 = 1;
-    /// Mach 0.6 to 0.8 at 10 m/s² from t = 2 s.
-    pub const ACCELERATION: u16 = 2;
-    /// Pull-up at `rate_milli_radps` from t = 2 s for 5 s.
-    pub const PULL_UP: u16 = 3;
-    /// Level right turn at `rate_milli_radps`.
-    pub const TURN: u16 = 4;
+    pub const STREAMED: u16 = STREAMED_PROFILE_CODE;
+
+    /// The code of `manoeuvre`'s built-in profile (its rate in
+    /// `rate_milli_radps` for a pull-up or a turn).
+    pub const fn of(manoeuvre: Manoeuvre) -> u16 {
+        manoeuvre.profile_code()
+    }
+
+    /// The manoeuvre whose built-in profile has `code`; `None` for
+    /// [`STREAMED`] and for codes of no profile.
+    pub const fn manoeuvre(code: u16) -> Option<Manoeuvre> {
+        Manoeuvre::from_profile_code(code)
+    }
 }
 
 /// [`CommandReply::result`] codes.

@@ -17,6 +17,7 @@ use host_bridge::feed::{FeedError, FeedMode, FeedOptions, FeedRun, answer_timeou
 use host_bridge::services::{check_instance, iox_config, quiet_iceoryx_log};
 
 use crate::progress::Progress;
+use crate::scenario_arg::ScenarioArg;
 use crate::{Failure, usage};
 
 /// The instance when none is named.
@@ -52,8 +53,8 @@ pub struct FeedArgs {
     /// The bridge instance to feed.
     #[arg(long, value_name = "NAME", default_value = DEFAULT_INSTANCE)]
     instance: String,
-    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE")]
+    /// A shipped scenario or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
     scenario: String,
     /// Flight-path rotation rate of a pull-up or turn, rad/s.
     #[arg(long, value_name = "W", allow_negative_numbers = true)]

@@ -33,6 +33,7 @@ use std::process::ExitCode;
 mod board_arg;
 mod bridge_cmd;
 mod progress;
+mod scenario_arg;
 mod signals;
 mod studies;
 
@@ -46,6 +47,7 @@ use decoy_sim::pendulum::{
 use decoy_sim::trim::{LevelTrim, TrimRequest, level_trim};
 use decoy_sim::{InitialState, RunOptions, RunOutput, Scenario, SimError, describe_layout};
 use progress::Progress;
+use scenario_arg::ScenarioArg;
 use serde::Serialize;
 use solver_core::pendulum::{GRAVITY, ROD_LENGTH, ROD_MASS};
 
@@ -105,8 +107,8 @@ enum Command {
 
 #[derive(Args, Debug)]
 struct HilArgs {
-    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE")]
+    /// A shipped scenario or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
     scenario: String,
     /// The board (firmware/boards.toml).
     #[arg(long, value_name = "NAME", value_parser = board_arg::BoardParser, default_value_t = Board::default())]
@@ -169,8 +171,8 @@ struct TrimArgs {
 
 #[derive(Args, Debug)]
 struct SimulateArgs {
-    /// A shipped scenario (steady, acceleration, pull-up, turn, recorded) or the path of a scenario TOML file.
-    #[arg(long, value_name = "NAME|FILE")]
+    /// A shipped scenario or the path of a scenario TOML file.
+    #[arg(long, value_name = "NAME|FILE", value_parser = ScenarioArg)]
     scenario: String,
     /// Number of cable segments (default: the scenario's, else the configuration's solver.segments_host).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]

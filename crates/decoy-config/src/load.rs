@@ -76,6 +76,23 @@ impl SystemConfig {
             text: toml_text.to_owned(),
         })
     }
+
+    /// Parses a system from the TOML text of a file that is not on disk (a
+    /// Python dict's, in the `decoy` Python package), named `name` in messages.
+    /// Its `base` and `decoy.aero_table` resolve as a file's in `dir` would; a
+    /// name that is no file there but one of the built-in files
+    /// (`reference-system.toml`, `weak-stability-decoy.toml`, `decoy-aero.csv`)
+    /// is the built-in file, so that `base = "reference-system.toml"` is an
+    /// overlay on the built-in reference system from any directory. Validated
+    /// as a file is, with the same errors.
+    pub fn from_text_in(name: &str, toml_text: &str, dir: &Path) -> Result<Self, ConfigError> {
+        load(File {
+            name: name.to_owned(),
+            identity: name.to_owned(),
+            place: Place::Given(dir.to_owned()),
+            text: toml_text.to_owned(),
+        })
+    }
 }
 
 /// Where a file was found: what the names it gives resolve against.
@@ -85,6 +102,9 @@ enum Place {
     Builtin,
     /// A file on disk: names resolve against its directory.
     Disk(PathBuf),
+    /// Text without a file whose names resolve against this directory, else
+    /// among the built-in files ([`SystemConfig::from_text_in`]).
+    Given(PathBuf),
     /// Text given with its aerodynamic table and without a file.
     Text {
         /// The aerodynamic table's text.
@@ -114,6 +134,14 @@ impl File {
             Place::Disk(path) => {
                 let dir = path.parent().unwrap_or_else(|| Path::new("."));
                 disk_file(&tidy(&dir.join(relative)))
+            }
+            Place::Given(dir) => {
+                let path = tidy(&dir.join(relative));
+                if !path.exists() && builtin_file(relative).is_ok() {
+                    builtin_file(relative)
+                } else {
+                    disk_file(&path)
+                }
             }
             Place::Text { .. } => Err(ConfigError::Invalid {
                 file: self.name.clone(),

@@ -210,6 +210,53 @@ fn an_overlays_aero_table_is_relative_to_the_overlay() {
     assert_eq!(config.aero_rows[0].cd, 0.5);
 }
 
+/// Text without a file (a Python dict's) resolves its names in the directory
+/// given, else among the built-in files; its errors name it as given.
+#[test]
+fn text_in_a_directory_resolves_its_names_there_else_among_the_builtins() {
+    let scratch = Scratch::new("text-in");
+    let reference = SystemConfig::builtin().unwrap();
+    // The built-in reference, whole: its aerodynamic table is the built-in one.
+    let whole = SystemConfig::from_text_in("config dict", BUILTIN_TOML, &scratch.0).unwrap();
+    let mut expected = reference.clone();
+    expected.source = "config dict".to_owned();
+    assert_eq!(whole, expected);
+    // An overlay on the built-in reference.
+    let overlay = "base = \"reference-system.toml\"\n[decoy]\nmass = 3.0\n";
+    let light = SystemConfig::from_text_in("config dict", overlay, &scratch.0).unwrap();
+    assert_eq!(light.decoy.mass, 3.0);
+    assert_eq!(light.cable, reference.cable);
+    // A file of that name in the directory comes first (for the names the
+    // text itself writes: the overlay's aerodynamic table is its base's).
+    scratch.write(
+        "decoy-aero.csv",
+        &BUILTIN_AERO_CSV.replacen(
+            "\n0,0.000000,0.450000,-0.000000",
+            "\n0,0.000000,0.500000,-0.000000",
+            1,
+        ),
+    );
+    let draggy = SystemConfig::from_text_in("config dict", BUILTIN_TOML, &scratch.0).unwrap();
+    assert_eq!(draggy.aero_rows[0].cd, 0.5);
+    let light = SystemConfig::from_text_in("config dict", overlay, &scratch.0).unwrap();
+    assert_eq!(light.aero_rows, reference.aero_rows);
+    // Errors name the text as given; a name that is neither is the read error.
+    let bad = SystemConfig::from_text_in(
+        "config dict",
+        "base = \"reference-system.toml\"\n[decoy]\nmass = -1.0\n",
+        &scratch.0,
+    )
+    .unwrap_err();
+    assert_eq!(
+        bad.to_string(),
+        "config dict: decoy.mass must be positive, got -1"
+    );
+    let missing =
+        SystemConfig::from_text_in("config dict", "base = \"nowhere.toml\"\n", &scratch.0)
+            .unwrap_err();
+    assert!(matches!(missing, ConfigError::Io { .. }), "{missing}");
+}
+
 /// Errors in an overlay name the file that wrote the field: an unknown or
 /// mistyped key with its line in the overlay, a value out of range in the
 /// overlay or in its base.

@@ -2,13 +2,14 @@
 //! own) that turns host messages into answers. The firmware wraps it with a UART
 //! and SysTick; the host runs the same type as its reference.
 
-use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
+use decoy_schema::BUILTIN_ALTITUDE_M;
+use solver_core::profiles::{LevelAcceleration, ManoeuvreParams, ManoeuvrePath};
 use solver_core::{
     AircraftState, Atmosphere, ConfigError, Model, ModelParams, Real, SolveError, Solver, State,
     TrimTask, Vec3,
 };
 
-use crate::builtin::BuiltinPath;
+use crate::builtin;
 use crate::envelope::OperatingEnvelope;
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
 use crate::lookahead::Lookahead;
@@ -64,9 +65,6 @@ pub const MAX_PROFILE_RATE_MILLI_RADPS: u16 = 1000;
 /// the controller's segments (`lookahead::prediction_params`; a model whose copy
 /// needs more segments has no look-ahead).
 pub const PREDICTION_CAPACITY: usize = 12;
-
-/// Altitude of the built-in profiles, m.
-const PROFILE_ALTITUDE_M: f64 = 9000.0;
 
 /// Work units of the trim one State frame carries on while the controller
 /// initialises ([`solver_core::TrimTask`]; a decoy moment is 8 units, a segment's
@@ -299,7 +297,7 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     profile: Profile,
     /// The flight path of the selected built-in profile (None: streamed), made
     /// when the profile is selected.
-    builtin: Option<BuiltinPath>,
+    builtin: Option<ManoeuvrePath>,
     run: Option<Run>,
     /// The trim in progress before a run starts.
     init: Initialising<T, N>,
@@ -360,7 +358,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         // constant must be all zero bits to lie in `.bss` (checked by the HIL
         // tests). Never read: selecting a profile replaces it, `configure` clears
         // it, and an unconfigured controller never starts a run.
-        builtin: Some(BuiltinPath::Level(LevelAcceleration {
+        builtin: Some(ManoeuvrePath::Level(LevelAcceleration {
             altitude: 0.0,
             initial_speed: 0.0,
             final_speed: 0.0,
@@ -687,10 +685,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             }
             Command::SelectProfile(profile) => {
                 let rate = match profile {
-                    Profile::PullUp { rate_milli_radps } | Profile::Turn { rate_milli_radps } => {
-                        rate_milli_radps
-                    }
-                    _ => 0,
+                    Profile::Builtin(b) => b.rate_milli_radps(),
+                    Profile::Streamed => 0,
                 };
                 if rate > MAX_PROFILE_RATE_MILLI_RADPS {
                     return self.reject(None, RejectReason::OutOfRange);
@@ -840,12 +836,16 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         let generated;
         let flown = match (&self.builtin, &self.run) {
             (Some(path), Some(run)) => {
-                generated =
-                    path.frame::<T>(frame.seq, frame.time_s, frame.time_s - run.start_time_s);
+                generated = builtin::frame::<T>(
+                    path,
+                    frame.seq,
+                    frame.time_s,
+                    frame.time_s - run.start_time_s,
+                );
                 &generated
             }
             (Some(path), None) => {
-                generated = path.frame::<T>(frame.seq, frame.time_s, 0.0);
+                generated = builtin::frame::<T>(path, frame.seq, frame.time_s, 0.0);
                 &generated
             }
             (None, _) => frame,
@@ -939,11 +939,16 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         }
     }
 
-    /// The built-in profile's flight path, if one is selected.
-    fn builtin_path(&self) -> Option<BuiltinPath> {
-        if self.profile == Profile::Streamed {
+    /// The built-in profile's flight path, if one is selected: its manoeuvre's
+    /// built-in flight (`decoy_schema::ManoeuvreInfo::builtin`) at
+    /// [`BUILTIN_ALTITUDE_M`], its Mach numbers as speeds with the model's
+    /// atmosphere in f64, at the command's rate.
+    fn builtin_path(&self) -> Option<ManoeuvrePath> {
+        let Profile::Builtin(profile) = self.profile else {
             return None;
-        }
+        };
+        let manoeuvre = profile.manoeuvre();
+        let flight = &manoeuvre.info().builtin;
         let env = self.solver.model().params().environment;
         let atmosphere = match env.atmosphere {
             Atmosphere::Isa1976 {
@@ -958,34 +963,21 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             Atmosphere::Vacuum => Atmosphere::Vacuum,
         };
         let a = atmosphere
-            .at(PROFILE_ALTITUDE_M)
+            .at(BUILTIN_ALTITUDE_M)
             .map_or(0.0, |air| air.speed_of_sound);
-        let h = PROFILE_ALTITUDE_M;
-        Some(match self.profile {
-            Profile::Streamed => return None,
-            Profile::Steady => BuiltinPath::Level(LevelAcceleration::steady(h, 0.8 * a)),
-            Profile::Acceleration => BuiltinPath::Level(LevelAcceleration {
-                altitude: h,
-                initial_speed: 0.6 * a,
-                final_speed: 0.8 * a,
-                start: 2.0,
-                acceleration: 10.0,
-            }),
-            Profile::PullUp { rate_milli_radps } => BuiltinPath::PullUp(PullUp {
-                altitude: h,
-                speed: 0.6 * a,
-                start: 2.0,
-                rate: f64::from(rate_milli_radps) * 1e-3,
-                duration: 5.0,
-            }),
-            Profile::Turn { rate_milli_radps } => BuiltinPath::Turn(LevelTurn {
-                altitude: h,
-                speed: 0.8 * a,
-                start: 0.0,
-                rate: f64::from(rate_milli_radps) * 1e-3,
+        Some(ManoeuvrePath::new(
+            manoeuvre,
+            &ManoeuvreParams {
+                altitude: BUILTIN_ALTITUDE_M,
+                speed: flight.mach * a,
+                final_speed: flight.final_mach * a,
+                start: flight.start_s,
+                acceleration: flight.acceleration_mps2,
+                rate: f64::from(profile.rate_milli_radps()) * 1e-3,
+                duration: flight.duration_s,
                 gravity: env.gravity.to_f64(),
-            }),
-        })
+            },
+        ))
     }
 
     /// True when the flown frame is inside the operating envelope; `mach` its

@@ -10,6 +10,7 @@ use decoy_link::{
     Command, DeviceMessage, FrameDecoder, HostMessage, MAX_WIRE_BYTES, PROTOCOL_VERSION, Profile,
     RejectReason, StatusFlags, encode,
 };
+use decoy_schema::Manoeuvre;
 
 /// A board of that name with a 168 MHz core clock (any name: no enum to extend).
 fn board(name: &str) -> decoy_link::BoardInfo {
@@ -432,9 +433,7 @@ fn commands_are_answered() {
         }
         other => panic!("{other:?}"),
     }
-    let too_fast = Profile::Turn {
-        rate_milli_radps: 5000,
-    };
+    let too_fast = Profile::builtin(Manoeuvre::Turn, 5000);
     let before = c.snapshot();
     let answer = c.handle(
         HostMessage::Command(Command::SelectProfile(too_fast)),
@@ -448,7 +447,10 @@ fn commands_are_answered() {
 fn the_acceleration_profile_uses_frames_as_the_clock() {
     let mut c = controller();
     let status = c.handle(
-        HostMessage::Command(Command::SelectProfile(Profile::Acceleration)),
+        HostMessage::Command(Command::SelectProfile(Profile::builtin(
+            Manoeuvre::Acceleration,
+            0,
+        ))),
         &mut NoCounter,
     );
     assert!(StatusFlags(status_flags(status)).contains(StatusFlags::PROFILE_BUILTIN));
@@ -578,32 +580,12 @@ fn the_paper_manoeuvres_fly_through_with_the_wave_step_limit() {
     // would diverge with a step fixed at the cap; the wave-speed limit shortens the
     // step for those frames only. Steady flight keeps four steps per 10 ms frame.
     let cases = [
-        (Profile::Steady, 5.0),
-        (Profile::Acceleration, 25.0),
-        (
-            Profile::PullUp {
-                rate_milli_radps: 50,
-            },
-            15.0,
-        ),
-        (
-            Profile::PullUp {
-                rate_milli_radps: 100,
-            },
-            15.0,
-        ),
-        (
-            Profile::PullUp {
-                rate_milli_radps: 200,
-            },
-            15.0,
-        ),
-        (
-            Profile::Turn {
-                rate_milli_radps: 200,
-            },
-            15.0,
-        ),
+        (Profile::builtin(Manoeuvre::Steady, 0), 5.0),
+        (Profile::builtin(Manoeuvre::Acceleration, 0), 25.0),
+        (Profile::builtin(Manoeuvre::PullUp, 50), 15.0),
+        (Profile::builtin(Manoeuvre::PullUp, 100), 15.0),
+        (Profile::builtin(Manoeuvre::PullUp, 200), 15.0),
+        (Profile::builtin(Manoeuvre::Turn, 200), 15.0),
     ];
     for (profile, seconds) in cases {
         let (peak32, steps32) = fly_builtin::<f32>(profile, seconds);
@@ -611,7 +593,7 @@ fn the_paper_manoeuvres_fly_through_with_the_wave_step_limit() {
         println!(
             "{profile:?}: peak {peak32} N (f64 {peak64} N), at most {steps32} steps (f64 {steps64})"
         );
-        if profile == Profile::Steady {
+        if profile == Profile::builtin(Manoeuvre::Steady, 0) {
             assert_eq!(steps32, 4);
         }
         assert!(

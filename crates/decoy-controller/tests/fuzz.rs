@@ -7,6 +7,7 @@ mod common;
 use common::{frame, output, running, send};
 use decoy_controller::NoCounter;
 use decoy_link::{AircraftStateFrame, Command, DeviceMessage, FrameDecoder, HostMessage, Profile};
+use decoy_schema::Manoeuvre;
 
 /// SplitMix64, so failures reproduce.
 struct Rng(u64);
@@ -65,13 +66,9 @@ fn random_frames_never_panic_and_rejections_change_nothing() {
             0 => HostMessage::Command(Command::ResetToTrim),
             1 => HostMessage::Command(Command::SelectProfile(match r.next() % 4 {
                 0 => Profile::Streamed,
-                1 => Profile::Steady,
-                2 => Profile::Turn {
-                    rate_milli_radps: (r.next() % 2000) as u16,
-                },
-                _ => Profile::PullUp {
-                    rate_milli_radps: (r.next() % 400) as u16,
-                },
+                1 => Profile::builtin(Manoeuvre::Steady, 0),
+                2 => Profile::builtin(Manoeuvre::Turn, (r.next() % 2000) as u16),
+                _ => Profile::builtin(Manoeuvre::PullUp, (r.next() % 400) as u16),
             })),
             2 => HostMessage::Command(Command::GetStatus),
             _ => {

@@ -10,6 +10,7 @@ use decoy_controller::{Controller, ControllerError, NoCounter};
 use decoy_link::{
     Command, DeviceMessage, HostMessage, MAX_WIRE_BYTES, Profile, RejectReason, encode,
 };
+use decoy_schema::Manoeuvre;
 use solver_core::ConfigError;
 
 fn command(c: &mut Controller<f32, CAPACITY>, command: Command) -> DeviceMessage {
@@ -52,7 +53,10 @@ fn an_unconfigured_controller_answers_commands_and_rejects_state_frames() {
     ));
     // A built-in profile skips those checks: nothing to trim.
     assert!(matches!(
-        command(&mut c, Command::SelectProfile(Profile::Steady)),
+        command(
+            &mut c,
+            Command::SelectProfile(Profile::builtin(Manoeuvre::Steady, 0))
+        ),
         DeviceMessage::Status(_)
     ));
     match send(&mut c, frame(1, 0.01)) {
@@ -79,9 +83,7 @@ fn a_reconfigured_controller_keeps_nothing_of_its_past() {
     let _ = used.poll_silence(10_000);
     let _ = command(
         &mut used,
-        Command::SelectProfile(Profile::PullUp {
-            rate_milli_radps: 100,
-        }),
+        Command::SelectProfile(Profile::builtin(Manoeuvre::PullUp, 100)),
     );
     let _ = send(&mut used, frame(0, 0.0));
     let _ = send(&mut used, frame(1, 0.01));

@@ -15,7 +15,7 @@ use decoy_controller::{Controller, NoCounter, SystemParams};
 use decoy_link::{
     Command, DeviceMessage, HostMessage, MonitorLevel, OutputFrame, Profile, Requirement,
 };
-use decoy_schema::REQUIREMENT_COUNT;
+use decoy_schema::{Manoeuvre, REQUIREMENT_COUNT};
 use solver_core::profiles::LevelAcceleration;
 use solver_core::{AircraftState, FlightPath, Real};
 
@@ -108,21 +108,11 @@ fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
         // The paper's 0.20 rad/s pull-up and turn, and every other built-in
         // manoeuvre the product ships (pull-ups 0.05 and 0.10, turn 0.10).
         for profile in [
-            Profile::PullUp {
-                rate_milli_radps: 200,
-            },
-            Profile::Turn {
-                rate_milli_radps: 200,
-            },
-            Profile::PullUp {
-                rate_milli_radps: 50,
-            },
-            Profile::PullUp {
-                rate_milli_radps: 100,
-            },
-            Profile::Turn {
-                rate_milli_radps: 100,
-            },
+            Profile::builtin(Manoeuvre::PullUp, 200),
+            Profile::builtin(Manoeuvre::Turn, 200),
+            Profile::builtin(Manoeuvre::PullUp, 50),
+            Profile::builtin(Manoeuvre::PullUp, 100),
+            Profile::builtin(Manoeuvre::Turn, 100),
         ] {
             let outputs = fly_profile::<f32>(&system, profile, 12.0);
             let events = events(&outputs);
@@ -147,11 +137,7 @@ fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
                     );
                 }
             }
-            if profile
-                == (Profile::PullUp {
-                    rate_milli_radps: 200,
-                })
-            {
+            if profile == (Profile::builtin(Manoeuvre::PullUp, 200)) {
                 assert!(
                     violated > 0,
                     "{label}: the 0.20 rad/s pull-up violates nothing"
@@ -201,7 +187,11 @@ fn steady_flight_gives_no_advisory_anywhere_in_the_envelope() {
 /// advisory or a violation.
 #[test]
 fn the_acceleration_case_gives_no_advisory() {
-    let outputs = fly_profile::<f32>(&shipped(), Profile::Acceleration, 15.0);
+    let outputs = fly_profile::<f32>(
+        &shipped(),
+        Profile::builtin(Manoeuvre::Acceleration, 0),
+        15.0,
+    );
     for o in &outputs {
         assert_eq!(
             o.management.advisories, 0,
@@ -222,7 +212,7 @@ fn the_acceleration_case_gives_no_advisory() {
 #[test]
 fn the_look_ahead_covers_3_s_and_refreshes_every_half_second() {
     let system = shipped();
-    let outputs = fly_profile::<f32>(&system, Profile::Steady, 6.0);
+    let outputs = fly_profile::<f32>(&system, Profile::builtin(Manoeuvre::Steady, 0), 6.0);
     let mut starts: Vec<f64> = outputs
         .iter()
         .map(|o| o.management.prediction_from_s)
@@ -255,13 +245,7 @@ fn predicted_margins_against_the_margins_reached() {
     // to compare (the accuracy does not depend on how the work is sliced).
     let mut system = shipped();
     system.management.prediction_steps_per_frame = 10;
-    let outputs = fly_profile::<f32>(
-        &system,
-        Profile::PullUp {
-            rate_milli_radps: 200,
-        },
-        12.0,
-    );
+    let outputs = fly_profile::<f32>(&system, Profile::builtin(Manoeuvre::PullUp, 200), 12.0);
     let mut compared = 0;
     // Largest |predicted - reached| per requirement, in the rotation and in
     // the climb after it (the snatch).
@@ -335,9 +319,10 @@ fn predicted_margins_against_the_margins_reached() {
 fn the_slice_gives_the_same_bits_wherever_it_runs() {
     let system = shipped();
     let messages: Vec<HostMessage> = {
-        let select = HostMessage::Command(Command::SelectProfile(Profile::PullUp {
-            rate_milli_radps: 200,
-        }));
+        let select = HostMessage::Command(Command::SelectProfile(Profile::builtin(
+            Manoeuvre::PullUp,
+            200,
+        )));
         let mut m = vec![select];
         for k in 0..=1000u32 {
             let t = 0.01 * f64::from(k);

@@ -43,7 +43,8 @@ fn main() {
     let peak = |v: Vec<f64>| v.into_iter().fold(0.0, f64::max);
     let mut references = Vec::new();
     let mut all_frames = Vec::new();
-    for (name, rate, t_end) in flight::SHIPPED_MANOEUVRES {
+    for (kind, rate, t_end) in flight::SHIPPED_MANOEUVRES {
+        let name = kind.name();
         let (_, frames) =
             flight::builtin_frames(&config, name, rate, t_end).unwrap_or_else(|e| panic!("{e}"));
         let reference = flight::frame_reference(

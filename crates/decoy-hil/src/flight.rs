@@ -11,7 +11,8 @@ use decoy_controller::{Controller, FramePath, NoCounter};
 use decoy_link::{
     AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, StatusFlags, StatusFrame,
 };
-use decoy_sim::{RunOptions, RunPlan, Scenario, SimError};
+use decoy_schema::Manoeuvre;
+use decoy_sim::{RunOptions, RunPlan, Scenario, ScenarioKind, SimError};
 use solver_core::{FlightPath, Real, SegmentLayout, Solver};
 
 use crate::link::{LinkError, Session};
@@ -73,16 +74,18 @@ pub fn checked_frame_count(t_end: f64, from_flag: bool) -> Result<u32, String> {
 }
 
 /// Every manoeuvre the product ships, as issue 14's accuracy and worst-frame
-/// studies fly them: (built-in scenario, rate, simulated seconds).
-pub const SHIPPED_MANOEUVRES: [(&str, Option<f64>, f64); 8] = [
-    ("steady", None, 10.0),
-    ("acceleration", None, 12.0),
-    ("pull-up", Some(0.05), 10.0),
-    ("pull-up", Some(0.10), 10.0),
-    ("pull-up", Some(0.20), 10.0),
-    ("turn", Some(0.10), 10.0),
-    ("turn", Some(0.20), 10.0),
-    ("recorded", None, 10.0),
+/// studies fly them: (the kind, whose shipped scenario is flown; its rate;
+/// simulated seconds). Every kind is here, a rate exactly for the manoeuvres
+/// with one (tested).
+pub const SHIPPED_MANOEUVRES: [(ScenarioKind, Option<f64>, f64); 8] = [
+    (ScenarioKind::Manoeuvre(Manoeuvre::Steady), None, 10.0),
+    (ScenarioKind::Manoeuvre(Manoeuvre::Acceleration), None, 12.0),
+    (ScenarioKind::Manoeuvre(Manoeuvre::PullUp), Some(0.05), 10.0),
+    (ScenarioKind::Manoeuvre(Manoeuvre::PullUp), Some(0.10), 10.0),
+    (ScenarioKind::Manoeuvre(Manoeuvre::PullUp), Some(0.20), 10.0),
+    (ScenarioKind::Manoeuvre(Manoeuvre::Turn), Some(0.10), 10.0),
+    (ScenarioKind::Manoeuvre(Manoeuvre::Turn), Some(0.20), 10.0),
+    (ScenarioKind::Recorded, None, 10.0),
 ];
 
 /// The plan (`decoy simulate`'s, with `config`) and the frames of built-in
@@ -537,6 +540,29 @@ pub fn outputs(answers: &[DeviceMessage]) -> Vec<OutputFrame> {
 
 #[cfg(test)]
 mod tests {
+    use decoy_schema::Parameter;
+
+    /// Every kind of scenario is among the shipped manoeuvres, with a rate
+    /// exactly when it has one.
+    #[test]
+    fn every_kind_is_a_shipped_manoeuvre() {
+        for kind in ScenarioKind::ALL {
+            assert!(
+                SHIPPED_MANOEUVRES.iter().any(|(k, _, _)| *k == kind),
+                "{} is not flown by the studies",
+                kind.name()
+            );
+        }
+        for (kind, rate, _) in SHIPPED_MANOEUVRES {
+            assert_eq!(
+                rate.is_some(),
+                kind.need(Parameter::Rate).is_some(),
+                "{}",
+                kind.name()
+            );
+        }
+    }
+
     use super::*;
     use solver_core::profiles::LevelAcceleration;
 

@@ -33,7 +33,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use decoy_config::SystemConfig;
 use decoy_link::{DeviceMessage, HostMessage, StatusFlags};
 use decoy_sim::{FlightProfile, RunOptions, Scenario, SimError};
-use solver_core::profiles::{LevelTurn, PullUp};
+use solver_core::profiles::{LevelTurn, ManoeuvrePath, PullUp};
 
 use crate::flight::{self, InstructionStats};
 use crate::link::Session;
@@ -188,7 +188,8 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
     }
     // Every shipped manoeuvre at its full duration (the scenario file's, not
     // the studies' shortened one).
-    for (name, rate, _) in flight::SHIPPED_MANOEUVRES {
+    for (kind, rate, _) in flight::SHIPPED_MANOEUVRES {
+        let name = kind.name();
         let (profile, t_end) = scenario(
             config,
             name,
@@ -250,7 +251,7 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
                 p.rate, p.duration
             ),
             group: Group::RateLimit,
-            profile: FlightProfile::PullUp(p),
+            profile: FlightProfile::Manoeuvre(ManoeuvrePath::PullUp(p)),
             t_end: LIMIT_S,
         });
         let v = config.mach_to_speed(h, m)?;
@@ -259,13 +260,13 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
         cases.push(Case {
             label: format!("turn limit {h:.0} m Mach {m:.2} ({w:.3} rad/s)"),
             group: Group::RateLimit,
-            profile: FlightProfile::Turn(LevelTurn {
+            profile: FlightProfile::Manoeuvre(ManoeuvrePath::Turn(LevelTurn {
                 altitude: h,
                 speed: v,
                 start: 2.0,
                 rate: w,
                 gravity: g,
-            }),
+            })),
             t_end: LIMIT_S,
         });
     }
@@ -277,13 +278,13 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
         cases.push(Case {
             label: format!("tropopause {label} from {h:.0} m Mach 0.80"),
             group: Group::Tropopause,
-            profile: FlightProfile::PullUp(PullUp {
+            profile: FlightProfile::Manoeuvre(ManoeuvrePath::PullUp(PullUp {
                 altitude: h,
                 speed: v,
                 start: 2.0,
                 rate: w,
                 duration: 5.0,
-            }),
+            })),
             t_end: 20.0,
         });
     }
@@ -517,7 +518,7 @@ mod tests {
             assert!(steady.len() >= 3 * altitudes.len());
             assert_eq!(
                 cases.iter().filter(|c| c.group == Group::Shipped).count(),
-                8
+                flight::SHIPPED_MANOEUVRES.len()
             );
             assert!(cases.iter().filter(|c| c.group == Group::RateLimit).count() >= 6);
             assert_eq!(

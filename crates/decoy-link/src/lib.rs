@@ -8,6 +8,8 @@
 //!   ([`encode`], [`Decoder`]), typed [`FrameError`]s, never a stall on garbage.
 //! - [`messages`]: [`HostMessage`] (State frames, commands) and [`DeviceMessage`]
 //!   (outputs, rejections, status, pong, hello), [`PROTOCOL_VERSION`].
+//! - [`profile`]: [`Profile`], the streamed kinematics or a manoeuvre of
+//!   `decoy_schema` flown built in.
 //!
 //! docs/protocol.md is the wire format's reference. `no_std`, no heap, no
 //! `unsafe`; the `std` feature adds `framing::encode_vec` only.
@@ -32,6 +34,7 @@
 
 pub mod framing;
 pub mod messages;
+pub mod profile;
 
 /// The requirements' list and container, from `decoy-schema` (the reports of
 /// [`Management`] are a [`PerRequirement`]).
@@ -46,3 +49,4 @@ pub use messages::{
     DeviceMessage, Hello, HostMessage, Management, MonitorLevel, MonitorReport, OutputFrame,
     PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
 };
+pub use profile::BuiltinProfile;

@@ -7,6 +7,8 @@
 use decoy_schema::{PerRequirement, Requirement};
 use serde::{Deserialize, Serialize};
 
+pub use crate::profile::{BuiltinProfile, Profile};
+
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
 pub const PROTOCOL_VERSION: u16 = 6;
 
@@ -48,7 +50,7 @@ pub enum Command {
     /// The next State frame starts a new run from the trim at that state (also
     /// the state at boot). Answered by a Status frame.
     ResetToTrim,
-    /// Fly a built-in profile (or go back to streamed kinematics); implies
+    /// Fly a manoeuvre built in (or go back to streamed kinematics); implies
     /// [`Command::ResetToTrim`]. Answered by a Status frame.
     SelectProfile(Profile),
     /// Answered by a Status frame.
@@ -57,29 +59,6 @@ pub enum Command {
     Ping {
         /// Any value; echoed.
         nonce: u32,
-    },
-}
-
-/// Where the aircraft kinematics come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum Profile {
-    /// From the State frames (the normal mode).
-    #[default]
-    Streamed,
-    /// Steady level flight, 9 km, Mach 0.8 (the State frames are the clock only).
-    Steady,
-    /// Mach 0.6 level at 9 km to t = 2 s, then +10 m/s^2 to Mach 0.8.
-    Acceleration,
-    /// Mach 0.6 level at 9 km to t = 2 s, then the flight path rotates up at
-    /// `rate_milli_radps` / 1000 rad/s for 5 s, then the climb is held.
-    PullUp {
-        /// Flight-path rotation rate, mrad/s (positive up).
-        rate_milli_radps: u16,
-    },
-    /// Level coordinated right turn at 9 km, Mach 0.8, from t = 0.
-    Turn {
-        /// Turn rate, mrad/s.
-        rate_milli_radps: u16,
     },
 }
 

@@ -7,6 +7,7 @@ use decoy_link::{
     Hello, HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, Management, MonitorLevel, MonitorReport,
     OutputFrame, PerRequirement, Profile, RejectReason, Rejected, StatusFrame, crc32, encode,
 };
+use decoy_schema::Manoeuvre;
 
 /// A small deterministic generator (SplitMix64), so failures reproduce.
 struct Rng(u64);
@@ -66,17 +67,12 @@ fn host_message(r: &mut Rng) -> HostMessage {
         3 => HostMessage::Command(Command::ResetToTrim),
         4 => HostMessage::Command(Command::GetStatus),
         5 => HostMessage::Command(Command::Ping { nonce: r.u32() }),
-        6 => HostMessage::Command(Command::SelectProfile(match r.next() % 5 {
-            0 => Profile::Streamed,
-            1 => Profile::Steady,
-            2 => Profile::Acceleration,
-            3 => Profile::PullUp {
-                rate_milli_radps: r.u16(),
+        6 => HostMessage::Command(Command::SelectProfile(
+            match r.next() as usize % (Manoeuvre::ALL.len() + 1) {
+                0 => Profile::Streamed,
+                k => Profile::builtin(Manoeuvre::ALL[k - 1], r.u16()),
             },
-            _ => Profile::Turn {
-                rate_milli_radps: r.u16(),
-            },
-        })),
+        )),
         _ => HostMessage::State(AircraftStateFrame {
             seq: u32::MAX,
             ..state(r)

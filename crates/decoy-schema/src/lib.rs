@@ -17,3 +17,8 @@ pub use columns::{CSV_FILES, Column, CsvFile, Quantity};
 
 #[cfg(test)]
 mod docs;
+pub mod manoeuvre;
+pub use manoeuvre::{
+    BUILTIN_ALTITUDE_M, BuiltinFlight, Manoeuvre, ManoeuvreInfo, Need, Parameter,
+    STREAMED_PROFILE_CODE,
+};

@@ -86,7 +86,7 @@ pub enum SimError {
     /// The integration failed part way (the state diverged, a pivot lost positive
     /// definiteness, or the flight left the atmosphere). The outputs written up to
     /// `t_s` are valid and `summary.json` records `"stopped"`.
-    #[error("simulation stopped at t = {t_s} s: {reason}; the outputs up to then are in {}", out_dir.display())]
+    #[error("simulation stopped at t = {t_s} s: {reason}{}", outputs_in(out_dir.as_deref()))]
     Stopped {
         /// Time of the last good state, s.
         t_s: f64,
@@ -95,21 +95,22 @@ pub enum SimError {
         /// The solver's error, when the solver reported one.
         #[source]
         source: Option<SolveError>,
-        /// The output directory.
-        out_dir: PathBuf,
+        /// The output directory (`None`: a run kept in memory only,
+        /// [`crate::simulate_recorded`], or a study's).
+        out_dir: Option<PathBuf>,
     },
     /// A stop request (from the command line: a signal, SIGINT or SIGTERM) ended
     /// the run at a step boundary ([`crate::simulate_until`]). The outputs up to
     /// `t_s` are written whole and `summary.json`'s `"stopped"` names the
     /// request.
-    #[error("interrupted by {signal} at t = {t_s} s; the outputs up to then are in {}", out_dir.display())]
+    #[error("interrupted by {signal} at t = {t_s} s{}", outputs_in(out_dir.as_deref()))]
     Interrupted {
         /// Time of the last state, s.
         t_s: f64,
         /// What asked to stop (`SIGINT`; `summary.json`'s `stopped.reason` is `interrupted by SIGINT`).
         signal: &'static str,
-        /// The output directory.
-        out_dir: PathBuf,
+        /// The output directory (`None`: a run kept in memory only).
+        out_dir: Option<PathBuf>,
     },
     /// An input file (scenario, recorded flight) could not be read.
     #[error("cannot read {}: {source}", path.display())]
@@ -191,6 +192,14 @@ impl SimError {
             message: message.into(),
         }
     }
+}
+
+/// Where a stopped run's outputs are, for its message (nothing for a run
+/// that wrote none).
+fn outputs_in(out_dir: Option<&std::path::Path>) -> String {
+    out_dir
+        .map(|dir| format!("; the outputs up to then are in {}", dir.display()))
+        .unwrap_or_default()
 }
 
 fn line_suffix(line: Option<usize>) -> String {

@@ -18,6 +18,9 @@
 //!   line's SIGINT or SIGTERM) comes. [`clear_output_dir`] makes an output
 //!   directory hold one run's files only (every command that writes one calls
 //!   it), and every file is written whole (`decoy_plots::atomic`).
+//!   [`simulate_recorded`] keeps the same run's rows and snapshots in memory
+//!   and writes its files only to a directory it is given (the `decoy` Python
+//!   package, `crates/decoy-py`).
 //! - [`trace()`]: the same run kept in memory (optionally from a perturbed trim),
 //!   for the studies below.
 //! - [`sweep`]: the paper's steady-flight sweeps (speed, altitude; Figs. 15-22)
@@ -109,8 +112,8 @@ pub use profile::FlightProfile;
 pub use record::{Sample, Snapshot};
 pub use recorded::{RECORDED_COLUMNS, RecordedFlight, RecordedSample};
 pub use run::{
-    FIRMWARE_LOG, INSTRUCTIONS_PLOT, RunOutput, clear_output_dir, known_output_file_names,
-    output_file_names, simulate, simulate_until,
+    FIRMWARE_LOG, INSTRUCTIONS_PLOT, Recording, RunOutput, clear_output_dir,
+    known_output_file_names, output_file_names, simulate, simulate_recorded, simulate_until,
 };
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,

@@ -1,7 +1,7 @@
 //! [`FlightProfile`]: the aircraft trajectory of a scenario, one of the paper's
 //! prescribed manoeuvres or a recorded flight.
 
-use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
+use solver_core::profiles::ManoeuvrePath;
 use solver_core::{AircraftState, FlightPath, Real};
 
 use crate::recorded::RecordedFlight;
@@ -9,12 +9,8 @@ use crate::recorded::RecordedFlight;
 /// The prescribed aircraft motion of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FlightProfile {
-    /// Steady level flight, or a level acceleration between two speeds.
-    Level(LevelAcceleration),
-    /// Level flight, then the flight path rotating up at a constant rate, then a climb.
-    PullUp(PullUp),
-    /// Level flight, then a level coordinated turn.
-    Turn(LevelTurn),
+    /// One of `decoy_schema`'s manoeuvres, flown by solver-core's profile.
+    Manoeuvre(ManoeuvrePath),
     /// A recorded flight, interpolated.
     Recorded(RecordedFlight),
 }
@@ -25,15 +21,7 @@ impl FlightProfile {
     /// amplitude of the summary is measured from then on.
     pub fn manoeuvre_start(&self) -> f64 {
         match self {
-            FlightProfile::Level(p) => {
-                if p.final_speed == p.initial_speed || p.acceleration == 0.0 {
-                    0.0
-                } else {
-                    p.start
-                }
-            }
-            FlightProfile::PullUp(p) => p.start,
-            FlightProfile::Turn(p) => p.start,
+            FlightProfile::Manoeuvre(p) => p.manoeuvre_start(),
             FlightProfile::Recorded(_) => 0.0,
         }
     }
@@ -53,12 +41,7 @@ impl FlightProfile {
 impl FlightProfile {
     /// The aircraft state at `t`, s, in f64 (the trait gives any precision).
     pub fn state_at(&self, t: f64) -> AircraftState<f64> {
-        match self {
-            FlightProfile::Level(p) => p.state_at(t),
-            FlightProfile::PullUp(p) => p.state_at(t),
-            FlightProfile::Turn(p) => p.state_at(t),
-            FlightProfile::Recorded(p) => p.state_at(t),
-        }
+        FlightPath::<f64>::state_at(self, t)
     }
 }
 
@@ -66,10 +49,14 @@ impl FlightProfile {
 impl<T: Real> FlightPath<T> for FlightProfile {
     fn state_at(&self, t: f64) -> AircraftState<T> {
         match self {
-            FlightProfile::Level(p) => p.state_at(t),
-            FlightProfile::PullUp(p) => p.state_at(t),
-            FlightProfile::Turn(p) => p.state_at(t),
+            FlightProfile::Manoeuvre(p) => p.state_at(t),
             FlightProfile::Recorded(p) => FlightPath::<T>::state_at(p, t),
         }
+    }
+}
+
+impl From<ManoeuvrePath> for FlightProfile {
+    fn from(path: ManoeuvrePath) -> Self {
+        FlightProfile::Manoeuvre(path)
     }
 }

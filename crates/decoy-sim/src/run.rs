@@ -16,7 +16,8 @@ use crate::management::ManagementTrack;
 use crate::options::{InitialState, RunOptions};
 use crate::plots::PLOT_NAMES;
 use crate::record::{
-    CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample, Stop, probe,
+    CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample, Snapshot, Stop,
+    probe,
 };
 use crate::scenario::{RunPlan, Scenario};
 use crate::summary::{RunIdentity, Summary, measured};
@@ -32,6 +33,27 @@ pub struct RunOutput {
     pub files: Vec<PathBuf>,
     /// The checked plan the run followed.
     pub plan: RunPlan,
+}
+
+/// A run with its rows and cable snapshots in memory ([`simulate_recorded`]):
+/// what `timeseries.csv`, `cable.csv` and `summary.json` hold, whether or not
+/// they were written.
+#[derive(Debug)]
+pub struct Recording {
+    /// `summary.json`'s contents (with `stopped` when the run ended early).
+    pub summary: Summary,
+    /// The rows of `timeseries.csv`, in time order.
+    pub samples: Vec<Sample>,
+    /// The snapshots of `cable.csv`, in time order.
+    pub snapshots: Vec<Snapshot>,
+    /// Every file written, in order (none for a run kept in memory only).
+    pub files: Vec<PathBuf>,
+    /// The checked plan the run followed.
+    pub plan: RunPlan,
+    /// Why the run ended early, as [`simulate_until`] returns it then
+    /// ([`SimError::Stopped`] or [`SimError::Interrupted`]); `None` when it
+    /// flew to its end.
+    pub ended: Option<SimError>,
 }
 
 /// Integrates `plan.steps` steps from the solver's state, recording every
@@ -160,42 +182,80 @@ pub fn simulate_until(
 ) -> Result<RunOutput, SimError> {
     let wall = Instant::now();
     let plan = scenario.plan(config, options)?;
-    with_capacity!(plan.layout.count(), N => simulate_with::<N>(config, plan, options, progress, &stop, wall))
-}
-
-/// [`simulate_until`] with a model of capacity `N`.
-fn simulate_with<const N: usize>(
-    config: &SystemConfig,
-    plan: RunPlan,
-    options: &RunOptions,
-    progress: impl FnMut(f64),
-    stop: &dyn Fn() -> Option<&'static str>,
-    wall: Instant,
-) -> Result<RunOutput, SimError> {
     let out_dir = options
         .out_dir
         .clone()
         .unwrap_or_else(|| Path::new("out").join(&plan.name));
+    let recording = with_capacity!(plan.layout.count(), N => simulate_with::<N>(config, plan, Some(&out_dir), options, progress, &stop, wall))?;
+    if let Some(e) = recording.ended {
+        return Err(e);
+    }
+    Ok(RunOutput {
+        summary: recording.summary,
+        out_dir,
+        files: recording.files,
+        plan: recording.plan,
+    })
+}
+
+/// [`simulate_until`] keeping the run in memory: the rows of `timeseries.csv`
+/// and the snapshots of `cable.csv` as values, with the summary, whether or
+/// not they are written (the `decoy` Python package's `simulate`). The files
+/// are written only when `options.out_dir` names a directory (then the same
+/// files as [`simulate`], the plots with `options.plots`); `None` writes
+/// nothing (where [`simulate`] writes `out/NAME`).
+///
+/// A run that ends early is still a [`Recording`] (up to its last good state,
+/// `summary.stopped` saying why, [`Recording::ended`] the error
+/// [`simulate_until`] returns then); a run that cannot start (no trim, an
+/// initial state that cannot be evaluated) is the error.
+pub fn simulate_recorded(
+    config: &SystemConfig,
+    scenario: &Scenario,
+    options: &RunOptions,
+    progress: impl FnMut(f64),
+    stop: impl Fn() -> Option<&'static str>,
+) -> Result<Recording, SimError> {
+    let wall = Instant::now();
+    let plan = scenario.plan(config, options)?;
+    let out_dir = options.out_dir.clone();
+    with_capacity!(plan.layout.count(), N => simulate_with::<N>(config, plan, out_dir.as_deref(), options, progress, &stop, wall))
+}
+
+/// A run with a model of capacity `N`, writing its files to `out_dir` when
+/// there is one ([`simulate_until`], [`simulate_recorded`]).
+fn simulate_with<const N: usize>(
+    config: &SystemConfig,
+    plan: RunPlan,
+    out_dir: Option<&Path>,
+    options: &RunOptions,
+    progress: impl FnMut(f64),
+    stop: &dyn Fn() -> Option<&'static str>,
+    wall: Instant,
+) -> Result<Recording, SimError> {
     let model: Model<f64, N> = config.model(plan.layout)?;
     let n = model.segment_count();
     let probe = probe(config, &model, plan.lateral_sign);
 
-    std::fs::create_dir_all(&out_dir).map_err(|source| SimError::Io {
-        action: "create the directory",
-        path: out_dir.clone(),
-        source,
-    })?;
-    clear_output_dir(&out_dir)?;
-    let timeseries_path = out_dir.join("timeseries.csv");
-    let cable_path = out_dir.join("cable.csv");
-    let files = (
-        CsvFile::create(timeseries_path.clone(), &SIMULATE_TIMESERIES)?,
-        CsvFile::create(cable_path.clone(), &SIMULATE_CABLE)?,
-    );
+    let csv_files = match out_dir {
+        Some(out_dir) => {
+            std::fs::create_dir_all(out_dir).map_err(|source| SimError::Io {
+                action: "create the directory",
+                path: out_dir.to_owned(),
+                source,
+            })?;
+            clear_output_dir(out_dir)?;
+            Some((
+                CsvFile::create(out_dir.join("timeseries.csv"), &SIMULATE_TIMESERIES)?,
+                CsvFile::create(out_dir.join("cable.csv"), &SIMULATE_CABLE)?,
+            ))
+        }
+        None => None,
+    };
     let mut recorder = Recorder::new(
         &plan,
         probe,
-        Some(files),
+        csv_files,
         SAMPLE_INTERVAL_S,
         SNAPSHOT_INTERVAL_S,
     );
@@ -247,34 +307,42 @@ fn simulate_with<const N: usize>(
         wall.elapsed().as_secs_f64(),
         stopped.as_ref().map(|stop| stop.reason.clone()),
     );
-    let summary_path = out_dir.join("summary.json");
-    let mut json = serde_json::to_string_pretty(&summary).map_err(|e| SimError::Io {
-        action: "write",
-        path: summary_path.clone(),
-        source: std::io::Error::other(e),
-    })?;
-    json.push('\n');
-    write_atomically(&summary_path, json.as_bytes()).map_err(|source| SimError::Io {
-        action: "write",
-        path: summary_path.clone(),
-        source,
-    })?;
-    let mut files = vec![timeseries_path, cable_path, summary_path];
+    let mut files = Vec::new();
+    if let Some(out_dir) = out_dir {
+        let summary_path = out_dir.join("summary.json");
+        let mut json = serde_json::to_string_pretty(&summary).map_err(|e| SimError::Io {
+            action: "write",
+            path: summary_path.clone(),
+            source: std::io::Error::other(e),
+        })?;
+        json.push('\n');
+        write_atomically(&summary_path, json.as_bytes()).map_err(|source| SimError::Io {
+            action: "write",
+            path: summary_path.clone(),
+            source,
+        })?;
+        files.extend([
+            out_dir.join("timeseries.csv"),
+            out_dir.join("cable.csv"),
+            summary_path,
+        ]);
+    }
 
     if let Some(e) = not_started {
         return Err(e);
     }
-    if options.plots {
+    if let (Some(out_dir), true) = (out_dir, options.plots) {
         let recorded = Recorded {
             samples: &samples,
             snapshots: &snapshots,
         };
-        files.extend(crate::plots::write_all(&recorded, &plan, config, &out_dir)?);
+        files.extend(crate::plots::write_all(&recorded, &plan, config, out_dir)?);
     }
 
-    if let Some(stop) = stopped {
+    let ended = stopped.map(|stop| {
         let t_s = round_time(last.t);
-        return Err(match stop.requested {
+        let out_dir = out_dir.map(Path::to_owned);
+        match stop.requested {
             Some(signal) => SimError::Interrupted {
                 t_s,
                 signal,
@@ -286,13 +354,15 @@ fn simulate_with<const N: usize>(
                 source: stop.source,
                 out_dir,
             },
-        });
-    }
-    Ok(RunOutput {
+        }
+    });
+    Ok(Recording {
         summary,
-        out_dir,
+        samples,
+        snapshots,
         files,
         plan,
+        ended,
     })
 }
 
@@ -435,10 +505,12 @@ mod tests {
                 ..RunOptions::default()
             };
             let plan = scenario.plan(&config, &options).unwrap();
+            let out_dir = options.out_dir.clone().unwrap();
             let out = if capacity == SMALL_CAPACITY {
                 simulate_with::<SMALL_CAPACITY>(
                     &config,
                     plan,
+                    Some(&out_dir),
                     &options,
                     |_| {},
                     &|| None,
@@ -448,17 +520,85 @@ mod tests {
                 simulate_with::<MAX_SEGMENTS>(
                     &config,
                     plan,
+                    Some(&out_dir),
                     &options,
                     |_| {},
                     &|| None,
                     Instant::now(),
                 )
             };
-            std::fs::read(out.unwrap().out_dir.join("timeseries.csv")).unwrap()
+            assert!(out.unwrap().ended.is_none());
+            std::fs::read(out_dir.join("timeseries.csv")).unwrap()
         };
         let small = run(SMALL_CAPACITY);
         let large = run(MAX_SEGMENTS);
         let _ = std::fs::remove_dir_all(&dir);
         assert!(small == large);
+    }
+
+    /// A run kept in memory is the run `simulate` writes: its rows and
+    /// snapshots are the files' rows, its summary the file's (but for the wall
+    /// time), and it writes nothing. One that diverges is still a recording,
+    /// whose error names no directory.
+    #[test]
+    fn a_recording_is_the_written_run() {
+        use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
+        let config = SystemConfig::builtin().unwrap();
+        let scenario = Scenario::builtin("pull-up").unwrap();
+        let dir = std::env::temp_dir().join(format!("decoy-sim-recording-{}", std::process::id()));
+        let options = RunOptions {
+            segments: Some(8),
+            t_end: Some(2.5),
+            out_dir: Some(dir.clone()),
+            plots: false,
+            ..RunOptions::default()
+        };
+        let written = simulate(&config, &scenario, &options, |_| {}).unwrap();
+        let in_memory = RunOptions {
+            out_dir: None,
+            ..options.clone()
+        };
+        let recording = simulate_recorded(&config, &scenario, &in_memory, |_| {}, || None).unwrap();
+        assert!(recording.files.is_empty() && recording.ended.is_none());
+        let wall = |mut s: Summary| {
+            s.wall_s = 0.0;
+            s
+        };
+        assert_eq!(wall(recording.summary.clone()), wall(written.summary));
+        let mut timeseries = format!("{}\n", SIMULATE_TIMESERIES.header());
+        for sample in &recording.samples {
+            timeseries.push_str(&crate::csv_row(&SIMULATE_TIMESERIES, |q| sample.cell(q)));
+        }
+        let mut cable = format!("{}\n", SIMULATE_CABLE.header());
+        for snapshot in &recording.snapshots {
+            for j in 0..snapshot.joints.len() {
+                cable.push_str(&crate::csv_row(&SIMULATE_CABLE, |q| snapshot.cell(j, q)));
+            }
+        }
+        let read = |name: &str| std::fs::read_to_string(dir.join(name)).unwrap();
+        assert!(timeseries == read("timeseries.csv"));
+        assert!(cable == read("cable.csv"));
+
+        let diverging = RunOptions {
+            dt: Some(0.5),
+            t_end: Some(10.0),
+            ..in_memory
+        };
+        let stopped = simulate_recorded(&config, &scenario, &diverging, |_| {}, || None).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let t_s = stopped.summary.stopped.as_ref().unwrap().t_s;
+        let Some(e @ SimError::Stopped { out_dir: None, .. }) = &stopped.ended else {
+            panic!("{:?}", stopped.ended);
+        };
+        assert!(
+            e.to_string()
+                .starts_with(&format!("simulation stopped at t = {t_s} s: ")),
+            "{e}"
+        );
+        assert!(!e.to_string().contains("outputs"), "{e}");
+        assert_eq!(
+            stopped.samples.last().unwrap().t,
+            stopped.snapshots.last().unwrap().t
+        );
     }
 }

@@ -2,26 +2,14 @@
 //!
 //! A scenario is a small TOML file (`scenarios/*.toml` in the repository; the
 //! shipped ones are embedded, so `--scenario acceleration` works from any
-//! directory). Keys (unknown keys are errors):
-//!
-//! | key | kinds | meaning |
-//! |---|---|---|
-//! | `name` | all | the scenario's name (letters, digits, `-`, `_`, `.`); the default output directory is `out/<name>` |
-//! | `description` | all | one line for people (optional) |
-//! | `kind` | all | `steady`, `acceleration`, `pull-up`, `turn` or `recorded` |
-//! | `altitude_m` | all but recorded | initial altitude, m (0 to 20 000) |
-//! | `mach` | all but recorded | initial Mach number (above 0, at most 2) |
-//! | `final_mach` | acceleration | Mach number after the acceleration |
-//! | `accel_start_s` | acceleration | when the acceleration starts, s |
-//! | `acceleration_mps2` | acceleration | along-track acceleration, m/s^2 (> 0; slows down if `final_mach < mach`) |
-//! | `rate_radps` | pull-up, turn | flight-path rotation rate, rad/s (pull-up: positive up; turn: positive right); at most 1 in magnitude |
-//! | `start_s` | pull-up, turn | when the rotation starts, s (turn: optional, default 0) |
-//! | `duration_s` | pull-up | how long the flight path rotates, s; then the climb is held |
-//! | `file` | recorded | the recorded-flight CSV, relative to the scenario file |
-//! | `t_end_s` | all | simulated time, s |
-//! | `dt_s` | all | RK4 time step, s (optional, default: the configuration's `solver.time_step_host`) |
-//! | `segments` | all | cable segments (optional, default: the configuration's `solver.segments_host`) |
-//! | `grading` | all | segment length ratio, short at the decoy (optional, default 1 = uniform) |
+//! directory): its `name`, a `description` for people, its `kind` (one of
+//! `decoy_schema`'s manoeuvres by name, or `recorded`), the parameters the kind
+//! takes (a manoeuvre's are `decoy_schema::ManoeuvreInfo::parameters`, each key
+//! `decoy_schema::Parameter::key`; a recorded flight's is its CSV `file`,
+//! relative to the scenario file), the simulated time `t_end_s`, and optionally
+//! the RK4 step `dt_s`, the `segments` and their `grading`. docs/outputs.md,
+//! "Scenarios", documents every key; unknown keys are errors, and so are
+//! keys the kind does not take.
 //!
 //! The command line's flags override the file's values ([`crate::RunOptions`]).
 //! [`Scenario::plan`] checks everything and builds the run's flight profile.
@@ -29,9 +17,10 @@
 use std::path::{Path, PathBuf};
 
 use decoy_config::SystemConfig;
+use decoy_schema::{Manoeuvre, Need, Parameter};
 use serde::{Deserialize, Serialize};
 use solver_core::SegmentLayout;
-use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
+use solver_core::profiles::{ManoeuvreParams, ManoeuvrePath};
 
 use crate::error::SimError;
 use crate::format::format_number;
@@ -69,32 +58,156 @@ pub const MAX_STEPS: f64 = 1e9;
 /// Grading ratios accepted (the solver's range).
 pub const GRADING_RANGE: (f64, f64) = (1.0, 10.0);
 
-/// What the aircraft does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
+/// What the aircraft does: one of `decoy_schema`'s manoeuvres, or a recorded
+/// flight. A scenario file names it (`kind = "pull-up"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ScenarioKind {
-    /// Steady level flight.
-    Steady,
-    /// Level acceleration from `mach` to `final_mach`.
-    Acceleration,
-    /// Pull-up: the flight path rotates up at `rate_radps` for `duration_s`.
-    PullUp,
-    /// Level coordinated turn at `rate_radps`.
-    Turn,
+    /// A prescribed manoeuvre, flown by solver-core's profile.
+    Manoeuvre(Manoeuvre),
     /// A recorded flight from a CSV file.
     Recorded,
 }
 
+/// The name of [`ScenarioKind::Recorded`].
+const RECORDED: &str = "recorded";
+
+/// The number of scenario kinds.
+const KIND_COUNT: usize = Manoeuvre::ALL.len() + 1;
+
 impl ScenarioKind {
-    /// The name used in scenario files (`pull-up`, ...).
-    pub fn name(self) -> &'static str {
-        match self {
-            ScenarioKind::Steady => "steady",
-            ScenarioKind::Acceleration => "acceleration",
-            ScenarioKind::PullUp => "pull-up",
-            ScenarioKind::Turn => "turn",
-            ScenarioKind::Recorded => "recorded",
+    /// Every kind: the manoeuvres in their order, then a recorded flight.
+    pub const ALL: [ScenarioKind; KIND_COUNT] = {
+        let mut all = [ScenarioKind::Recorded; KIND_COUNT];
+        let mut i = 0;
+        while i < Manoeuvre::ALL.len() {
+            all[i] = ScenarioKind::Manoeuvre(Manoeuvre::ALL[i]);
+            i += 1;
         }
+        all
+    };
+
+    /// The name used in scenario files (`pull-up`, ...).
+    pub const fn name(self) -> &'static str {
+        match self {
+            ScenarioKind::Manoeuvre(m) => m.name(),
+            ScenarioKind::Recorded => RECORDED,
+        }
+    }
+
+    /// One line for people.
+    pub const fn help(self) -> &'static str {
+        match self {
+            ScenarioKind::Manoeuvre(m) => m.help(),
+            ScenarioKind::Recorded => "A recorded flight from a CSV file",
+        }
+    }
+
+    /// The kind of that name, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// The manoeuvre, unless a recorded flight.
+    pub const fn manoeuvre(self) -> Option<Manoeuvre> {
+        match self {
+            ScenarioKind::Manoeuvre(m) => Some(m),
+            ScenarioKind::Recorded => None,
+        }
+    }
+
+    /// Whether a scenario of this kind needs a manoeuvre's `parameter`, or
+    /// `None` when it does not take it.
+    pub const fn need(self, parameter: Parameter) -> Option<Need> {
+        match self {
+            ScenarioKind::Manoeuvre(m) => m.need(parameter),
+            ScenarioKind::Recorded => None,
+        }
+    }
+}
+
+/// Every kind's name, for serde's messages (`unknown variant ..., expected one
+/// of ...`).
+const KIND_NAMES: [&str; KIND_COUNT] = {
+    let mut names = [""; KIND_COUNT];
+    let mut i = 0;
+    while i < KIND_COUNT {
+        names[i] = ScenarioKind::ALL[i].name();
+        i += 1;
+    }
+    names
+};
+
+/// As a unit variant named [`ScenarioKind::name`], as serde derives it for an
+/// enum of unit variants in kebab case (so TOML's messages are the same).
+impl Serialize for ScenarioKind {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let index = ScenarioKind::ALL
+            .iter()
+            .position(|k| k == self)
+            .unwrap_or_default();
+        serializer.serialize_unit_variant("ScenarioKind", index as u32, self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for ScenarioKind {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::{self, EnumAccess, Unexpected, VariantAccess, Visitor};
+        use std::fmt;
+
+        /// A variant, by name or index.
+        struct Field(ScenarioKind);
+        impl<'de> Deserialize<'de> for Field {
+            fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                struct FieldVisitor;
+                impl Visitor<'_> for FieldVisitor {
+                    type Value = Field;
+                    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                        f.write_str("variant identifier")
+                    }
+                    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Field, E> {
+                        usize::try_from(v)
+                            .ok()
+                            .and_then(|i| ScenarioKind::ALL.get(i))
+                            .map(|k| Field(*k))
+                            .ok_or_else(|| {
+                                E::invalid_value(
+                                    Unexpected::Unsigned(v),
+                                    &format!("variant index 0 <= i < {KIND_COUNT}").as_str(),
+                                )
+                            })
+                    }
+                    fn visit_str<E: de::Error>(self, v: &str) -> Result<Field, E> {
+                        ScenarioKind::from_name(v)
+                            .map(Field)
+                            .ok_or_else(|| E::unknown_variant(v, &KIND_NAMES))
+                    }
+                    fn visit_bytes<E: de::Error>(self, v: &[u8]) -> Result<Field, E> {
+                        match std::str::from_utf8(v) {
+                            Ok(v) => self.visit_str(v),
+                            Err(_) => {
+                                Err(E::unknown_variant(&String::from_utf8_lossy(v), &KIND_NAMES))
+                            }
+                        }
+                    }
+                }
+                deserializer.deserialize_identifier(FieldVisitor)
+            }
+        }
+
+        struct KindVisitor;
+        impl<'de> Visitor<'de> for KindVisitor {
+            type Value = ScenarioKind;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("enum ScenarioKind")
+            }
+            fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<ScenarioKind, A::Error> {
+                let (Field(kind), variant) = data.variant()?;
+                variant.unit_variant()?;
+                Ok(kind)
+            }
+        }
+
+        deserializer.deserialize_enum("ScenarioKind", &KIND_NAMES, KindVisitor)
     }
 }
 
@@ -201,22 +314,16 @@ impl RunPlan {
             Err(_) => "Mach unknown".to_owned(),
         };
         let mut text = format!("{mach} at {altitude:.0} m ({airspeed:.2} m/s airspeed)");
-        match &self.profile {
-            FlightProfile::PullUp(p) => {
-                text.push_str(&format!(
-                    ", flight path rotating at {} rad/s from t = {} s",
-                    format_number(p.rate),
-                    format_number(p.start)
-                ));
-            }
-            FlightProfile::Turn(t) => {
-                text.push_str(&format!(
-                    ", turning at {} rad/s from t = {} s",
-                    format_number(t.rate),
-                    format_number(t.start)
-                ));
-            }
-            _ => {}
+        // A rotating manoeuvre's rate, in its own words (`turning at ...`).
+        if let (Some(manoeuvre), FlightProfile::Manoeuvre(path)) =
+            (self.kind.manoeuvre(), &self.profile)
+            && let (Some(words), Some(rate)) = (manoeuvre.info().rotation, path.rate())
+        {
+            text.push_str(&format!(
+                ", {words} at {} rad/s from t = {} s",
+                format_number(rate),
+                format_number(path.manoeuvre_start())
+            ));
         }
         text
     }
@@ -309,7 +416,7 @@ impl Scenario {
             }
         };
         let recorded = kind == ScenarioKind::Recorded;
-        let rotates = matches!(kind, ScenarioKind::PullUp | ScenarioKind::Turn);
+        let rotates = kind.need(Parameter::Rate).is_some();
         applies(
             "--altitude",
             options.altitude.is_some(),
@@ -326,70 +433,27 @@ impl Scenario {
             "--rate",
             options.rate.is_some(),
             rotates,
-            "only pull-up and turn scenarios have a rate",
+            &format!("only {} scenarios have a rate", rate_kinds()),
         )?;
 
-        // Which keys each kind needs (required) and allows.
-        use ScenarioKind as K;
-        let keys: [(&str, bool, &[K], &[K]); 9] = [
-            (
-                "altitude_m",
-                self.altitude_m.is_some(),
-                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
-                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
-            ),
-            (
-                "mach",
-                self.mach.is_some(),
-                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
-                &[K::Steady, K::Acceleration, K::PullUp, K::Turn],
-            ),
-            (
-                "final_mach",
-                self.final_mach.is_some(),
-                &[K::Acceleration],
-                &[K::Acceleration],
-            ),
-            (
-                "accel_start_s",
-                self.accel_start_s.is_some(),
-                &[K::Acceleration],
-                &[K::Acceleration],
-            ),
-            (
-                "acceleration_mps2",
-                self.acceleration_mps2.is_some(),
-                &[K::Acceleration],
-                &[K::Acceleration],
-            ),
-            (
-                "rate_radps",
-                self.rate_radps.is_some(),
-                &[K::PullUp, K::Turn],
-                &[K::PullUp, K::Turn],
-            ),
-            (
-                "start_s",
-                self.start_s.is_some(),
-                &[K::PullUp],
-                &[K::PullUp, K::Turn],
-            ),
-            (
-                "duration_s",
-                self.duration_s.is_some(),
-                &[K::PullUp],
-                &[K::PullUp],
-            ),
-            ("file", self.file.is_some(), &[K::Recorded], &[K::Recorded]),
-        ];
-        for (key, present, required, allowed) in keys {
-            if !present && required.contains(&kind) {
+        // The keys the kind needs (required) and takes (the manoeuvre's
+        // parameters, a recorded flight's file), in Parameter::ALL's order.
+        let keys = Parameter::ALL
+            .map(|p| (p.key(), self.value(p).is_some(), kind.need(p)))
+            .into_iter()
+            .chain([(
+                "file",
+                self.file.is_some(),
+                recorded.then_some(Need::Required),
+            )]);
+        for (key, present, need) in keys {
+            if !present && need == Some(Need::Required) {
                 return Err(invalid(
                     key,
                     format!("is required for a {} scenario", kind.name()),
                 ));
             }
-            if present && !allowed.contains(&kind) {
+            if present && need.is_none() {
                 return Err(invalid(
                     key,
                     format!("does not apply to a {} scenario", kind.name()),
@@ -489,54 +553,26 @@ impl Scenario {
         }
         let mut lateral_sign = 1.0;
         let profile = match kind {
-            ScenarioKind::Steady => {
-                let v = speed(mach.unwrap_or_default(), "mach")?;
-                FlightProfile::Level(LevelAcceleration::steady(altitude.unwrap_or_default(), v))
-            }
-            ScenarioKind::Acceleration => {
-                let v0 = speed(mach.unwrap_or_default(), "mach")?;
-                let v1 = speed(self.final_mach.unwrap_or_default(), "final_mach")?;
-                let start = self.accel_start_s.unwrap_or_default();
-                check_non_negative(&invalid, "accel_start_s", start)?;
-                let a = self.acceleration_mps2.unwrap_or_default();
-                check_positive(&invalid, "acceleration_mps2", a)?;
-                FlightProfile::Level(LevelAcceleration {
-                    altitude: altitude.unwrap_or_default(),
-                    initial_speed: v0,
-                    final_speed: v1,
-                    start,
-                    acceleration: a,
-                })
-            }
-            ScenarioKind::PullUp => {
-                let v = speed(mach.unwrap_or_default(), "mach")?;
-                let start = self.start_s.unwrap_or_default();
-                check_non_negative(&invalid, "start_s", start)?;
-                let duration = self.duration_s.unwrap_or_default();
-                check_positive(&invalid, "duration_s", duration)?;
-                FlightProfile::PullUp(PullUp {
-                    altitude: altitude.unwrap_or_default(),
-                    speed: v,
-                    start,
-                    rate: rate.unwrap_or_default(),
-                    duration,
-                })
-            }
-            ScenarioKind::Turn => {
-                let v = speed(mach.unwrap_or_default(), "mach")?;
-                let start = self.start_s.unwrap_or(0.0);
-                check_non_negative(&invalid, "start_s", start)?;
-                let w = rate.unwrap_or_default();
-                if w < 0.0 {
+            ScenarioKind::Manoeuvre(manoeuvre) => {
+                // The overrides' values, else the file's.
+                let value = |p: Parameter| match p {
+                    Parameter::Altitude => altitude,
+                    Parameter::Mach => mach,
+                    Parameter::Rate => rate,
+                    _ => self.value(p),
+                };
+                let params = manoeuvre_params(
+                    manoeuvre,
+                    &value,
+                    config.environment.gravity,
+                    &speed,
+                    &invalid,
+                )?;
+                let path = ManoeuvrePath::new(manoeuvre, &params);
+                if path.turns_left() {
                     lateral_sign = -1.0;
                 }
-                FlightProfile::Turn(LevelTurn {
-                    altitude: altitude.unwrap_or_default(),
-                    speed: v,
-                    start,
-                    rate: w,
-                    gravity: config.environment.gravity,
-                })
+                FlightProfile::Manoeuvre(path)
             }
             ScenarioKind::Recorded => {
                 let file = self.file.as_deref().unwrap_or_default();
@@ -577,6 +613,20 @@ impl Scenario {
         })
     }
 
+    /// The file's value of a manoeuvre's `parameter`.
+    fn value(&self, parameter: Parameter) -> Option<f64> {
+        match parameter {
+            Parameter::Altitude => self.altitude_m,
+            Parameter::Mach => self.mach,
+            Parameter::FinalMach => self.final_mach,
+            Parameter::AccelerationStart => self.accel_start_s,
+            Parameter::Acceleration => self.acceleration_mps2,
+            Parameter::Rate => self.rate_radps,
+            Parameter::Start => self.start_s,
+            Parameter::Duration => self.duration_s,
+        }
+    }
+
     /// Reads the recording `file`: the embedded example for the built-in
     /// scenario, else relative to the scenario file's directory.
     fn load_recording(&self, file: &str) -> Result<RecordedFlight, SimError> {
@@ -605,6 +655,63 @@ impl Scenario {
             source,
         })?;
         RecordedFlight::parse(&path.display().to_string(), &text)
+    }
+}
+
+/// The parameters of `manoeuvre` from `value` (the overrides' and the file's),
+/// each checked in [`Parameter::ALL`]'s order (altitude and rate are checked
+/// already): Mach numbers become speeds (`speed`); a parameter the manoeuvre
+/// does not take stays 0, one it may omit is 0 when omitted.
+fn manoeuvre_params(
+    manoeuvre: Manoeuvre,
+    value: &dyn Fn(Parameter) -> Option<f64>,
+    gravity: f64,
+    speed: &dyn Fn(f64, &str) -> Result<f64, SimError>,
+    invalid: &Invalid<'_>,
+) -> Result<ManoeuvreParams, SimError> {
+    let mut params = ManoeuvreParams {
+        gravity,
+        ..ManoeuvreParams::default()
+    };
+    for parameter in Parameter::ALL {
+        if manoeuvre.need(parameter).is_none() {
+            continue;
+        }
+        let key = parameter.key();
+        let v = value(parameter).unwrap_or_default();
+        match parameter {
+            Parameter::Altitude => params.altitude = v,
+            Parameter::Rate => params.rate = v,
+            Parameter::Mach => params.speed = speed(v, key)?,
+            Parameter::FinalMach => params.final_speed = speed(v, key)?,
+            Parameter::AccelerationStart | Parameter::Start => {
+                check_non_negative(invalid, key, v)?;
+                params.start = v;
+            }
+            Parameter::Acceleration => {
+                check_positive(invalid, key, v)?;
+                params.acceleration = v;
+            }
+            Parameter::Duration => {
+                check_positive(invalid, key, v)?;
+                params.duration = v;
+            }
+        }
+    }
+    Ok(params)
+}
+
+/// The kinds with a rate, in words: `pull-up and turn`.
+fn rate_kinds() -> String {
+    let names: Vec<&str> = Manoeuvre::ALL
+        .into_iter()
+        .filter(|m| m.has_rate())
+        .map(Manoeuvre::name)
+        .collect();
+    match names.split_last() {
+        Some((last, [])) => (*last).to_owned(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+        None => "no".to_owned(),
     }
 }
 

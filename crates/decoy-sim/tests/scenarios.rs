@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use decoy_config::SystemConfig;
 use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
+use decoy_schema::{BUILTIN_ALTITUDE_M, Manoeuvre};
 use decoy_sim::{
     BUILTIN_SCENARIOS, InitialState, RECORDED_COLUMNS, RecordedFlight, RecordedSample, RunOptions,
     RunOutput, Scenario, ScenarioKind, SimError, Summary, simulate,
@@ -82,11 +83,6 @@ fn summary_json(dir: &Path) -> serde_json::Value {
 #[test]
 fn every_shipped_scenario_parses_and_plans() {
     let config = config();
-    let names: Vec<&str> = BUILTIN_SCENARIOS.iter().map(|(n, _)| *n).collect();
-    assert_eq!(
-        names,
-        ["steady", "acceleration", "pull-up", "turn", "recorded"]
-    );
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
     for (name, text) in BUILTIN_SCENARIOS {
         let builtin = Scenario::builtin(name).unwrap();
@@ -104,7 +100,10 @@ fn every_shipped_scenario_parses_and_plans() {
         }
     }
     let acceleration = Scenario::builtin("acceleration").unwrap();
-    assert_eq!(acceleration.kind, ScenarioKind::Acceleration);
+    assert_eq!(
+        acceleration.kind,
+        ScenarioKind::Manoeuvre(Manoeuvre::Acceleration)
+    );
     assert_eq!(
         (
             acceleration.mach,
@@ -130,6 +129,81 @@ fn every_shipped_scenario_parses_and_plans() {
     );
     let turn = Scenario::builtin("turn").unwrap();
     assert_eq!((turn.rate_radps, turn.mach), (Some(0.20), Some(0.8)));
+}
+
+/// One shipped scenario per kind, named after it: `--scenario pull-up` flies
+/// the pull-up, and a new manoeuvre ships its scenario.
+#[test]
+fn one_shipped_scenario_per_kind() {
+    let names: Vec<&str> = BUILTIN_SCENARIOS.iter().map(|(n, _)| *n).collect();
+    assert_eq!(names, ScenarioKind::ALL.map(ScenarioKind::name));
+    for kind in ScenarioKind::ALL {
+        assert_eq!(Scenario::builtin(kind.name()).unwrap().kind, kind);
+        assert_eq!(ScenarioKind::from_name(kind.name()), Some(kind));
+        assert!(!kind.help().is_empty());
+    }
+}
+
+/// The shipped scenario of each manoeuvre flies the flight of its built-in
+/// profile on the controller (`decoy_schema::ManoeuvreInfo::builtin`), the rate
+/// aside (the link's command carries it), as docs/protocol.md says.
+#[test]
+fn shipped_manoeuvres_fly_their_builtin_flights() {
+    for manoeuvre in Manoeuvre::ALL {
+        let s = Scenario::builtin(manoeuvre.name()).unwrap();
+        let b = manoeuvre.info().builtin;
+        let name = manoeuvre.name();
+        assert_eq!(s.altitude_m, Some(BUILTIN_ALTITUDE_M), "{name}");
+        assert_eq!(s.mach, Some(b.mach), "{name}");
+        assert_eq!(s.final_mach.unwrap_or(b.mach), b.final_mach, "{name}");
+        assert_eq!(
+            s.accel_start_s.or(s.start_s).unwrap_or_default(),
+            b.start_s,
+            "{name}"
+        );
+        assert_eq!(
+            s.acceleration_mps2.unwrap_or_default(),
+            b.acceleration_mps2,
+            "{name}"
+        );
+        assert_eq!(s.duration_s.unwrap_or_default(), b.duration_s, "{name}");
+        assert_eq!(s.rate_radps.is_some(), manoeuvre.has_rate(), "{name}");
+    }
+}
+
+/// A scenario's `kind` reads and fails as serde's derived enum of kebab-case
+/// unit variants did: the same TOML messages.
+#[test]
+fn scenario_kinds_parse_with_the_messages_of_a_derived_enum() {
+    let parse =
+        |kind: &str| Scenario::from_toml(&format!("name = \"x\"\nkind = {kind}\nt_end_s = 1\n"));
+    for k in ScenarioKind::ALL {
+        assert_eq!(parse(&format!("\"{}\"", k.name())).unwrap().kind, k);
+    }
+    let message = |kind: &str| parse(kind).unwrap_err().to_string();
+    let expected: Vec<String> = ScenarioKind::ALL
+        .iter()
+        .map(|k| format!("`{}`", k.name()))
+        .collect();
+    assert_eq!(
+        message("\"PullUp\""),
+        format!(
+            "scenario, line 2: unknown variant `PullUp`, expected one of {}",
+            expected.join(", ")
+        )
+    );
+    assert_eq!(message("3"), "scenario, line 2: wanted string or table");
+    assert_eq!(
+        toml::to_string(&Scenario {
+            kind: ScenarioKind::Manoeuvre(Manoeuvre::PullUp),
+            ..parse("\"steady\"").unwrap()
+        })
+        .unwrap()
+        .lines()
+        .find(|l| l.starts_with("kind"))
+        .unwrap(),
+        "kind = \"pull-up\""
+    );
 }
 
 #[test]
@@ -402,8 +476,8 @@ fn bad_inputs_are_typed_errors_that_name_the_input() {
     let e = Scenario::load("loop-the-loop").unwrap_err();
     assert!(matches!(e, SimError::UnknownScenario { .. }), "{e:?}");
     let message = e.to_string();
-    for name in ["steady", "acceleration", "pull-up", "turn", "recorded"] {
-        assert!(message.contains(name), "{message}");
+    for kind in ScenarioKind::ALL {
+        assert!(message.contains(kind.name()), "{message}");
     }
     assert!(e.is_usage());
 

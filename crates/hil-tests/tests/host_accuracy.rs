@@ -254,7 +254,8 @@ fn within_target(name: &str, rate: Option<f64>, t_end: f64) {
 #[test]
 fn the_embedded_model_converged_is_within_two_percent() {
     let mut worst: (f64, &str, Option<f64>) = (0.0, "", None);
-    for (name, rate, t_end) in flight::SHIPPED_MANOEUVRES {
+    for (kind, rate, t_end) in flight::SHIPPED_MANOEUVRES {
+        let name = kind.name();
         let (config, _, frames) = setup(name, rate, t_end);
         let reference = |layout| {
             peak(

@@ -228,13 +228,10 @@ pub fn to_link_command(c: &bridge_types::Command) -> Result<Command, u16> {
         command::PING => Ok(Command::Ping { nonce: c.nonce }),
         command::SELECT_PROFILE => {
             let rate_milli_radps = c.rate_milli_radps;
-            let p = match c.profile {
-                profile::STREAMED => Profile::Streamed,
-                profile::STEADY => Profile::Steady,
-                profile::ACCELERATION => Profile::Acceleration,
-                profile::PULL_UP => Profile::PullUp { rate_milli_radps },
-                profile::TURN => Profile::Turn { rate_milli_radps },
-                _ => return Err(reason::WRONG_TYPE),
+            let p = match (c.profile, profile::manoeuvre(c.profile)) {
+                (profile::STREAMED, _) => Profile::Streamed,
+                (_, Some(manoeuvre)) => Profile::builtin(manoeuvre, rate_milli_radps),
+                (_, None) => return Err(reason::WRONG_TYPE),
             };
             Ok(Command::SelectProfile(p))
         }
@@ -255,6 +252,7 @@ pub fn command(seq: u32, code: u16) -> bridge_types::Command {
 mod tests {
     use super::*;
     use decoy_link::{PerRequirement, Requirement};
+    use decoy_schema::Manoeuvre;
 
     #[test]
     fn states_map_field_for_field_both_ways() {
@@ -364,14 +362,19 @@ mod tests {
             Some(reason::WRONG_TYPE)
         );
         let mut c = command(1, command::SELECT_PROFILE);
-        c.profile = profile::TURN;
         c.rate_milli_radps = 100;
+        c.profile = profile::STREAMED;
         assert_eq!(
             to_link_command(&c),
-            Ok(Command::SelectProfile(Profile::Turn {
-                rate_milli_radps: 100
-            }))
+            Ok(Command::SelectProfile(Profile::Streamed))
         );
+        for manoeuvre in Manoeuvre::ALL {
+            c.profile = profile::of(manoeuvre);
+            assert_eq!(
+                to_link_command(&c),
+                Ok(Command::SelectProfile(Profile::builtin(manoeuvre, 100)))
+            );
+        }
         c.profile = 77;
         assert_eq!(to_link_command(&c), Err(reason::WRONG_TYPE));
         assert_eq!(to_link_command(&command(1, 9)), Err(reason::WRONG_TYPE));

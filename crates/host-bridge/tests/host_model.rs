@@ -74,7 +74,8 @@ fn the_host_model_flies_every_shipped_manoeuvre_at_every_frame_spacing() {
             let config = SystemConfig::builtin().unwrap();
             let mut failures = Vec::new();
             // Every shipped manoeuvre at the scenario file's full duration.
-            for (name, rate, _) in SHIPPED_MANOEUVRES {
+            for (kind, rate, _) in SHIPPED_MANOEUVRES {
+                let name = kind.name();
                 for spacing in SPACINGS_S {
                     let (rejected, flown) = fly(&config, name, rate, spacing);
                     println!(

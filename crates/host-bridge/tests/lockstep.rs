@@ -12,6 +12,7 @@ use bridge_types::{
 use decoy_config::SystemConfig;
 use decoy_hil::flight::{self, host_controller, replay, scenario_frames, scenario_messages};
 use decoy_link::{AircraftStateFrame, DeviceMessage};
+use decoy_schema::Manoeuvre;
 use host_bridge::BridgeError;
 use host_bridge::backend::{BackendOptions, Precision};
 use host_bridge::client::BridgeClient;
@@ -311,7 +312,7 @@ fn commands_answer_with_the_status() {
     let r = c
         .command(Command {
             command: command::SELECT_PROFILE,
-            profile: profile::TURN,
+            profile: profile::of(Manoeuvre::Turn),
             rate_milli_radps: 2000,
             ..Default::default()
         })
@@ -333,7 +334,7 @@ fn commands_answer_with_the_status() {
     let r = c
         .command(Command {
             command: command::SELECT_PROFILE,
-            profile: profile::STEADY,
+            profile: profile::of(Manoeuvre::Steady),
             ..Default::default()
         })
         .unwrap();

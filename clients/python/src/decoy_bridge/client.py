@@ -387,8 +387,9 @@ class Bridge:
         return self.command("get_status", timeout_s=timeout_s).status
 
     def select_profile(self, profile: str, rate_radps: float = 0.0, timeout_s: float | None = None) -> Any:
-        """Command: select a built-in profile (``streamed``, ``steady``,
-        ``acceleration``, ``pull-up``, ``turn``; rate in rad/s for the last two)."""
+        """Command: select a built-in profile by name: ``streamed``, or a manoeuvre
+        (the ``profile`` codes of the layout: ``steady``, ``pull-up`` or ``pull_up``,
+        ...); the rate in rad/s for the manoeuvres that have one (pull-up, turn)."""
         return self.command("select_profile", profile=profile, rate_radps=rate_radps, timeout_s=timeout_s)
 
     # --- closing -------------------------------------------------------------------------

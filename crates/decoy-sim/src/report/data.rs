@@ -1,7 +1,5 @@
 //! The report's data: every case it runs ([`collect`]) and the measures taken from them.
 
-use std::path::PathBuf;
-
 use decoy_config::SystemConfig;
 use solver_core::SegmentLayout;
 
@@ -101,7 +99,7 @@ pub(super) fn collect<F: FnMut(f64)>(
                 t_s: s.t_s,
                 reason: s.reason.clone(),
                 source: None,
-                out_dir: PathBuf::new(),
+                out_dir: None,
             }
             .at(what)),
             None => Ok(t),
