@@ -4,7 +4,8 @@
 //! - **The file** is as `cargo xtask bless` writes it (no hand edit), names
 //!   only boards of `firmware/boards.toml`, flights of the envelope sweep's
 //!   test grid and shipped manoeuvres, and has every board's entries (a board
-//!   added to the table gets them by blessing).
+//!   added to the table gets them by blessing), on the f32 boards every flight
+//!   of the grid.
 //! - **The documents' tables** between `<!-- baselines: ID -->` and `<!-- end
 //!   baselines -->` (README.md, firmware/README.md) are what this test renders
 //!   from the file and from the budgets (`decoy_hil::budgets`); with
@@ -21,7 +22,6 @@ use std::sync::OnceLock;
 use common::baselines::{self, FILE, MEASURED, SECTIONS, number, table_at};
 use decoy_config::SystemConfig;
 use decoy_hil::budgets::{self, Budget};
-use decoy_hil::flight;
 use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::sweep::{self, Grid, Group};
 use toml::{Table, Value};
@@ -448,11 +448,7 @@ fn accuracy_table() -> String {
                  / 300 segments, same frames / analytic path, N |\n|---|---:|---:|---:|---:|\n"
         .to_owned();
     let section = table_at(baselines::file(), &["host_accuracy"]);
-    for (name, rate, _) in flight::SHIPPED_MANOEUVRES {
-        let key = match rate {
-            Some(w) => format!("{name} {w:.2} rad/s"),
-            None => name.to_owned(),
-        };
+    for key in baselines::shipped_keys() {
         let t = section.and_then(|t| t.get(&key)).and_then(Value::as_table);
         let f = |k: &str| t.and_then(|t| field(t, k));
         let n = |k: &str| f(k).map_or_else(|| "-".to_owned(), |x| format!("{x:.1}"));
@@ -627,21 +623,27 @@ fn the_file_is_generated_and_complete() {
         .map(|c| c.label)
         .collect();
     for &board in Board::all() {
-        for (label, _) in lines(entry("envelope", board)) {
+        let flown = lines(entry("envelope", board));
+        for (label, _) in &flown {
             assert!(
                 grid.iter().any(|g| g == label),
                 "{FILE}: `envelope.{board}` has `{label}`, no flight of the test grid (run `{}`)",
                 baselines::BLESS
             );
         }
+        // The f32 boards fly the whole grid (the f64 boards a subset): their
+        // baselines are the whole grid's, never a shortened run's.
+        if board.precision() == Precision::F32 {
+            for label in &grid {
+                assert!(
+                    flown.iter().any(|(l, _)| l == label),
+                    "{FILE}: `envelope.{board}` has no `{label}` (run `{}` over the whole grid)",
+                    baselines::BLESS
+                );
+            }
+        }
     }
-    let shipped: Vec<String> = flight::SHIPPED_MANOEUVRES
-        .iter()
-        .map(|(name, rate, _)| match rate {
-            Some(w) => format!("{name} {w:.2} rad/s"),
-            None => (*name).to_owned(),
-        })
-        .collect();
+    let shipped = baselines::shipped_keys();
     let accuracy = lines(table_at(file, &["host_accuracy"]));
     for (key, _) in &accuracy {
         assert!(

@@ -145,29 +145,13 @@ fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> Peaks {
     }
 }
 
-/// A manoeuvre's key in the baselines (`pull-up 0.20 rad/s`).
-fn manoeuvre(name: &str, rate: Option<f64>) -> String {
-    match rate {
-        Some(w) => format!("{name} {w:.2} rad/s"),
-        None => name.to_owned(),
-    }
-}
-
-/// The keys of every shipped manoeuvre.
-fn shipped() -> Vec<String> {
-    flight::SHIPPED_MANOEUVRES
-        .iter()
-        .map(|(name, rate, _)| manoeuvre(name, *rate))
-        .collect()
-}
-
 /// Checks the errors `errors` (name, relative error) of manoeuvre `key`
 /// against their baselines, or with `DECOY_BLESS` writes them and `values`
 /// (peaks, not compared) into its line.
 fn baselines_of(key: &str, errors: &[(&str, f64)], values: &[(&str, f64)]) {
     if baselines::blessing() {
         baselines::record(&[SECTION], |t| {
-            let shipped = shipped();
+            let shipped = baselines::shipped_keys();
             t.retain(|k, _| shipped.iter().any(|s| s == k) || k == baselines::MEASURED);
             let line = t
                 .entry(key.to_owned())
@@ -230,7 +214,7 @@ fn check(
         );
     }
     baselines_of(
-        &manoeuvre(name, rate),
+        &baselines::manoeuvre_key(name, rate),
         &[("same_frames", frames), ("analytic", analytic)],
         &[
             ("controller_n", p.controller),
@@ -283,7 +267,7 @@ fn the_embedded_model_converged_is_within_two_percent() {
             error * 100.0
         );
         baselines_of(
-            &manoeuvre(name, rate),
+            &baselines::manoeuvre_key(name, rate),
             &[("embedded_converged", error)],
             &[],
         );

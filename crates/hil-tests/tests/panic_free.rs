@@ -20,7 +20,7 @@ use std::time::Duration;
 
 mod common;
 
-use common::baselines::{self, Ratchet};
+use common::baselines::{self, Margin, Ratchet};
 use common::on_each;
 use decoy_hil::firmware;
 use decoy_hil::panic_sites::{self, by_function};
@@ -148,7 +148,7 @@ fn check(board: Board) {
     }
     let mut ratchet = Ratchet::new(&path, board.to_string());
     for (function, n) in &counts {
-        ratchet.count(function, *n as u64);
+        ratchet.at_most(function, *n as f64, Margin::Exact);
     }
     let functions: Vec<&str> = counts.keys().map(String::as_str).collect();
     ratchet.note_gone(&functions);
