@@ -100,7 +100,7 @@ enum Cmd {
     CheckRefs,
     /// Measure the HIL tests' baselines again (the tests with DECOY_BLESS=1) and
     /// write crates/hil-tests/baselines.toml and the documents' tables generated
-    /// from it; the budgets are asserted as ever. About 25 minutes in all, most of
+    /// from it; the budgets are asserted as ever. About 16 minutes in all, most of
     /// it the envelope sweep.
     Bless {
         /// Only these sections of the file (repeatable): step_cost, memory,

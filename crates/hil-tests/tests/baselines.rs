@@ -19,15 +19,13 @@ use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::sync::OnceLock;
 
-use common::baselines::{self, FILE, MEASURED, SECTIONS, number, table_at};
+use common::baselines::{self, DOCUMENTS, FILE, MEASURED, SECTIONS, number, table_at};
 use decoy_config::SystemConfig;
 use decoy_hil::budgets::{self, Budget};
 use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::sweep::{self, Grid, Group};
 use toml::{Table, Value};
 
-/// The documents with generated tables, relative to the repository's root.
-const DOCUMENTS: &[&str] = &["README.md", "firmware/README.md"];
 /// The marker's kind: `<!-- baselines: ID -->`.
 const KIND: &str = "baselines";
 

@@ -41,6 +41,9 @@ use toml::{Table, Value};
 
 /// The file, relative to the repository's root.
 pub const FILE: &str = "crates/hil-tests/baselines.toml";
+/// The documents with tables generated from the file (`tests/baselines.rs`),
+/// relative to the repository's root.
+pub const DOCUMENTS: &[&str] = &["README.md", "firmware/README.md"];
 /// The environment variable that makes the tests write their measurements.
 pub const BLESS_ENV: &str = "DECOY_BLESS";
 /// The environment variable with the command that blesses (set by `cargo
@@ -370,7 +373,8 @@ fn stamp() -> Table {
 }
 
 /// The commit checked out (`git rev-parse`), with `+ uncommitted changes` when
-/// the tracked files (this file aside) differ from it; `unknown` without git.
+/// the tracked files differ from it (but this file and [`DOCUMENTS`], which a
+/// bless writes); `unknown` without git.
 fn commit() -> String {
     let git = |args: &[&str]| {
         Command::new("git")
@@ -385,15 +389,20 @@ fn commit() -> String {
     let Some(head) = git(&["rev-parse", "--short=12", "HEAD"]) else {
         return "unknown".to_owned();
     };
-    let exclude = format!(":(exclude){FILE}");
-    match git(&[
-        "status",
-        "--porcelain",
-        "--untracked-files=no",
-        "--",
-        ".",
-        &exclude,
-    ]) {
+    let mut args = vec![
+        "status".to_owned(),
+        "--porcelain".to_owned(),
+        "--untracked-files=no".to_owned(),
+        "--".to_owned(),
+        ".".to_owned(),
+    ];
+    args.extend(
+        std::iter::once(FILE)
+            .chain(DOCUMENTS.iter().copied())
+            .map(|f| format!(":(exclude){f}")),
+    );
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    match git(&args) {
         Some(changes) if changes.is_empty() => head,
         _ => format!("{head} + uncommitted changes"),
     }
