@@ -17,6 +17,9 @@
 //!   and section the text cites exists.
 //! - `check-layering`: the layering stage alone ([`layering`]): the crates'
 //!   dependencies, no `#[path]`, no file cycle ([`modules`]).
+//! - `bless [--only NAME]`: measure the HIL tests' baselines again and write
+//!   them, `crates/hil-tests/baselines.toml`, and the documents' tables generated
+//!   from them (see [`bless`]).
 
 mod apt;
 mod firmware;
@@ -100,6 +103,17 @@ enum Cmd {
     CheckRefs,
     /// The layering stage alone: crate dependencies, `#[path]`, file cycles.
     CheckLayering,
+    /// Measure the HIL tests' baselines again (the tests with DECOY_BLESS=1) and
+    /// write crates/hil-tests/baselines.toml and the documents' tables generated
+    /// from it; the budgets are asserted as ever. About 16 minutes in all, most of
+    /// it the envelope sweep.
+    Bless {
+        /// Only these sections of the file (repeatable): step_cost, memory,
+        /// panic_sites, envelope, host_accuracy. The others are kept.
+        #[arg(long, value_name = "NAME",
+              value_parser = PossibleValuesParser::new(BLESSED.iter().map(|b| b.section)))]
+        only: Vec<String>,
+    },
     /// A board's firmware (firmware/boards.toml): build, lint or run it.
     Firmware {
         #[command(subcommand)]
@@ -177,6 +191,7 @@ fn main() -> ExitCode {
         Cmd::Soak { duration } => soak(&root, &duration),
         Cmd::CheckRefs => refs::check(&root),
         Cmd::CheckLayering => layering::check(&root),
+        Cmd::Bless { only } => bless(&root, &only),
         Cmd::Firmware { command } => match firmware_command(&root, command) {
             // The runner's exit code is QEMU's.
             Ok(code) => return ExitCode::from(code),
@@ -450,6 +465,94 @@ fn run(root: &Path) -> Result<()> {
             .collect();
         process::run(&mut cargo(root, &args))?;
     }
+    Ok(())
+}
+
+/// One measuring run of `cargo xtask bless`: a HIL test that writes a section of
+/// `crates/hil-tests/baselines.toml` when `DECOY_BLESS` is set.
+struct Blessed {
+    /// The section it writes (`--only NAME`).
+    section: &'static str,
+    /// The test target (`crates/hil-tests/tests/NAME.rs`).
+    test: &'static str,
+    /// The test filter that selects the measuring tests, if not all of them.
+    filter: Option<&'static str>,
+}
+
+/// The measuring runs of `cargo xtask bless`, in order: each a test binary run
+/// as the tests run (the harness's two threads, the envelope in its shards).
+const BLESSED: &[Blessed] = &[
+    Blessed {
+        section: "step_cost",
+        test: "step_cost",
+        filter: None,
+    },
+    Blessed {
+        section: "memory",
+        test: "hil_link",
+        filter: Some("ram_peak"),
+    },
+    Blessed {
+        section: "panic_sites",
+        test: "panic_free",
+        filter: Some("frame_path"),
+    },
+    Blessed {
+        section: "host_accuracy",
+        test: "host_accuracy",
+        filter: None,
+    },
+    Blessed {
+        section: "envelope",
+        test: "envelope",
+        filter: None,
+    },
+];
+
+/// `cargo xtask bless [--only NAME]...`: runs the measuring tests of [`BLESSED`]
+/// (those of `only`, or all) with `DECOY_BLESS=1`, which write their sections
+/// of `crates/hil-tests/baselines.toml` (each measurement still held to its
+/// budget: one over it fails the run and is not written), then the baselines
+/// test with `DECOY_BLESS=1`, which rewrites the documents' generated tables and
+/// checks the file.
+fn bless(root: &Path, only: &[String]) -> Result<()> {
+    let command = std::iter::once("cargo xtask bless".to_owned())
+        .chain(only.iter().map(|s| format!("--only {s}")))
+        .collect::<Vec<String>>()
+        .join(" ");
+    let started = Instant::now();
+    let runs = BLESSED
+        .iter()
+        .filter(|b| only.is_empty() || only.iter().any(|o| o == b.section));
+    for run in runs {
+        println!();
+        println!("==> bless {} (tests/{}.rs)", run.section, run.test);
+        let start = Instant::now();
+        let mut args = vec!["test", "-p", "hil-tests", "--test", run.test];
+        if let Some(filter) = run.filter {
+            args.extend(["--", filter]);
+        }
+        let mut cmd = cargo(root, &args);
+        cmd.env("DECOY_BLESS", "1")
+            .env("DECOY_BLESS_COMMAND", &command);
+        process::run(&mut cmd)?;
+        println!(
+            "<== {}: written in {:.1} s",
+            run.section,
+            start.elapsed().as_secs_f64()
+        );
+    }
+    println!();
+    println!("==> the documents' tables and the file's check (tests/baselines.rs)");
+    let mut cmd = cargo(root, &["test", "-p", "hil-tests", "--test", "baselines"]);
+    cmd.env("DECOY_BLESS", "1");
+    process::run(&mut cmd)?;
+    println!();
+    println!(
+        "blessed in {:.1} min: crates/hil-tests/baselines.toml and the tables of README.md and \
+         firmware/README.md (review with `git diff`, commit with the change)",
+        started.elapsed().as_secs_f64() / 60.0
+    );
     Ok(())
 }
 

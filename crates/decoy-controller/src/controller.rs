@@ -67,8 +67,8 @@ pub const PREDICTION_CAPACITY: usize = 12;
 /// residual 1). A frame of the trim costs about 27,000 instructions on the
 /// Cortex-M4F (validation, the output evaluation of the frame that completes
 /// it) plus about 105 a unit: 480 units keep every frame of the trim near
-/// 78,000, under the frame budget of 90,000 with margin for the unit's spread
-/// (firmware/README.md, "The trim"). The f32 trim takes 260 to 750 units over
+/// 78,000, under the f32 boards' frame budget with margin for the unit's spread
+/// (firmware/README.md, "The trim"; the budget in "Budgets and baselines"). The f32 trim takes 260 to 750 units over
 /// the envelope (one or two frames). The f32 controllers' slice.
 pub const TRIM_SLICE_UNITS: u32 = 480;
 

@@ -8,6 +8,8 @@
 //! bridge's qemu backend (`decoy_stream::qemu_backend`), the benches' firmware
 //! rows and the HIL tests (`crates/hil-tests`, which holds only tests) use it.
 //!
+//! - [`budgets`]: the requirements the firmware is held to (frame, RK4 step,
+//!   management, RAM, accuracy), each with the issue it comes from.
 //! - [`qemu`]: run a program with a time limit, killed on timeout and on drop;
 //!   the QEMU command line of the boards ([`qemu::Board`], the boards of
 //!   `firmware/boards.toml` through the crate `decoy-boards`).
@@ -27,6 +29,7 @@
 //!   RK4 step on the target.
 #![deny(missing_docs)]
 
+pub mod budgets;
 pub mod defmt;
 pub mod firmware;
 pub mod flight;

@@ -108,7 +108,8 @@ pub fn write_timeseries(
 }
 
 /// Draws the instructions of every control step against time (the trim frame
-/// left out), with the target for comparison.
+/// left out), with the board's frame budget ([`decoy_hil::budgets::frame`]) for
+/// comparison.
 pub fn instructions_plot(
     name: &str,
     board: Board,
@@ -127,10 +128,11 @@ pub fn instructions_plot(
         y: steps.iter().map(|o| f64::from(o.instructions)).collect(),
     }];
     if let (Some(first), Some(last)) = (t.first(), t.last()) {
+        let budget = decoy_hil::budgets::frame(board);
         series.push(decoy_plots::Series {
-            label: format!("target {INSTRUCTIONS_TARGET}"),
+            label: format!("budget {} ({})", budget.limit, budget.source),
             x: vec![*first, *last],
-            y: vec![f64::from(INSTRUCTIONS_TARGET); 2],
+            y: vec![f64::from(budget.limit); 2],
         });
     }
     let plot = decoy_plots::Plot {
@@ -145,9 +147,6 @@ pub fn instructions_plot(
         .map(Vec::from)
         .map_err(|e| format!("the {INSTRUCTIONS_PLOT} plot: {e}"))
 }
-
-/// The target of instructions per 10 ms control step, drawn for comparison.
-pub const INSTRUCTIONS_TARGET: u32 = 100_000;
 
 #[cfg(test)]
 mod tests {

@@ -20,12 +20,14 @@
 //!   (libm), so every answer must be equal: outputs in every field but the
 //!   instruction counts, bit for bit, rejections and status frames exactly; the
 //!   f64 boards (the M7) against the f64 reference, their nominal frames
-//!   within [`FRAME_BUDGET_M7`].
+//!   within the board's frame budget ([`budgets::frame`]).
 //! - **Memory.** The RAM peak (static RAM plus the deepest stack, at boot or in
-//!   the link loop) within the board's RAM budget, and within issue 22's rule
-//!   for the board ([`RAM_PEAK_RULES`]: the M7 with 8 KiB left, the f32 boards
-//!   at most their peak before issue 22); the controller in `.bss`, never on
-//!   the stack.
+//!   the link loop) within the board's budget ([`budgets::ram_peak`]: its RAM,
+//!   `firmware/boards.toml`, and on the M7 issue 22's 8 KiB left), then the
+//!   flash, the static RAM, both stack peaks and the RAM peak against their
+//!   baselines (`crates/hil-tests/baselines.toml`, `[memory.BOARD]`; written
+//!   with `DECOY_BLESS=1`, `cargo xtask bless`); the controller in `.bss`,
+//!   never on the stack.
 //! - **Determinism.** Two runs receive byte-identical streams (the instruction
 //!   counts included, so on the STM32F405 the 168 MHz SysTick's conversion to
 //!   instructions repeats too).
@@ -46,60 +48,25 @@ mod common;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
+use common::baselines::{self, Margin, Ratchet};
 use common::{boards_in, elf, on_each};
 use decoy_config::SystemConfig;
-use decoy_hil::firmware;
 use decoy_hil::flight::{self, Exchange};
 use decoy_hil::link::Session;
 use decoy_hil::qemu::{Board, Precision};
 use decoy_hil::reference::Reference;
+use decoy_hil::{budgets, firmware};
 use decoy_link::{
     AircraftStateFrame, Command, DeviceMessage, HostMessage, OutputFrame, RejectReason, StatusFlags,
 };
 use decoy_sim::{RunOptions, Scenario};
 
-/// The f64 boards' (the M7's, f64 in hardware) bound on a whole nominal frame:
-/// the worst frame measured before issue 22 (160,080), kept
-/// (`tests/envelope.rs` holds every frame of its flights to it).
-const FRAME_BUDGET_M7: u32 = 160_000;
-
-/// RAM the M7 keeps free at its peak (issue 22: at least 8 KiB).
-const M7_RAM_HEADROOM: u64 = 8 * 1024;
-/// The M4's RAM peak when issue 22 was filed (capacity 64: 34,876 B): never
-/// above it.
-const M4_RAM_PEAK_BEFORE: u64 = 34_876;
-/// The STM32F405's RAM peak when issue 22 was filed: never above it.
-const STM32F405_RAM_PEAK_BEFORE: u64 = 34_904;
-
-/// Issue 22's rule on a board's RAM peak, beyond its budget.
-#[derive(Clone, Copy, Debug)]
-enum RamRule {
-    /// At most this many bytes (the board's peak when the issue was filed).
-    AtMost(u64),
-    /// At least this many bytes of the budget left.
-    Headroom(u64),
-}
-
-/// Issue 22's rules on the RAM peak, by board name (`firmware/boards.toml`;
-/// [`every_ram_rule_names_a_board`] checks the names). A board without a rule
-/// is held to its budget alone.
-const RAM_PEAK_RULES: &[(&str, RamRule, &str)] = &[
-    (
-        "m4",
-        RamRule::AtMost(M4_RAM_PEAK_BEFORE),
-        "the M4's peak before issue 22",
-    ),
-    (
-        "stm32f405",
-        RamRule::AtMost(STM32F405_RAM_PEAK_BEFORE),
-        "the STM32F405's peak before issue 22",
-    ),
-    (
-        "m7",
-        RamRule::Headroom(M7_RAM_HEADROOM),
-        "the M7's 8 KiB of headroom",
-    ),
-];
+/// The section of the baselines.
+const SECTION: &str = "memory";
+/// How much the flash may exceed its baseline: its constants hold the source
+/// paths of a few third-party panic locations, under Cargo's home, whose
+/// length differs between machines; everything else is exact.
+const FLASH_MARGIN: Margin = Margin::Relative(0.01);
 
 /// A fresh firmware session on `board`, whose Hello must name the board and its
 /// core clock.
@@ -173,15 +140,6 @@ fn nominal_frame_max(answers: &[DeviceMessage]) -> u32 {
         .unwrap_or(0)
 }
 
-/// Every board of [`RAM_PEAK_RULES`] is in the table (a renamed board must not
-/// lose its rule silently).
-#[test]
-fn every_ram_rule_names_a_board() {
-    for (name, _, _) in RAM_PEAK_RULES {
-        Board::by_name(name).unwrap_or_else(|e| panic!("RAM_PEAK_RULES: {e}"));
-    }
-}
-
 /// The f64 boards (the M7: Cortex-M7, f64 in hardware, `mps2-an500`): the same
 /// answers as the host reference in f64 with the target's maths, bit for bit.
 #[test]
@@ -227,25 +185,22 @@ fn f64_board_matches_the_host_in_f64(board: Board) {
         stats.nominal_solver_max,
         flown.frames_per_second()
     );
+    let budget = budgets::frame(board);
     for out in flight::outputs(&answers) {
         if out.steps == flight::NOMINAL_RK4_STEPS {
-            assert!(
-                out.instructions <= FRAME_BUDGET_M7,
-                "{board}: nominal frame seq {} took {} instructions, over {FRAME_BUDGET_M7}",
-                out.seq,
-                out.instructions
-            );
+            budget
+                .check(&format!("{board}: seq {}", out.seq), out.instructions)
+                .unwrap_or_else(|e| panic!("{e}"));
         }
     }
 }
 
 /// Memory at every moment fits the board: static RAM (`.data` + `.bss`) plus the
 /// deepest stack, at boot (building the controller) or in the link loop (the
-/// trim and 300 frames of the acceleration), at most the board's RAM
-/// ([`Board::ram_budget`]) and within its rule of [`RAM_PEAK_RULES`]; the
-/// controller, built in place in its `static`, lies
-/// in `.bss` and never on the stack: the boot's stack is smaller than the
-/// controller (a copy of it on the stack would make it larger).
+/// trim and 300 frames of the acceleration), within [`budgets::ram_peak`], and
+/// each quantity within its baseline; the controller, built in place in its
+/// `static`, lies in `.bss` and never on the stack: the boot's stack is smaller
+/// than the controller (a copy of it on the stack would make it larger).
 fn ram_peak_fits_the_board(board: Board) {
     let memory = firmware::memory_usage(elf(board)).unwrap_or_else(|e| panic!("{e}"));
     let (exchanges, _, _, log) = fly(board, &frames("acceleration", None, 3.0));
@@ -271,27 +226,16 @@ fn ram_peak_fits_the_board(board: Board) {
         marks.boot,
         100.0 * peak as f64 / budget as f64
     );
-    assert!(
-        peak <= budget,
-        "{board}: RAM peak {peak} B (static {} B + stack {} B) over the board's {budget} B",
-        memory.ram(),
-        marks.peak()
-    );
-    // Issue 22: the M7 with at least 8 KiB left at its peak; the f32 boards at
-    // most their peak when the issue was filed.
-    if let Some((_, rule, why)) = RAM_PEAK_RULES
-        .iter()
-        .find(|(name, ..)| *name == board.name())
-    {
-        let limit = match *rule {
-            RamRule::AtMost(bytes) => bytes,
-            RamRule::Headroom(bytes) => budget - bytes,
-        };
-        assert!(
-            peak <= limit,
-            "{board}: RAM peak {peak} B over {limit} B ({why})"
-        );
-    }
+    budgets::ram_peak(board)
+        .check(
+            &format!(
+                "{board}: static {} B + stack {} B",
+                memory.ram(),
+                marks.peak()
+            ),
+            peak,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     assert!(
         memory.bss >= marks.controller,
         "{board}: the controller ({} B) is not in .bss ({} B): its `static` has an initial value (flash and a copy at boot)",
@@ -304,6 +248,35 @@ fn ram_peak_fits_the_board(board: Board) {
         marks.boot,
         marks.controller
     );
+    let measured = [
+        ("flash", memory.flash()),
+        ("text", memory.text),
+        ("data", memory.data),
+        ("bss", memory.bss),
+        ("static_ram", memory.ram()),
+        ("controller", marks.controller),
+        ("stack_boot", marks.boot),
+        ("stack_link", link),
+        ("ram_peak", peak),
+    ];
+    let path = [SECTION, board.name()];
+    if baselines::blessing() {
+        baselines::record(&path, |t| {
+            t.clear();
+            for (name, bytes) in measured {
+                t.insert(name.into(), baselines::int(bytes));
+            }
+        });
+        return;
+    }
+    let mut ratchet = Ratchet::new(&path, board.to_string());
+    ratchet.at_most("flash", memory.flash() as f64, FLASH_MARGIN);
+    for (name, bytes) in measured {
+        if !["flash", "text", "data", "bss"].contains(&name) {
+            ratchet.count(name, bytes);
+        }
+    }
+    ratchet.finish();
 }
 
 /// [`ram_peak_fits_the_board`] on the f64 boards (the M7: the largest

@@ -14,50 +14,51 @@
 //! - **the analytic flight path** (`decoy simulate`'s run of the scenario, at its
 //!   own RK4 step: 1 ms; 0.5 ms for the recorded flight, 0.25 ms for the
 //!   pull-ups). A controller sees the aircraft only every 10 ms, and through a
-//!   snatch load that alone moves the peak: the 300-segment model's 0.20 rad/s
-//!   peak is 841.3 N on the frames against 853.2 N on the analytic path
-//!   (-1.4 %), the recorded flight's 497.0 N against 513.5 N (-3.2 %).
+//!   snatch load that alone moves the peak: the 300-segment model's own peak on
+//!   the frames is below its peak on the analytic path (the baselines have
+//!   both).
 //!
-//! What holds (measured 2026-12-02, embedded model 12 graded 1.26, RK4 steps of at
-//! most 2.5 ms, `cargo test -p hil-tests --test host_accuracy -- --nocapture`):
+//! What is asserted:
 //!
-//! - **Against the same frames every shipped manoeuvre is within the issue's
-//!   2 %**, the snatch loads included: steady -0.03 %, acceleration -0.01 %,
-//!   pull-ups +0.47 / +0.59 / +0.50 % (0.05 / 0.10 / 0.20 rad/s), turns +0.27 /
-//!   +0.11 %, recorded flight -0.19 %. Before issue 14's model change (16 graded
-//!   1.3, steps at the wave-speed stability limit on its 0.46 m segment) the
-//!   snatches were +5.30, +17.78, +5.93 and +9.60 % off.
-//! - **The embedded model itself** (f64, the reference's converged steps, the
-//!   same frames) is within 2 % on all eight (worst -1.76 %, the 0.20 rad/s
-//!   pull-up), asserted by [`the_embedded_model_converged_is_within_two_percent`]:
-//!   the step of at most 2.5 ms adds at most about two points to the model's
-//!   own error, never as much as to leave the band (firmware/README.md, "The
-//!   worst frame and the accuracy", has the study of models and steps).
-//! - **Against the analytic path** all are within 2 % but the recorded flight,
-//!   -3.39 %: the 300-segment model itself, fed the 100 Hz frames, is 3.2 %
-//!   below its analytic run, so no controller fed 100 Hz frames can meet 2 %
-//!   there. It is held to its measurement plus a guard of 0.5 point
-//!   ([`RECORDED_ANALYTIC_LIMIT`]), so that a change making it worse fails.
+//! - **the budget** ([`budgets::PEAK_TENSION`], issue 14's 2 %): against the
+//!   same frames on every shipped manoeuvre, the snatch loads included; against
+//!   the analytic path on every one but the recorded flight, where the
+//!   300-segment model itself, fed the 100 Hz frames, is more than 2 % below its
+//!   analytic run, so that no controller fed 100 Hz frames can meet it there;
+//!   and the embedded model itself (f64, the reference's converged steps, the
+//!   same frames; [`the_embedded_model_converged_is_within_two_percent`]), so
+//!   that the controller's steps of at most 2.5 ms are what add to the model's
+//!   own error (firmware/README.md, "The worst frame and the accuracy", has the
+//!   study of models and steps);
+//! - **the baselines** (`crates/hil-tests/baselines.toml`, `[host_accuracy]`, a
+//!   line per manoeuvre): each error's size at most its baseline (the runs are
+//!   deterministic: the file keeps them to 1e-6), the recorded flight against
+//!   its analytic path included. With `DECOY_BLESS=1` (`cargo xtask bless`)
+//!   they are written instead, with the peaks themselves.
 //!
 //! Each scenario is its own test (they run in parallel); each takes a few
 //! seconds to about 20 s.
 
+mod common;
+
+use common::baselines::{self, Margin, Ratchet};
 use decoy_config::SystemConfig;
-use decoy_hil::flight;
+use decoy_hil::{budgets, flight};
 use decoy_link::DeviceMessage;
 use decoy_sim::{TraceOptions, trace};
 use solver_core::SegmentLayout;
+use toml::{Table, Value};
 
 /// The issue's accuracy target on the peak connection tension.
-const TARGET: f64 = 0.02;
+const TARGET: f64 = budgets::PEAK_TENSION.limit;
+/// The section of the baselines.
+const SECTION: &str = "host_accuracy";
+/// How far an error's size may be above its baseline: the file keeps it to
+/// 1e-6.
+const ERROR_MARGIN: Margin = Margin::Absolute(1e-6);
 
 /// RK4 step of the same-frames references, s (converged; see the module's text).
 const REFERENCE_STEP_S: f64 = 0.000125;
-
-/// The recorded flight against its analytic path: measured -3.39 % (the
-/// 300-segment model on the frames is -3.2 % off it), plus a guard of 0.5 point.
-/// Deterministic runs: an exact number, not a noise band.
-const RECORDED_ANALYTIC_LIMIT: f64 = 0.039;
 
 /// Peak connection tensions (N) at the frame times of one manoeuvre.
 struct Peaks {
@@ -144,14 +145,44 @@ fn peaks(name: &str, rate: Option<f64>, t_end: f64) -> Peaks {
     }
 }
 
-/// Checks `name` against both references with the limits given; returns the
-/// errors (same frames, analytic).
+/// Checks the errors `errors` (name, relative error) of manoeuvre `key`
+/// against their baselines, or with `DECOY_BLESS` writes them and `values`
+/// (peaks, not compared) into its line.
+fn baselines_of(key: &str, errors: &[(&str, f64)], values: &[(&str, f64)]) {
+    if baselines::blessing() {
+        baselines::record(&[SECTION], |t| {
+            let shipped = baselines::shipped_keys();
+            t.retain(|k, _| shipped.iter().any(|s| s == k) || k == baselines::MEASURED);
+            let line = t
+                .entry(key.to_owned())
+                .or_insert_with(|| Value::Table(Table::new()))
+                .as_table_mut()
+                .unwrap_or_else(|| panic!("{SECTION}.{key} is not a table"));
+            for (name, x) in errors {
+                line.insert((*name).to_owned(), baselines::rounded(*x, 6));
+            }
+            for (name, x) in values {
+                line.insert((*name).to_owned(), baselines::rounded(*x, 2));
+            }
+        });
+        return;
+    }
+    let mut ratchet = Ratchet::inline(&[SECTION], key, key);
+    for (name, x) in errors {
+        ratchet.at_most(name, *x, ERROR_MARGIN);
+    }
+    ratchet.finish();
+}
+
+/// Checks `name` against both references, the analytic path within
+/// `limit_analytic` if any, then against the baselines; returns the errors
+/// (same frames, analytic).
 fn check(
     name: &str,
     rate: Option<f64>,
     t_end: f64,
     limit_frames: f64,
-    limit_analytic: f64,
+    limit_analytic: Option<f64>,
 ) -> (f64, f64) {
     let p = peaks(name, rate, t_end);
     let frames = p.controller / p.same_frames - 1.0;
@@ -173,20 +204,31 @@ fn check(
         frames * 100.0,
         limit_frames * 100.0
     );
-    assert!(
-        analytic.abs() <= limit_analytic,
-        "{name} {rate:?}: the peak connection tension is {:+.2} % off the 300-segment f64 \
-         solution on the analytic path, over {:.1} %",
-        analytic * 100.0,
-        limit_analytic * 100.0
+    if let Some(limit) = limit_analytic {
+        assert!(
+            analytic.abs() <= limit,
+            "{name} {rate:?}: the peak connection tension is {:+.2} % off the 300-segment f64 \
+             solution on the analytic path, over {:.1} %",
+            analytic * 100.0,
+            limit * 100.0
+        );
+    }
+    baselines_of(
+        &baselines::manoeuvre_key(name, rate),
+        &[("same_frames", frames), ("analytic", analytic)],
+        &[
+            ("controller_n", p.controller),
+            ("same_frames_n", p.same_frames),
+            ("analytic_n", p.analytic),
+        ],
     );
     (frames, analytic)
 }
 
-/// Checks `name` at `rate` for `t_end` s: within [`TARGET`] of the same frames,
-/// within `limit_analytic` of the analytic path.
-fn within_target(name: &str, rate: Option<f64>, t_end: f64, limit_analytic: f64) {
-    check(name, rate, t_end, TARGET, limit_analytic);
+/// Checks `name` at `rate` for `t_end` s: within [`TARGET`] of the same frames
+/// and of the analytic path.
+fn within_target(name: &str, rate: Option<f64>, t_end: f64) {
+    check(name, rate, t_end, TARGET, Some(TARGET));
 }
 
 /// The embedded model (f64) integrated with the reference's converged steps
@@ -224,6 +266,11 @@ fn the_embedded_model_converged_is_within_two_percent() {
              solution on the same frames",
             error * 100.0
         );
+        baselines_of(
+            &baselines::manoeuvre_key(name, rate),
+            &[("embedded_converged", error)],
+            &[],
+        );
     }
     println!(
         "worst: {} {:?}, {:+.2} %",
@@ -235,42 +282,42 @@ fn the_embedded_model_converged_is_within_two_percent() {
 
 #[test]
 fn steady_is_within_two_percent_of_the_host() {
-    within_target("steady", None, 10.0, TARGET);
+    within_target("steady", None, 10.0);
 }
 
 #[test]
 fn acceleration_is_within_two_percent_of_the_host() {
-    within_target("acceleration", None, 12.0, TARGET);
+    within_target("acceleration", None, 12.0);
 }
 
 #[test]
 fn turn_010_is_within_two_percent_of_the_host() {
-    within_target("turn", Some(0.10), 10.0, TARGET);
+    within_target("turn", Some(0.10), 10.0);
 }
 
 #[test]
 fn turn_020_is_within_two_percent_of_the_host() {
-    within_target("turn", Some(0.20), 10.0, TARGET);
+    within_target("turn", Some(0.20), 10.0);
 }
 
 #[test]
 fn pull_up_005_is_within_two_percent_of_the_host() {
-    within_target("pull-up", Some(0.05), 10.0, TARGET);
+    within_target("pull-up", Some(0.05), 10.0);
 }
 
 #[test]
 fn pull_up_010_is_within_two_percent_of_the_host() {
-    within_target("pull-up", Some(0.10), 10.0, TARGET);
+    within_target("pull-up", Some(0.10), 10.0);
 }
 
 #[test]
 fn pull_up_020_is_within_two_percent_of_the_host() {
-    within_target("pull-up", Some(0.20), 10.0, TARGET);
+    within_target("pull-up", Some(0.20), 10.0);
 }
 
 /// Within [`TARGET`] of the same frames; against the analytic path held to
-/// [`RECORDED_ANALYTIC_LIMIT`] (see the module's text).
+/// its baseline only (see the module's text).
 #[test]
 fn recorded_is_within_two_percent_of_the_host_on_its_frames() {
-    within_target("recorded", None, 10.0, RECORDED_ANALYTIC_LIMIT);
+    check("recorded", None, 10.0, TARGET, None);
 }

@@ -165,10 +165,7 @@ fn run() -> Result<(), String> {
 /// The envelope sweep's full grid on `board` (two QEMU sessions at once), each
 /// flight summarised.
 fn envelope_board(board: Board) -> EnvelopeBoard {
-    let bound = match board.precision() {
-        Precision::F64 => report::M7_FRAME_BOUND,
-        Precision::F32 => report::F32_FRAME_BOUND,
-    };
+    let bound = decoy_hil::budgets::frame(board).limit;
     let flights = (|| -> Result<Vec<EnvelopeFlight>, String> {
         let config = decoy_config::SystemConfig::builtin().map_err(|e| e.to_string())?;
         let cases = sweep::cases(&config, sweep::Grid::Full).map_err(|e| e.to_string())?;

@@ -10,10 +10,10 @@ use decoy_plots::{Aspect, Plot, Series};
 use super::*;
 
 /// The bound every frame over the envelope must meet on the f32 boards (the M4
-/// and the STM32F405; issue 22).
-pub const F32_FRAME_BOUND: u32 = 90_000;
-/// The f64 boards' (the M7's) stated bound.
-pub const M7_FRAME_BOUND: u32 = 160_000;
+/// and the STM32F405): their budget (`decoy_hil::budgets`, issue 22).
+pub const F32_FRAME_BOUND: u32 = decoy_hil::budgets::FRAME_F32.limit;
+/// The f64 boards' (the M7's) budget.
+pub const M7_FRAME_BOUND: u32 = decoy_hil::budgets::FRAME_F64.limit;
 /// The boards of the sweep, as the report names them (its tables' columns):
 /// every board's label in `firmware/boards.toml`, in the table's order.
 pub fn boards() -> Vec<&'static str> {
@@ -119,7 +119,10 @@ pub fn envelope_plot(inputs: &Inputs) -> Vec<Plot> {
         .collect();
     if !f32_boards.is_empty() {
         let mut s: Vec<Series> = f32_boards.iter().map(|b| series(b)).collect();
-        s.push(bound(F32_FRAME_BOUND, "bound 90,000"));
+        s.push(bound(
+            F32_FRAME_BOUND,
+            &format!("bound {}", thousands(u64::from(F32_FRAME_BOUND))),
+        ));
         plots.push(Plot {
             title: "Worst frame per altitude band over the envelope: Cortex-M4F, f32".into(),
             x_label: "aircraft altitude [km] (1 km bands)".into(),
@@ -141,7 +144,10 @@ pub fn envelope_plot(inputs: &Inputs) -> Vec<Plot> {
             ),
             x_label: "aircraft altitude [km] (1 km bands)".into(),
             y_label: "instructions per 10 ms frame".into(),
-            series: vec![series(b), bound(b.bound, "bound 160,000")],
+            series: vec![
+                series(b),
+                bound(b.bound, &format!("bound {}", thousands(u64::from(b.bound)))),
+            ],
             aspect: Aspect::Free,
             invert_y: false,
         });

@@ -1,9 +1,13 @@
 //! What the HIL tests share: the boards come from `firmware/boards.toml`
 //! (`decoy_hil::qemu::Board`), never a list of their own, so a board added to
-//! the table is tested by every test of its role.
+//! the table is tested by every test of its role; the measured baselines
+//! ([`baselines`]: `crates/hil-tests/baselines.toml`, read, compared, and
+//! written by `cargo xtask bless`).
 
 // Each test binary uses its own part of this module.
 #![allow(dead_code)]
+
+pub mod baselines;
 
 use std::panic::{self, AssertUnwindSafe};
 use std::path::PathBuf;
