@@ -83,30 +83,8 @@ pub const SYMBOL_PREFIX: &str = "_decoy_board_";
 /// The firmware's binary name (`firmware/Cargo.toml`).
 pub const BINARY: &str = "decoy-firmware";
 
-/// The solver's scalar on a board.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Precision {
-    /// f32: the Cortex-M4F's single-precision FPU.
-    F32,
-    /// f64: feature `f64` (in hardware on the Cortex-M7's FPv5-D16).
-    F64,
-}
-
-impl Precision {
-    /// Bits of the scalar.
-    pub fn bits(self) -> u8 {
-        match self {
-            Precision::F32 => 32,
-            Precision::F64 => 64,
-        }
-    }
-}
-
-impl fmt::Display for Precision {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "f{}", self.bits())
-    }
-}
+/// The solver's scalar on a board (the schema's, as the bridge's backend has it).
+pub use decoy_schema::Precision;
 
 /// Which of a board's firmware builds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

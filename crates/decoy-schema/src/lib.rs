@@ -18,7 +18,9 @@ pub use columns::{CSV_FILES, Column, CsvFile, Quantity};
 #[cfg(test)]
 mod docs;
 pub mod manoeuvre;
+pub mod precision;
 pub use manoeuvre::{
     BUILTIN_ALTITUDE_M, BuiltinFlight, Manoeuvre, ManoeuvreInfo, Need, Parameter,
     STREAMED_PROFILE_CODE,
 };
+pub use precision::Precision;

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use decoy_config::SystemConfig;
 use decoy_hil::link::{LinkError, Session};
-use decoy_hil::qemu::{self, Board};
+use decoy_hil::qemu::Board;
 use decoy_link::{DeviceMessage, HostMessage, StatusFlags};
 use host_bridge::BridgeError;
 use host_bridge::backend::{Backend, ModelInfo, Precision};
@@ -70,10 +70,7 @@ pub fn qemu_backend(
     options: &QemuOptions,
 ) -> Result<Box<dyn Backend + Send>, BridgeError> {
     let board = options.board;
-    let board_precision = match board.precision() {
-        qemu::Precision::F32 => Precision::F32,
-        qemu::Precision::F64 => Precision::F64,
-    };
+    let board_precision = board.precision();
     if let Some(p) = options.precision
         && p != board_precision
     {

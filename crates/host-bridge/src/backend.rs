@@ -19,24 +19,8 @@ pub const SMALL_CAPACITY: usize = 64;
 /// Segment capacity of the host controller above 64 segments.
 pub const LARGE_CAPACITY: usize = 512;
 
-/// The solver's scalar.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Precision {
-    /// f32 (the firmware's on the M4; with libm the same bits).
-    F32,
-    /// f64 (the host's reference; the M7 firmware's).
-    F64,
-}
-
-impl Precision {
-    /// Bits of the scalar.
-    pub fn bits(self) -> u8 {
-        match self {
-            Precision::F32 => 32,
-            Precision::F64 => 64,
-        }
-    }
-}
+/// The solver's scalar (the schema's, as the boards' table has it).
+pub use decoy_schema::Precision;
 
 /// How to build the host backend.
 #[derive(Clone, Debug, Default)]
