@@ -866,7 +866,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
                 return Solved::Answer(self.reject(seq, reason));
             }
         };
-        let mut output = OUTPUT_ZERO;
+        let mut output = OutputFrame::ZERO;
         let Ok(aircraft) = self.output(frame, steps, &mut output) else {
             self.roll_back(&saved, saved_init);
             return Solved::Answer(self.reject(seq, RejectReason::SolverFailure));
@@ -1257,26 +1257,6 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         Ok(aircraft)
     }
 }
-
-/// An Output of zero values, filled by [`Controller::output`].
-const OUTPUT_ZERO: OutputFrame = OutputFrame {
-    seq: 0,
-    time_s: 0.0,
-    connection_tension_n: 0.0,
-    tow_tension_n: 0.0,
-    decoy_position_fp_m: [0.0; 3],
-    decoy_euler_rel_rad: [0.0; 3],
-    angle_of_attack_rad: 0.0,
-    cable_clearance_exhaust_m: 0.0,
-    decoy_clearance_aircraft_m: 0.0,
-    flags: 0,
-    instructions: 0,
-    step_instructions: 0,
-    steps: 0,
-    management_instructions: 0,
-    prediction_steps: 0,
-    management: Management::ZERO,
-};
 
 /// The bits of the longest accepted interval between two State frames,
 /// [`MAX_TIME_JUMP_S`] plus [`TIME_TOLERANCE_S`] (positive doubles order as their

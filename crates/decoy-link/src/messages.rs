@@ -130,6 +130,29 @@ pub struct OutputFrame {
     pub management: Management,
 }
 
+impl OutputFrame {
+    /// An Output of zero values (the management's [`Management::ZERO`]): what
+    /// the controller fills, and the base of a literal that sets a few fields.
+    pub const ZERO: Self = OutputFrame {
+        seq: 0,
+        time_s: 0.0,
+        connection_tension_n: 0.0,
+        tow_tension_n: 0.0,
+        decoy_position_fp_m: [0.0; 3],
+        decoy_euler_rel_rad: [0.0; 3],
+        angle_of_attack_rad: 0.0,
+        cable_clearance_exhaust_m: 0.0,
+        decoy_clearance_aircraft_m: 0.0,
+        flags: 0,
+        instructions: 0,
+        step_instructions: 0,
+        steps: 0,
+        management_instructions: 0,
+        prediction_steps: 0,
+        management: Management::ZERO,
+    };
+}
+
 /// The level of one monitor: its margin against the configured thresholds
 /// (`[management]`), with hysteresis on the way down.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]

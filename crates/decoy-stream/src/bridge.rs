@@ -91,7 +91,7 @@ impl FrameAnswer for Answer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use decoy_link::{Management, StatusFrame};
+    use decoy_link::StatusFrame;
     use host_bridge::convert::{
         initialising_answer, output_answer, output_from_link, rejected_answer,
     };
@@ -106,17 +106,12 @@ mod tests {
             connection_tension_n: 900.0,
             tow_tension_n: 40.0,
             decoy_position_fp_m: [100.0, 0.0, 12.0],
-            decoy_euler_rel_rad: [0.0; 3],
             angle_of_attack_rad: 0.01,
             cable_clearance_exhaust_m: 1.5,
             decoy_clearance_aircraft_m: 99.0,
             flags: 1,
-            instructions: 0,
-            step_instructions: 0,
             steps: 4,
-            management_instructions: 0,
-            prediction_steps: 0,
-            management: Management::default(),
+            ..OutputFrame::ZERO
         };
         let output = output_answer(1, output_from_link(&out));
         assert_eq!(output.seq(), Some(7));

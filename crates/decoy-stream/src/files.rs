@@ -159,20 +159,13 @@ mod tests {
         let mut fw = OutputFrame {
             seq: 17,
             time_s: 1.5,
-            connection_tension_n: 0.0,
-            tow_tension_n: 0.0,
-            decoy_position_fp_m: [0.0; 3],
-            decoy_euler_rel_rad: [0.0; 3],
-            angle_of_attack_rad: 0.0,
-            cable_clearance_exhaust_m: 0.0,
-            decoy_clearance_aircraft_m: 0.0,
             flags: 3,
             instructions: 88_000,
             step_instructions: 80_000,
             steps: 4,
             management_instructions: 250_000,
             prediction_steps: 5,
-            management: decoy_link::Management::default(),
+            ..OutputFrame::ZERO
         };
         fw.management.advisories = 8;
         let mut s = Sample {
