@@ -421,11 +421,20 @@ fn simulate_text(
         Initial::Trim => "trim",
         Initial::Straight => "straight cable",
     };
+    let steps = match (&r.steps, r.dt) {
+        (Some(st), Some(dt)) => format!("{} RK4 steps of {dt} s (fixed)", st.count),
+        (Some(st), None) => format!(
+            "{} RK4 steps of {:.3} to {:.3} ms (adaptive)",
+            st.count,
+            st.min_s * 1000.0,
+            st.max_s * 1000.0
+        ),
+        (None, dt) => format!("RK4 dt = {} s", dt.unwrap_or(f64::NAN)),
+    };
     let _ = writeln!(
         s,
-        "  {}, RK4 dt = {} s, {} s simulated, initial state: {initial}",
+        "  {}, {steps}, {} s simulated, initial state: {initial}",
         describe_layout(&run.plan.layout),
-        r.dt,
         r.t_end
     );
     let _ = writeln!(s, "Connection-point tension");

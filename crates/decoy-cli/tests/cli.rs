@@ -528,6 +528,7 @@ fn simulate_json_is_the_summary_and_the_files_are_written() {
         "segments",
         "dt",
         "t_end",
+        "steps",
         "max_tension_connection_N",
         "t_at_max_tension_s",
         "pitch_oscillation_amplitude_deg",
@@ -567,7 +568,13 @@ fn simulate_json_is_the_summary_and_the_files_are_written() {
     assert_eq!(v["scenario"], "steady");
     assert_eq!(v["segments"], 16);
     assert_eq!(num(&v, "t_end"), 2.0);
-    assert_eq!(num(&v, "dt"), 0.001);
+    // No --dt: the adaptive rule chose the steps.
+    assert!(v["dt"].is_null(), "{v}");
+    assert_eq!(v["steps"]["rule"], "adaptive");
+    assert!(
+        num(&v["steps"], "count") >= 200.0,
+        "at least a step per 10 ms row: {v}"
+    );
     // Steady flight from trim stays at trim (about 271 N at Mach 0.8, 9 km).
     let tension = num(&v["final"], "tension_connection_N");
     assert!((tension - 271.0).abs() < 5.0, "{tension}");

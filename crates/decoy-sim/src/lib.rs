@@ -41,7 +41,8 @@
 //! 1. `error`, `format` (number and layout formats), `capacity` (the solver
 //!    capacity chosen from the segment count), `geometry`, `options`
 //!    ([`RunOptions`]);
-//! 2. `recorded` (recorded flights), `profile` ([`FlightProfile`]);
+//! 2. `recorded` (recorded flights), `profile` ([`FlightProfile`]), `steps`
+//!    (the step rule and the run's timeline, [`StepRule`], [`Timeline`]);
 //! 3. `scenario` (scenario files and [`RunPlan`]), `trim` (the steady trim of
 //!    one flight condition, `decoy trim`);
 //! 4. `record` (the probe, running statistics and CSV rows of a run), then
@@ -81,6 +82,7 @@ pub mod record;
 pub mod recorded;
 pub mod run;
 pub mod scenario;
+pub mod steps;
 pub mod summary;
 pub mod trace;
 pub mod trim;
@@ -107,5 +109,6 @@ pub use run::{
 pub use scenario::{
     BUILTIN_SCENARIOS, RECORDED_EXAMPLE_CSV, RunPlan, Scenario, ScenarioKind, ScenarioOrigin,
 };
-pub use summary::{FinalValues, StoppedAt, Summary, summarize};
+pub use steps::{StepRule, Timeline};
+pub use summary::{FinalValues, StepsTaken, StoppedAt, Summary, summarize};
 pub use trace::{Start, Trace, TraceOptions, pitched_attitude, trace};

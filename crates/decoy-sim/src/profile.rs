@@ -26,6 +26,24 @@ impl FlightProfile {
         }
     }
 
+    /// The times in (0, `t_end`), s, at which the path's acceleration or rotation
+    /// rate jumps, increasing: a manoeuvre's start and end, a recorded flight's
+    /// samples (its cubic Hermite is continuous in velocity, not in acceleration,
+    /// at every sample). The run's steps end exactly at each ([`crate::steps`]).
+    pub fn breakpoints(&self, t_end: f64) -> Vec<f64> {
+        let mut times: Vec<f64> = match self {
+            FlightProfile::Manoeuvre(p) => p.breakpoints().into_iter().flatten().collect(),
+            FlightProfile::Recorded(r) => {
+                let first = r.samples()[0].time;
+                r.samples().iter().map(|s| s.time - first).collect()
+            }
+        };
+        times.retain(|&t| t > 0.0 && t < t_end);
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        times
+    }
+
     /// The steady straight flight condition at t = 0 that the initial state is
     /// built for: the path's position, velocity and attitude at t = 0 with its
     /// acceleration and rotation set to zero.

@@ -17,6 +17,7 @@ use crate::geometry::{
 use crate::management::{ManagementSample, ManagementTrack};
 use crate::profile::FlightProfile;
 use crate::scenario::RunPlan;
+use crate::steps::Marks;
 use decoy_schema::Quantity;
 use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
 
@@ -357,6 +358,16 @@ impl Snapshot {
     }
 }
 
+/// How many output intervals of `interval` s make `every` s (at least one).
+fn intervals(every: f64, interval: f64) -> u64 {
+    ((every / interval).round() as u64).max(1)
+}
+
+/// A step in seconds, for messages: its shortest round-trip form.
+pub(crate) fn format_step(step: f64) -> String {
+    crate::format::format_number(step)
+}
+
 /// Writes the snapshot's rows to `cable.csv` (one write).
 fn write_snapshot(csv: &mut CsvFile, snapshot: &Snapshot) -> Result<(), SimError> {
     let mut text = String::with_capacity(snapshot.joints.len() * 64);
@@ -368,10 +379,14 @@ fn write_snapshot(csv: &mut CsvFile, snapshot: &Snapshot) -> Result<(), SimError
 
 /// Everything measured and written from the evaluated states, in step order.
 ///
-/// It is fed the outputs of RK4's first stage ([`Solver::step_observed`]), which
-/// evaluates the dynamics at the state before each step anyway, so measuring every
-/// step costs no extra evaluation. The CSV files are optional: an in-memory run
-/// (`trace`) keeps only the samples and snapshots.
+/// It is fed the outputs at the state each step starts from ([`Solver::outputs`],
+/// whose evaluation the step then reuses as RK4's first stage), so measuring every
+/// step costs no extra evaluation. Every state is measured (the statistics: peaks,
+/// minima, the pitch amplitude); the states at the run's output times (every
+/// 10 ms, [`crate::steps`]) are the rows, kept every `rows_every` of them, and
+/// every `rows_per_snapshot`-th is a cable snapshot; the first and the last state
+/// are both. The CSV files are optional: an in-memory run (`trace`) keeps only the
+/// samples and snapshots.
 pub(crate) struct Recorder<'a> {
     pub path: &'a FlightProfile,
     pub probe: Probe,
@@ -390,10 +405,23 @@ pub(crate) struct Recorder<'a> {
     /// True once a state has been recorded.
     pub recorded_any: bool,
     pub last_written: bool,
-    pub sample_every: u64,
-    pub snapshot_every: u64,
+    /// Keep every this many output times as a row.
+    pub rows_every: u64,
+    /// Take a snapshot every this many output times.
+    pub rows_per_snapshot: u64,
+    /// Output times seen so far (the first state's is number 0).
+    pub rows_seen: u64,
+    /// The last step taken, s (for the message of a divergence).
+    pub last_step: f64,
+    /// Steps that stood.
     pub steps: u64,
-    pub dt: f64,
+    /// Steps undone (an adaptive step whose error estimate was too large, or that
+    /// failed) and taken again shorter.
+    pub rejected: u64,
+    /// The solver's error of the last step that failed and was taken again.
+    pub last_failure: Option<SolveError>,
+    /// The shortest and the longest step that stood, s.
+    pub step_range: (f64, f64),
     /// The management monitors and the onboard controller (runs that write files).
     pub management: Option<ManagementTrack>,
 }
@@ -433,8 +461,8 @@ impl Stop {
 
 impl<'a> Recorder<'a> {
     /// A recorder for `plan` keeping a sample every `sample_interval` s and a
-    /// snapshot every `snapshot_interval` s (both at least every step), writing
-    /// the CSV files given.
+    /// snapshot every `snapshot_interval` s (both whole numbers of the plan's
+    /// output interval, at least one), writing the CSV files given.
     pub(crate) fn new(
         plan: &'a RunPlan,
         probe: Probe,
@@ -465,25 +493,32 @@ impl<'a> Recorder<'a> {
             },
             recorded_any: false,
             last_written: false,
-            sample_every: ((sample_interval / plan.dt).round() as u64).max(1),
-            snapshot_every: ((snapshot_interval / plan.dt).round() as u64).max(1),
-            steps: plan.steps,
-            dt: plan.dt,
+            rows_every: intervals(sample_interval, plan.timeline.row_interval()),
+            rows_per_snapshot: intervals(snapshot_interval, plan.timeline.row_interval()),
+            rows_seen: 0,
+            last_step: 0.0,
+            steps: 0,
+            rejected: 0,
+            last_failure: None,
+            step_range: (f64::INFINITY, 0.0),
             management: None,
         }
     }
 
-    /// Records the evaluation `out` of the state after step `k`. `Ok(Some)` when the
-    /// state cannot be used (the run stops at the previous one).
+    /// Records the evaluation `out` of the state after step `k`, whose time is
+    /// what `marks` says on the run's timeline. `Ok(Some)` when the state cannot
+    /// be used (the run stops at the previous one).
     pub(crate) fn record<const N: usize>(
         &mut self,
         k: u64,
         out: &Outputs<'_, f64, N>,
+        marks: Marks,
     ) -> Result<Option<Stop>, SimError> {
         let t = out.time();
         let aircraft = self.path.state_at(t);
-        let write_row = k == 0 || k.is_multiple_of(self.sample_every) || k == self.steps;
-        let take_snapshot = k == 0 || k.is_multiple_of(self.snapshot_every) || k == self.steps;
+        let row = self.rows_seen;
+        let write_row = marks.end || (marks.row && row.is_multiple_of(self.rows_every));
+        let take_snapshot = marks.end || (marks.row && row.is_multiple_of(self.rows_per_snapshot));
         let previous_yaw = (k > 0).then_some(self.last.euler_deg[2]);
         let mut sample = self.probe.sample(out, &aircraft, previous_yaw);
         self.probe
@@ -491,15 +526,18 @@ impl<'a> Recorder<'a> {
         if !(sample.tension_connection.is_finite() && sample.tension_tow.is_finite()) {
             return Ok(Some(Stop::failure(
                 format!(
-                    "the cable tension became non-finite at t = {} s: the state diverged (is the time step {} s too long?)",
+                    "the cable tension became non-finite at t = {} s: the state diverged (the last step was {} s)",
                     format_time(t),
-                    self.dt
+                    format_step(self.last_step)
                 ),
                 None,
             )));
         }
         if write_row && let Some(track) = &mut self.management {
             sample.management = track.observe(out, &aircraft, self.path);
+        }
+        if marks.row {
+            self.rows_seen += 1;
         }
         self.last = sample;
         std::mem::swap(&mut self.last_cable, &mut self.candidate_cable);
@@ -516,6 +554,22 @@ impl<'a> Recorder<'a> {
             self.keep_last_cable()?;
         }
         Ok(None)
+    }
+
+    /// Notes a step of `dt` s about to be taken.
+    pub(crate) fn note_step(&mut self, dt: f64) {
+        self.last_step = dt;
+    }
+
+    /// Counts a step of `dt` s that stood.
+    pub(crate) fn note_accepted(&mut self, dt: f64) {
+        self.steps += 1;
+        self.step_range = (self.step_range.0.min(dt), self.step_range.1.max(dt));
+    }
+
+    /// Counts the last step as undone.
+    pub(crate) fn note_rejection(&mut self) {
+        self.rejected += 1;
     }
 
     /// Keeps (and writes) the snapshot of the last good state.

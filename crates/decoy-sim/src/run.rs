@@ -11,16 +11,17 @@ use solver_core::{AircraftState, Model, SolveError, Solver, State, trim};
 
 use crate::capacity::with_capacity;
 use crate::error::SimError;
-use crate::format::round_time;
+use crate::format::{format_time, round_time};
 use crate::management::ManagementTrack;
 use crate::options::{InitialState, RunOptions};
 use crate::plots::PLOT_NAMES;
 use crate::record::{
     CsvFile, Recorded, Recorder, SAMPLE_INTERVAL_S, SNAPSHOT_INTERVAL_S, Sample, Snapshot, Stop,
-    probe,
+    format_step, probe,
 };
 use crate::scenario::{RunPlan, Scenario};
-use crate::summary::{RunIdentity, Summary, measured};
+use crate::steps::Marks;
+use crate::summary::{RunIdentity, StepsTaken, Summary, measured};
 
 /// What a finished run produced.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,11 +57,18 @@ pub struct Recording {
     pub ended: Option<SimError>,
 }
 
-/// Integrates `plan.steps` steps from the solver's state, recording every
-/// evaluated state with `recorder`; `progress` gets the fraction done now and
-/// then, and `stop` is asked before every step whether to stop there (`Some`:
-/// why, [`simulate_until`]). Returns why it stopped early, if it did (the
-/// recorder then holds every state up to the last good one).
+/// Integrates from the solver's state to the plan's end along its timeline
+/// ([`crate::steps`]: the step rule, the output times, the profile's breakpoints),
+/// recording every state with `recorder`; `progress` gets the fraction of the
+/// simulated time done now and then, and `stop` is asked before every step
+/// whether to stop there (`Some`: why, [`simulate_until`]). Returns why it
+/// stopped early, if it did (the recorder then holds every state up to the last
+/// good one).
+///
+/// Each state is evaluated once ([`Solver::outputs`]): the recorder measures it,
+/// its wave-speed rate sets the next step ([`solver_core::Outputs::wave_rate`]),
+/// and the step reuses the evaluation as its first stage. Each step ends at a time
+/// the timeline gives ([`Solver::step_to`]), so the clock never drifts.
 pub(crate) fn integrate<const N: usize>(
     solver: &mut Solver<f64, N>,
     plan: &RunPlan,
@@ -69,62 +77,105 @@ pub(crate) fn integrate<const N: usize>(
     stop: &dyn Fn() -> Option<&'static str>,
 ) -> Result<Option<Stop>, SimError> {
     let path = &plan.profile;
-    let steps = plan.steps;
-    let initial = match solver.outputs(path) {
-        Ok(out) => recorder.record(0, &out)?,
+    let timeline = &plan.timeline;
+    let rule = timeline.rule();
+    let mut cursor = timeline.cursor();
+    let mut marks = Marks::START;
+    // Progress at most a thousand times.
+    let progress_step = timeline.t_end() / 1000.0;
+    let mut next_progress = 0.0;
+    // The accuracy bound of the next step from the last step's error (adaptive).
+    let mut accuracy = f64::INFINITY;
+
+    // The initial state.
+    let mut rate = match solver.outputs(path) {
+        Ok(out) => {
+            if let Some(failed) = recorder.record(0, &out, marks)? {
+                return Err(SimError::Initial(
+                    failed.source.unwrap_or(SolveError::NonFinite { joint: 0 }),
+                ));
+            }
+            out.wave_rate()
+        }
         Err(e) => return Err(SimError::Initial(e)),
     };
-    if let Some(stop) = initial {
-        return Err(SimError::Initial(
-            stop.source.unwrap_or(SolveError::NonFinite { joint: 0 }),
-        ));
-    }
-    progress(0.0);
-
-    let progress_every = (steps / 1000).max(1);
-    let mut stopped: Option<Stop> = None;
-    for k in 1..=steps {
-        // A stop request ends the run at this step boundary: at the state after
-        // step k - 1, recorded here (step k's first stage would have recorded it).
+    let mut k: u64 = 0;
+    let stopped = loop {
+        if cursor.finished() {
+            break None;
+        }
+        if cursor.t() >= next_progress {
+            progress(cursor.t() / timeline.t_end());
+            next_progress = cursor.t() + progress_step;
+        }
+        // A stop request ends the run at this step boundary (the state just
+        // recorded; `finish` makes it a row and a snapshot like any last state).
         if let Some(requested) = stop() {
-            if k > 1 {
-                // This state ends the run: recorded as the last one is (a row,
-                // a cable snapshot, the management's observation).
-                recorder.steps = k - 1;
-                stopped = match solver.outputs(path) {
-                    Ok(out) => recorder.record(k - 1, &out)?,
-                    Err(e) => Some(Stop::failure(stop_reason(&e, plan.dt), Some(e))),
-                };
+            break Some(Stop::requested(requested));
+        }
+        // The next step: the rule's limit (and the accuracy bound), up to the next
+        // stop of the timeline; an adaptive step whose error is too large, or that
+        // fails, is undone and taken again shorter.
+        let mut limit = rule.allowed(rate).min(accuracy);
+        let taken = loop {
+            let end = match cursor.next(limit) {
+                Ok(end) => end,
+                Err(short) => {
+                    break Err(Stop::failure(
+                        format!(
+                            "the step rule asks for steps of {} s at t = {} s, shorter than {} s: the state diverged (or the model's shortest segment is too short for its tension; --dt forces a step)",
+                            format_step(short.allowed),
+                            format_time(cursor.t()),
+                            format_step(crate::steps::MIN_STEP_S)
+                        ),
+                        None,
+                    ));
+                }
+            };
+            let dt = end.t - cursor.t();
+            recorder.note_step(dt);
+            let adaptive = rule.fixed_step().is_none();
+            match solver.step_to_checked(path, end.t) {
+                Ok(step) => {
+                    let ratio = crate::steps::error_ratio(&step.error());
+                    // A NaN ratio (a non-finite estimate) fails the step too.
+                    if adaptive && (ratio > 1.0 || ratio.is_nan()) {
+                        step.undo();
+                        recorder.note_rejection();
+                        limit = dt * crate::steps::shrink(ratio);
+                        continue;
+                    }
+                    if adaptive {
+                        accuracy = dt * crate::steps::grow(ratio);
+                    }
+                    recorder.note_accepted(dt);
+                    break Ok((end, step.accept()));
+                }
+                Err(e) if adaptive => {
+                    recorder.note_rejection();
+                    limit = dt * crate::steps::SHRINK_ON_FAILURE;
+                    recorder.last_failure = Some(e);
+                }
+                Err(e) => break Err(Stop::failure(stop_reason(&e, dt), Some(e))),
             }
-            // A state that proves unusable is the failure it is, not the request.
-            stopped.get_or_insert(Stop::requested(requested));
-            break;
-        }
-        // The observer sees the state after step k - 1 (step 0 is recorded above).
-        let mut observed = Ok(None);
-        let stepped = solver.step_observed(path, plan.dt, |out| {
-            if k > 1 {
-                observed = recorder.record(k - 1, out);
-            }
-        });
-        if let Some(stop) = observed? {
-            stopped = Some(stop);
-            break;
-        }
-        if let Err(e) = stepped {
-            stopped = Some(Stop::failure(stop_reason(&e, plan.dt), Some(e)));
-            break;
-        }
-        if k.is_multiple_of(progress_every) {
-            progress(k as f64 / steps as f64);
-        }
-    }
-    if stopped.is_none() {
-        stopped = match solver.outputs(path) {
-            Ok(out) => recorder.record(steps, &out)?,
-            Err(e) => Some(Stop::failure(stop_reason(&e, plan.dt), Some(e))),
         };
-    }
+        let (end, outputs) = match taken {
+            Ok(taken) => taken,
+            Err(stop) => break Some(stop),
+        };
+        cursor.advance(&end);
+        marks = end.marks;
+        k += 1;
+        match outputs {
+            Ok(out) => {
+                if let Some(failed) = recorder.record(k, &out, marks)? {
+                    break Some(failed);
+                }
+                rate = out.wave_rate();
+            }
+            Err(e) => break Some(Stop::failure(stop_reason(&e, recorder.last_step), Some(e))),
+        }
+    };
     recorder.finish()?;
     if stopped.is_none() {
         progress(1.0);
@@ -273,6 +324,7 @@ fn simulate_with<const N: usize>(
         Err(e) => return Err(e),
     };
     let recorded_any = recorder.recorded_any;
+    let (steps, rejected, step_range) = (recorder.steps, recorder.rejected, recorder.step_range);
     let Recorder {
         timeseries,
         cable,
@@ -290,8 +342,15 @@ fn simulate_with<const N: usize>(
     let identity = RunIdentity {
         scenario: &plan.name,
         segments: n,
-        dt: plan.dt,
+        dt: plan.timeline.rule().fixed_step(),
         t_end: plan.t_end,
+        steps: Some(StepsTaken {
+            rule: plan.timeline.rule().name().to_owned(),
+            count: steps,
+            rejected,
+            min_s: if steps > 0 { step_range.0 } else { 0.0 },
+            max_s: step_range.1,
+        }),
     };
     // Without a recorded state the final values are unknown (`null`).
     let last = if recorded_any {
@@ -442,10 +501,11 @@ pub fn clear_output_dir(dir: &Path) -> Result<(), SimError> {
 }
 
 /// Why stepping stopped, in words.
-fn stop_reason(e: &SolveError, dt: f64) -> String {
+fn stop_reason(e: &SolveError, step: f64) -> String {
     match e {
         SolveError::NonFinite { .. } | SolveError::NonPositivePivot { .. } => format!(
-            "the state diverged ({e}); is the time step {dt} s too long for this discretisation?"
+            "the state diverged ({e}) in a step of {} s",
+            format_step(step)
         ),
         SolveError::Input(input) => format!("the aircraft state is unusable: {input}"),
         other => other.to_string(),

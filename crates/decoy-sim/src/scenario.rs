@@ -27,6 +27,7 @@ use crate::format::format_number;
 use crate::options::RunOptions;
 use crate::profile::FlightProfile;
 use crate::recorded::RecordedFlight;
+use crate::steps::{StepRule, Timeline};
 
 /// The shipped scenarios: name and TOML text (embedded from `scenarios/`).
 pub const BUILTIN_SCENARIOS: [(&str, &str); 5] = [
@@ -288,12 +289,11 @@ pub struct RunPlan {
     pub profile: FlightProfile,
     /// Cable discretisation.
     pub layout: SegmentLayout<f64>,
-    /// RK4 time step, s.
-    pub dt: f64,
-    /// Simulated time, s (the run ends after `steps` steps, at `steps * dt` >= this).
+    /// Where the RK4 steps end: the step rule, the output times, the profile's
+    /// breakpoints and the end ([`crate::steps`]).
+    pub timeline: Timeline,
+    /// Simulated time, s (the run ends at exactly this time).
     pub t_end: f64,
-    /// Number of RK4 steps.
-    pub steps: u64,
     /// +1 when the reported lateral offset is positive to the left of the flight
     /// path, -1 when positive to the right (left turns, so that the outside of the
     /// turn is positive).
@@ -486,33 +486,38 @@ impl Scenario {
             None => (self.t_end_s, from_file("t_end_s")),
         };
         t_end_source.check(check_positive, t_end)?;
-        let (dt, dt_source) = match (options.dt, self.dt_s) {
-            (Some(dt), _) => (dt, Source::new(cli, "--dt")),
-            (None, Some(dt)) => (dt, from_file("dt_s")),
-            (None, None) => (
-                config.solver.time_step_host,
-                from_config("solver.time_step_host"),
-            ),
+        // The step: a fixed one from the command line or the file, else the
+        // adaptive rule bounded by the configuration's longest step.
+        let fixed = match (options.dt, self.dt_s) {
+            (Some(dt), _) => Some((dt, Source::new(cli, "--dt"))),
+            (None, Some(dt)) => Some((dt, from_file("dt_s"))),
+            (None, None) => None,
         };
-        dt_source.check(check_positive, dt)?;
-        if dt > t_end {
-            return Err(dt_source.invalid(format!(
-                "{} s is longer than the simulated time {} s ({})",
-                format_number(dt),
-                format_number(t_end),
-                t_end_source.describe()
-            )));
-        }
-        let steps = (t_end / dt * (1.0 - 1e-12)).ceil();
-        if steps > MAX_STEPS {
-            return Err(t_end_source.invalid(format!(
-                "{} s asks for {steps:.1e} steps of {} s ({}), more than {}",
-                format_number(t_end),
-                format_number(dt),
-                dt_source.describe(),
-                format_number(MAX_STEPS)
-            )));
-        }
+        let rule = match fixed {
+            Some((dt, dt_source)) => {
+                dt_source.check(check_positive, dt)?;
+                if dt > t_end {
+                    return Err(dt_source.invalid(format!(
+                        "{} s is longer than the simulated time {} s ({})",
+                        format_number(dt),
+                        format_number(t_end),
+                        t_end_source.describe()
+                    )));
+                }
+                let steps = (t_end / dt * (1.0 - 1e-12)).ceil();
+                if steps > MAX_STEPS {
+                    return Err(t_end_source.invalid(format!(
+                        "{} s asks for {steps:.1e} steps of {} s ({}), more than {}",
+                        format_number(t_end),
+                        format_number(dt),
+                        dt_source.describe(),
+                        format_number(MAX_STEPS)
+                    )));
+                }
+                StepRule::Fixed { dt }
+            }
+            None => StepRule::Adaptive,
+        };
         let (segments, segments_source) = match (options.segments, self.segments) {
             (Some(n), _) => (n, Source::new(cli, "--segments")),
             (None, Some(n)) => (n, from_file("segments")),
@@ -601,14 +606,14 @@ impl Scenario {
                 FlightProfile::Recorded(flight)
             }
         };
+        let profile_breakpoints = profile.breakpoints(t_end);
         Ok(RunPlan {
             name: name.to_owned(),
             kind,
             profile,
             layout,
-            dt,
+            timeline: Timeline::new(rule, profile_breakpoints, t_end),
             t_end,
-            steps: steps.max(1.0) as u64,
             lateral_sign,
         })
     }

@@ -35,6 +35,22 @@ pub struct StoppedAt {
     pub reason: String,
 }
 
+/// The RK4 steps of a host run (`summary.json`'s `steps`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepsTaken {
+    /// `adaptive` (`decoy_sim::steps`) or `fixed`.
+    pub rule: String,
+    /// How many steps stood.
+    pub count: u64,
+    /// How many were undone and taken again shorter (their error estimate too
+    /// large, or the step failed).
+    pub rejected: u64,
+    /// The shortest step, s.
+    pub min_s: f64,
+    /// The longest step, s.
+    pub max_s: f64,
+}
+
 /// The contents of `summary.json` (see `docs/outputs.md`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
@@ -42,10 +58,15 @@ pub struct Summary {
     pub scenario: String,
     /// Number of cable segments.
     pub segments: usize,
-    /// RK4 time step, s.
-    pub dt: f64,
+    /// The fixed RK4 step, s (`--dt`, a scenario's `dt_s`, or the longest step
+    /// of a firmware or bridge run's controller); `null` when the step rule chose
+    /// the steps (`steps`).
+    pub dt: Option<f64>,
     /// Simulated time asked for, s.
     pub t_end: f64,
+    /// The steps a host run took: the rule and how many, how short, how long.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<StepsTaken>,
     /// Largest connection-point tension over all steps, N.
     #[serde(rename = "max_tension_connection_N")]
     pub max_tension_connection_n: f64,
@@ -100,8 +121,9 @@ pub fn summarize(
     let run = RunIdentity {
         scenario,
         segments,
-        dt,
+        dt: Some(dt),
         t_end,
+        steps: None,
     };
     measured(&run, &statistics, samples, &last, wall_s, stopped)
 }
@@ -110,8 +132,9 @@ pub fn summarize(
 pub(crate) struct RunIdentity<'a> {
     pub scenario: &'a str,
     pub segments: usize,
-    pub dt: f64,
+    pub dt: Option<f64>,
     pub t_end: f64,
+    pub steps: Option<StepsTaken>,
 }
 
 /// The summary of a run from its running `statistics` (every step), its kept
@@ -130,6 +153,7 @@ pub(crate) fn measured(
         segments: run.segments,
         dt: run.dt,
         t_end: run.t_end,
+        steps: run.steps.clone(),
         max_tension_connection_n: statistics.max_tension,
         // No measured state (a run that could not start): no time either (`null`).
         t_at_max_tension_s: if statistics.max_tension.is_finite() {

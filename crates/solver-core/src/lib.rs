@@ -62,6 +62,6 @@ pub use motion::{AircraftState, FlightPath, NodePath, PointKinematics, Uniform};
 pub use pendulum::{pendulum_energy, pendulum_initial_state, reference_pendulum};
 pub use rk4::{DerivativeSource, Rk4};
 pub use scalar::{Mat3, Real, Vec3};
-pub use solver::{DecoyOutputs, Outputs, Solver};
+pub use solver::{CheckedStep, DecoyOutputs, Outputs, Solver, StepError, WAVE_STEP_FACTOR};
 pub use state::{Derivative, State};
 pub use trim::{TrimTask, trim};

@@ -493,6 +493,29 @@ impl ManoeuvrePath {
         }
     }
 
+    /// The times, s, at which the path's acceleration or rotation rate jumps (a
+    /// manoeuvre's start and end; none for steady flight), in increasing order: an
+    /// integrator whose steps end exactly there keeps RK4's order through them
+    /// (a step that straddles a jump integrates a kink) and starts each manoeuvre
+    /// at its time, not a stage early.
+    pub fn breakpoints(&self) -> [Option<f64>; 2] {
+        match self {
+            ManoeuvrePath::Level(p) => {
+                let (v0, v1) = (p.initial_speed, p.final_speed);
+                let a = p.acceleration.abs();
+                if a == 0.0 || v0 == v1 {
+                    [None, None]
+                } else {
+                    // `along`'s end of the acceleration: start + (v1 - v0) / a.
+                    let a = if v1 >= v0 { a } else { -a };
+                    [Some(p.start), Some(p.start + (v1 - v0) / a)]
+                }
+            }
+            ManoeuvrePath::PullUp(p) => [Some(p.start), Some(p.start + p.duration)],
+            ManoeuvrePath::Turn(p) => [Some(p.start), None],
+        }
+    }
+
     /// The flight-path rotation rate, rad/s, of a path that rotates.
     pub fn rate(&self) -> Option<f64> {
         match self {

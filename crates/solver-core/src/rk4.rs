@@ -215,6 +215,32 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         )
     }
 
+    /// After a step: the new state and the spare derivative buffer (the step's
+    /// weighted sum, no longer needed) to evaluate the new state's derivative in,
+    /// for an error estimate that costs no evaluation the next step would not
+    /// make anyway ([`crate::Solver::step_to_checked`]); [`Rk4::keep_spare`] then
+    /// makes the spare buffer the last derivative.
+    pub fn state_and_spare(&mut self) -> (&State<T, N>, &mut Derivative<T, N>) {
+        let [a, b] = &mut self.derivatives;
+        let spare = if self.slope & 1 == 0 { b } else { a };
+        (&self.states[self.current & 1], spare)
+    }
+
+    /// Makes the spare derivative buffer, just evaluated at the current state
+    /// ([`Rk4::state_and_spare`]), the last derivative.
+    pub fn keep_spare(&mut self) {
+        self.slope = 1 - (self.slope & 1);
+    }
+
+    /// Goes back to the state before the last step: the state buffer the step
+    /// read is left untouched by it (the step writes the other and swaps), so
+    /// this is a swap back. Only right after a successful step is that buffer the
+    /// state before it; [`crate::Solver::step_to_checked`] guarantees it by
+    /// borrowing the solver until the step is accepted or undone.
+    pub fn undo_step(&mut self) {
+        self.current = 1 - (self.current & 1);
+    }
+
     /// Advances the state by one RK4 step of `dt` seconds with the derivatives of
     /// `source`, then renormalises (unit directions, rates perpendicular to them,
     /// unit quaternion).
@@ -263,6 +289,48 @@ impl<T: Real, const N: usize> Rk4<T, N> {
         }
         let t0 = self.state().time;
         let (t_half, t_end) = (t0 + half_of(dt), t0 + dt);
+        let start = match start {
+            Some(inputs) => inputs,
+            None => source.inputs_at(t0)?,
+        };
+        self.step_sampled(
+            source,
+            T::lit(dt),
+            start,
+            |source| source.inputs_at(t_half),
+            |source| source.inputs_at(t_end),
+            t_end,
+            observe,
+        )
+    }
+
+    /// One RK4 step from the state's time t0 to `t_end` exactly: the step dt =
+    /// `t_end` - t0 (in f64, then rounded to `T` for the stages), the inputs sampled
+    /// at t0 (or `start`, as in [`Rk4::step_from`]), t0 + dt/2 and `t_end`, and the
+    /// new state's time `t_end` itself, not t0 + dt: a caller that steps to times it
+    /// computes on a grid (k / 100 s) never sees its clock drift, whatever the steps.
+    /// Returns the inputs at `t_end` for the next step. [`InputError::BadTimeStep`]
+    /// when `t_end` is not finite or not after t0; on any error the state is left
+    /// exactly as it was.
+    #[inline(always)]
+    pub fn step_to<S, F>(
+        &mut self,
+        source: &mut S,
+        t_end: f64,
+        start: Option<S::Inputs>,
+        observe: F,
+    ) -> Result<S::Inputs, SolveError>
+    where
+        S: DerivativeSource<T, N> + ?Sized,
+        F: FnOnce(&mut S, &State<T, N>, &Derivative<T, N>),
+    {
+        let t0 = self.state().time;
+        let dt = t_end - t0;
+        let bits = dt.to_bits();
+        if !(bits > 0 && bits < f64::INFINITY.to_bits() && t_end.is_finite()) {
+            return Err(InputError::BadTimeStep.into());
+        }
+        let t_half = t0 + half_of(dt);
         let start = match start {
             Some(inputs) => inputs,
             None => source.inputs_at(t0)?,

@@ -409,6 +409,98 @@ impl<T: Real, const N: usize> Solver<T, N> {
         self.rk4.step(&mut towed, dt, |_, _, _| {})
     }
 
+    /// One RK4 step along `path` from the state's time to `t_end` exactly (the
+    /// step `t_end` minus that time; the new state's time is `t_end` itself, so a
+    /// caller stepping to the times of its own grid keeps an exact clock). The
+    /// host's adaptive runs step this way (`decoy_sim`'s step rule). The first stage
+    /// reuses the evaluation [`Solver::outputs`] left at this state, as
+    /// [`Solver::step`]'s does; the stages keep the forces [`Solver::step`] keeps.
+    /// On any error the state is left exactly as it was.
+    pub fn step_to<P: FlightPath<T> + ?Sized>(
+        &mut self,
+        path: &P,
+        t_end: f64,
+    ) -> Result<(), SolveError> {
+        let mut towed: Towed<'_, T, N, P, true> = Towed {
+            model: &self.model,
+            path,
+            method: self.method,
+            ws: &mut self.ws,
+            air: &mut self.air,
+            evaluated: &mut self.evaluated,
+        };
+        self.rk4
+            .step_to(&mut towed, t_end, None, |_, _, _| {})
+            .map(|_| ())
+    }
+
+    /// [`Solver::step_to`], then the derivative at the new state (the next step's
+    /// first stage, which that step reuses: no evaluation is added) and from it an
+    /// estimate of the step's error ([`StepError`]), with the choice to accept the
+    /// step ([`CheckedStep::accept`], the new state's outputs) or undo it
+    /// ([`CheckedStep::undo`]: the state before it, exactly).
+    ///
+    /// The estimate compares the end forces (at the connection point and at the
+    /// towing point, [`StepError`]) of two states the step has evaluated anyway: the last stage's,
+    /// at the predictor y + dt k3, and the new state's, y + dt/6 (k1 + 2 k2 + 2 k3 +
+    /// k4). The two states differ by dt ((k1 + 2 k2 + 2 k3 + k4)/6 - k3), whose
+    /// first-order terms cancel: O(dt^3), small where the motion is smooth on the
+    /// step's scale and large where a tension changes within the step (a snatch
+    /// load, the onset of a manoeuvre), the quantity the host's accuracy is judged
+    /// by. The cable's undamped short-wave ringing, which a state norm would chase
+    /// for the whole run, changes the end forces only at second order.
+    ///
+    /// On any error (the step's, or an evaluation of the new state that fails) the
+    /// state is left exactly as it was.
+    pub fn step_to_checked<P: FlightPath<T> + ?Sized>(
+        &mut self,
+        path: &P,
+        t_end: f64,
+    ) -> Result<CheckedStep<'_, T, N>, SolveError> {
+        self.step_to(path, t_end)?;
+        self.evaluated = None;
+        // The last stage's end forces (at the predictor y + dt k3), to compare
+        // with the new state's.
+        let n = self.model.segment_count();
+        let stage_forces = (self.ws.connection_force, self.ws.joint_force[n - 1]);
+        let evaluation = (|| -> Result<StepError, SolveError> {
+            let point = self.model.params().connection_point;
+            let (state, spare) = self.rk4.state_and_spare();
+            let connection = path.point_at(state.time, &point)?;
+            let (connection, air) = inputs_at(&self.model, &mut self.air, connection)?;
+            dynamics::evaluate(
+                &self.model,
+                state,
+                &connection,
+                &air,
+                self.method,
+                &mut self.ws,
+                spare,
+            )?;
+            let error = StepError::between(
+                stage_forces,
+                (self.ws.connection_force, self.ws.joint_force[n - 1]),
+            );
+            dynamics::joint_kinematics(&self.model, state, &mut self.ws);
+            self.evaluated = Some(EvaluationKey::new(&connection, &air, self.method));
+            Ok(error)
+        })();
+        match evaluation {
+            Ok(error) => {
+                self.rk4.keep_spare();
+                Ok(CheckedStep {
+                    solver: self,
+                    error,
+                })
+            }
+            Err(e) => {
+                self.evaluated = None;
+                self.rk4.undo_step();
+                Err(e)
+            }
+        }
+    }
+
     /// `count` steps of `dt` seconds along `path`: the same bits as `count` calls of
     /// [`Solver::step`], sampling the path one time fewer per step (a step's start
     /// is the step before's end: its inputs are carried over, not sampled again).
@@ -534,24 +626,7 @@ impl<T: Real, const N: usize> Solver<T, N> {
     ) -> Result<Outputs<'_, T, N>, SolveError> {
         self.evaluate_here(path)?;
         let outputs = self.last_outputs();
-        // Every tension finite (|T_j| from its square, which overflows f32 first: at
-        // 1.8e19 N, for accelerations far beyond any aircraft's), or a typed error
-        // naming the first joint where it is not.
-        // One sum of the squares, finite only if every |T_j|² is; the joints are
-        // searched only when it is not.
-        let segments = self.model.segment_count();
-        let squares = outputs
-            .downstream_joint_forces()
-            .iter()
-            .fold(outputs.joint_force(0).norm_squared(), |sum, f| {
-                sum + f.norm_squared()
-            });
-        if !squares.finite()
-            && let Some(joint) =
-                (0..=segments).find(|&j| !outputs.joint_force(j).norm_squared().finite())
-        {
-            return Err(SolveError::NonFinite { joint });
-        }
+        finite_tensions(&outputs)?;
         Ok(outputs)
     }
 
@@ -641,6 +716,101 @@ pub struct DecoyOutputs<T: Real> {
     pub aero_moment: Vec3<T>,
 }
 
+/// The error estimate of a step ([`Solver::step_to_checked`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepError {
+    /// The change of the end forces between the step's last stage (a) and its
+    /// new state (b), relative to the connection force:
+    /// max(|F0_a - F0_b|, |FN_a - FN_b|) / sqrt(|F0_a|^2 + |F0_b|^2), with F0 the
+    /// force at the connection point and FN the one at the towing point (0 when
+    /// the connection force is zero in both). O(dt^3). The towing point's change
+    /// is measured on the connection force's scale, not its own: the decoy's
+    /// pull is a few per cent of the connection force, and while the cable
+    /// near the decoy is slack its own scale would ask for short steps to
+    /// follow a force of a few newtons.
+    pub end_force: f64,
+}
+
+impl StepError {
+    /// The estimate from the end forces (connection, towing point) of the step's
+    /// last stage and of its new state.
+    fn between<T: Real>(stage: (Vec3<T>, Vec3<T>), new: (Vec3<T>, Vec3<T>)) -> Self {
+        let scale = (stage.0.norm_squared() + new.0.norm_squared()).to_f64();
+        let connection = (stage.0 - new.0).norm_squared().to_f64();
+        let towing = (stage.1 - new.1).norm_squared().to_f64();
+        let larger = if towing > connection {
+            towing
+        } else {
+            connection
+        };
+        StepError {
+            end_force: if scale > 0.0 {
+                libm::sqrt(larger / scale)
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
+/// A step taken by [`Solver::step_to_checked`], to be accepted or undone; the
+/// solver is borrowed until then, so nothing else can step in between.
+pub struct CheckedStep<'s, T: Real, const N: usize> {
+    solver: &'s mut Solver<T, N>,
+    error: StepError,
+}
+
+impl<'s, T: Real, const N: usize> CheckedStep<'s, T, N> {
+    /// The step's local error estimate.
+    pub fn error(&self) -> StepError {
+        self.error
+    }
+
+    /// Keeps the step: the outputs at the new state, already evaluated (the next
+    /// step's first stage reuses that evaluation). [`SolveError::NonFinite`] (and
+    /// the step kept) when a tension is not finite, as [`Solver::outputs`] says.
+    pub fn accept(self) -> Result<Outputs<'s, T, N>, SolveError> {
+        let solver = self.solver;
+        finite_tensions(&solver.last_outputs())?;
+        Ok(solver.last_outputs())
+    }
+
+    /// Undoes the step: the state before it, exactly, with its time.
+    pub fn undo(self) {
+        self.solver.evaluated = None;
+        self.solver.rk4.undo_step();
+    }
+}
+
+/// [`SolveError::NonFinite`] naming the first joint whose force is not finite.
+/// Every tension finite (|T_j| from its square, which overflows f32 first: at
+/// 1.8e19 N, for accelerations far beyond any aircraft's), or a typed error
+/// naming the first joint where it is not. One sum of the squares, finite only
+/// if every |T_j|² is; the joints are searched only when it is not.
+#[inline(always)]
+fn finite_tensions<T: Real, const N: usize>(outputs: &Outputs<'_, T, N>) -> Result<(), SolveError> {
+    let segments = outputs.segment_count();
+    let squares = outputs
+        .downstream_joint_forces()
+        .iter()
+        .fold(outputs.joint_force(0).norm_squared(), |sum, f| {
+            sum + f.norm_squared()
+        });
+    if !squares.finite()
+        && let Some(joint) =
+            (0..=segments).find(|&j| !outputs.joint_force(j).norm_squared().finite())
+    {
+        return Err(SolveError::NonFinite { joint });
+    }
+    Ok(())
+}
+
+/// Safety factor of the wave-speed step limit: every RK4 step is at most
+/// `WAVE_STEP_FACTOR` / [`Outputs::wave_rate`] (l_i / c_i for every segment i):
+/// the chain's fastest mode swings at sqrt(12) c/l and RK4 is stable to about
+/// 2.8 rad per step, so 0.8 is within 2 % of the limit.
+pub const WAVE_STEP_FACTOR: f64 = 0.8;
+
 /// A view of the results of the last evaluation.
 #[derive(Clone, Copy, Debug)]
 pub struct Outputs<'a, T: Real, const N: usize> {
@@ -674,6 +844,32 @@ impl<'a, T: Real, const N: usize> Outputs<'a, T, N> {
     /// slice, for a pass over them without a branch per joint.
     pub fn downstream_joint_forces(&self) -> &[Vec3<T>] {
         &self.ws.joint_force[..self.model.segment_count()]
+    }
+    /// The wave-speed rate max_i c_i / l_i of this evaluation, 1/s: c_i =
+    /// sqrt(T_i / mu) is the transverse wave speed of segment i at the larger of its
+    /// two end forces, l_i its length, mu the cable's linear density. The fastest
+    /// mode of the rod chain, alternate rods swinging against each other, has the
+    /// angular frequency sqrt(12) c/l, and RK4 is stable to about 2.8 rad per step:
+    /// a step of at most [`WAVE_STEP_FACTOR`] / rate keeps every segment stable. The
+    /// step rule of the controller (docs/protocol.md §5) and of the host's adaptive
+    /// runs. Two roots in all: max_i |T_i|^2 / l_i^4 is found first.
+    pub fn wave_rate(&self) -> T {
+        // Compare-and-select rather than `max`, which is a libm call on the M4F.
+        let larger = |a: T, b: T| if b > a { b } else { a };
+        let mut worst = T::zero();
+        let mut upstream = self.joint_force(0).norm_squared();
+        for (l, force) in self
+            .model
+            .lengths()
+            .iter()
+            .zip(self.downstream_joint_forces())
+        {
+            let downstream = force.norm_squared();
+            let l2 = *l * *l;
+            worst = larger(worst, larger(upstream, downstream) / (l2 * l2));
+            upstream = downstream;
+        }
+        (worst.square_root() / self.model.params().cable.linear_density).square_root()
     }
     /// Cable tension at joint `j`, N: the force's component along the cable, positive
     /// when the cable pulls (|T_j| signed by -T_j . e).

@@ -274,7 +274,7 @@ fn fly_pull_up(
 ) -> Result<PullUpPoint, SimError> {
     let plan = spec.plan(config, rate)?;
     let options = TraceOptions {
-        sample_interval_s: plan.dt,
+        sample_interval_s: plan.timeline.row_interval(),
         snapshot_interval_s: plan.t_end * 2.0,
         ..TraceOptions::default()
     };
@@ -288,7 +288,8 @@ fn fly_pull_up(
         }
         min_depth = min_depth.min(s.cg[2]);
     }
-    let every = ((PULL_UP_HISTORY_INTERVAL_S / plan.dt).round() as usize).max(1);
+    let every =
+        ((PULL_UP_HISTORY_INTERVAL_S / plan.timeline.row_interval()).round() as usize).max(1);
     let mut history: Vec<(f64, f64)> = run
         .samples
         .iter()

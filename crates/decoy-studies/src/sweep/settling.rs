@@ -319,7 +319,7 @@ pub fn settling_sweep(
     let options = TraceOptions {
         start: Start::TrimElseStraight,
         pitch_offset_deg: spec.pitch_offset_deg,
-        sample_interval_s: plan.dt,
+        sample_interval_s: plan.timeline.row_interval(),
         snapshot_interval_s: plan.t_end * 2.0,
     };
     let count = spec.values.len();
@@ -347,7 +347,7 @@ pub fn settling_sweep(
             spec.threshold_deg,
             run.stopped.is_none(),
         );
-        let every = ((HISTORY_INTERVAL_S / plan.dt).round() as usize).max(1);
+        let every = ((HISTORY_INTERVAL_S / plan.timeline.row_interval()).round() as usize).max(1);
         let mut pitch_history: Vec<(f64, f64)> = history.iter().step_by(every).copied().collect();
         if let (Some(last), Some(kept)) = (history.last(), pitch_history.last())
             && kept.0 < last.0
