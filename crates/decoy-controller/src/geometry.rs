@@ -330,6 +330,59 @@ pub fn cable_plume_clearance<T: Real>(
     (best, best_index)
 }
 
+/// [`cable_plume_clearance`] in f64 with the same result, bit for bit, for the
+/// host's runs, which measure every RK4 step: a point is evaluated only when it
+/// can be nearer than the smallest clearance found so far. The clearance changes
+/// by at most the distance moved (it is a distance to a fixed surface), and two
+/// points k places apart along the cable are at most k `spacing` apart
+/// (`spacing`: an upper bound of the distance from a joint to the next segment
+/// midpoint and from a midpoint to the next joint, half the longest segment). So
+/// after a point of clearance c, the next floor((c - best - margin) / spacing)
+/// points, with best the smallest clearance so far and margin
+/// [`PRUNE_MARGIN_M`] (far above the rounding of either computation), cannot
+/// replace it and are skipped. Its cost therefore depends on where the cable is:
+/// not for the controller's frame, whose cost must not ([`cable_plume_clearance`]).
+pub fn cable_plume_clearance_pruned(
+    plume: &ExhaustPlume<f64>,
+    aircraft: &AircraftState<f64>,
+    joints: impl IntoIterator<Item = Vec3<f64>>,
+    spacing: f64,
+) -> (f64, usize) {
+    let placed = PlacedPlume::new(plume, aircraft);
+    let (mut best, mut best_index) = (f64::INFINITY, 0);
+    // The index of the next point to evaluate.
+    let mut next = 0usize;
+    let mut consider = |p: &Vec3<f64>, index: usize, best: &mut f64, best_index: &mut usize| {
+        if index < next {
+            return;
+        }
+        let c = placed.clearance(p);
+        if c < *best {
+            (*best, *best_index) = (c, index);
+        }
+        let room = (c - *best - PRUNE_MARGIN_M) / spacing;
+        // Not a number (an infinite clearance, a zero spacing): no skip.
+        next = if (1.0..1e9).contains(&room) {
+            index + 1 + room as usize
+        } else {
+            index + 1
+        };
+    };
+    let mut previous: Option<Vec3<f64>> = None;
+    for (j, p) in joints.into_iter().enumerate() {
+        if let Some(q) = previous {
+            consider(&((q + p) * 0.5), 2 * j - 1, &mut best, &mut best_index);
+        }
+        consider(&p, 2 * j, &mut best, &mut best_index);
+        previous = Some(p);
+    }
+    (best, best_index)
+}
+
+/// The margin, m, by which [`cable_plume_clearance_pruned`]'s bound must exceed
+/// the smallest clearance so far for a point to be skipped.
+pub const PRUNE_MARGIN_M: f64 = 1e-6;
+
 fn lit3<T: Real>(v: [f64; 3]) -> Vec3<T> {
     Vec3::new(T::lit(v[0]), T::lit(v[1]), T::lit(v[2]))
 }
@@ -406,6 +459,59 @@ mod tests {
         assert!((side(53.0, 0.0) - 3.0).abs() < tol * 100.0);
     }
     for_both!(plume_clearance, plume_clearance_signs_and_values);
+
+    /// The pruned search gives the full search's clearance and index, bit for
+    /// bit, on cables near, through and far from the plume of a manoeuvring
+    /// aircraft.
+    #[test]
+    fn pruned_plume_clearance_is_the_full_one() {
+        let plume = plume::<f64>();
+        let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut skipped_some = false;
+        for case in 0..400 {
+            let mut aircraft = AircraftState::<f64>::level(9000.0 + 100.0 * uniform(), 200.0);
+            aircraft.position = lit3([4000.0 * uniform(), 50.0 * uniform(), -9000.0]);
+            // A unit quaternion of a random attitude (up to about 60 degrees).
+            let q = [1.0, uniform() - 0.5, uniform() - 0.5, uniform() - 0.5];
+            let norm = libm::sqrt(q.iter().map(|x| x * x).sum::<f64>());
+            aircraft.attitude = q.map(|x| x / norm);
+            // A cable leaving a point near the nozzle, bending down and back, with
+            // a random offset so that some cases cross the plume.
+            let rotation = solver_core::scalar::rotation_matrix(aircraft.attitude);
+            let start = aircraft.position + rotation * lit3([-8.0, 0.0, 1.7 * uniform()]);
+            let droop = 0.3 * (uniform() - 0.2);
+            let side = 0.1 * (uniform() - 0.5);
+            let joints: Vec<Vec3<f64>> = (0..=300)
+                .map(|j| {
+                    let a = j as f64 / 3.0;
+                    start + rotation * lit3([-a, side * a, droop * a + 1e-3 * a * a])
+                })
+                .collect();
+            let full = cable_plume_clearance(&plume, &aircraft, joints.iter().copied());
+            // Half the longest segment bounds the distance between consecutive
+            // points (joints and midpoints).
+            let longest = joints
+                .windows(2)
+                .map(|w| (w[1] - w[0]).norm())
+                .fold(0.0, f64::max);
+            let spacing = 0.5 * longest * (1.0 + 1e-9);
+            let pruned =
+                cable_plume_clearance_pruned(&plume, &aircraft, joints.iter().copied(), spacing);
+            assert_eq!(full.0.to_bits(), pruned.0.to_bits(), "case {case}");
+            assert_eq!(full.1, pruned.1, "case {case}");
+            skipped_some |= full.0 > 1.0;
+        }
+        assert!(
+            skipped_some,
+            "no case left the plume: the test would not exercise the pruning"
+        );
+    }
 
     fn capsule_clearance<T: Real>(tol: f64) {
         let e = Envelope::<T>::new([7.0, 0.0, 0.0], [-7.5, 0.0, 0.0], 1.6);

@@ -73,9 +73,9 @@ fn main() {
             .fold(0.0, f64::max);
         let tow10 = tr.samples.iter().map(|s| s.tension_tow).fold(0.0, f64::max);
         eprintln!(
-            "reference {name} {rate:?}: {} segments dt {} t_end {}: peak {:.2} N (every step {:.2}), tow peak {tow10:.2}, stopped {:?} ({:.1} s)",
+            "reference {name} {rate:?}: {} segments, {} steps, t_end {}: peak {:.2} N (every step {:.2}), tow peak {tow10:.2}, stopped {:?} ({:.1} s)",
             plan.layout.count(),
-            plan.dt,
+            plan.timeline.rule().name(),
             plan.t_end,
             peak10,
             tr.max_tension_connection_n,

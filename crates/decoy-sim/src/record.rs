@@ -11,7 +11,7 @@ use solver_core::{AircraftState, Model, Outputs, SolveError};
 use crate::error::SimError;
 use crate::format::{Cell, csv_row, format_time};
 use crate::geometry::{
-    Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance, envelope_from_config,
+    Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance_pruned, envelope_from_config,
     plume_from_config,
 };
 use crate::management::{ManagementSample, ManagementTrack};
@@ -150,6 +150,10 @@ pub(crate) struct Probe {
     lateral_sign: f64,
     /// Distance along the cable of joint j, m.
     pub joint_along: Vec<f64>,
+    /// An upper bound of the distance between consecutive points of the plume
+    /// clearance's search (joints and segment midpoints): half the longest
+    /// segment, plus 1e-9 of it for the rounding of the joint positions, m.
+    pub point_spacing: f64,
 }
 
 impl Probe {
@@ -166,10 +170,13 @@ impl Probe {
         let to_body =
             |p: &Vector3<f64>| rotation.inverse_transform_vector(&(p - aircraft.position));
         // Joints and segment midpoints, in the order decoy-link numbers them.
-        let (exhaust_clearance, at) = cable_plume_clearance(
+        // Every step is measured: the pruned search (the same result, bit for bit)
+        // evaluates only the points near enough to the plume to matter.
+        let (exhaust_clearance, at) = cable_plume_clearance_pruned(
             &self.plume,
             aircraft,
             (0..=n).map(|j| out.joint_position(j)),
+            self.point_spacing,
         );
         let exhaust_along = if at % 2 == 0 {
             self.joint_along[at / 2]
@@ -613,11 +620,13 @@ pub(crate) fn probe<const N: usize>(
     for l in model.lengths() {
         joint_along.push(joint_along[joint_along.len() - 1] + l);
     }
+    let longest = model.lengths().iter().fold(0.0f64, |a, &l| a.max(l));
     Probe {
         plume: plume_from_config(&config.aircraft),
         envelope: envelope_from_config(&config.aircraft),
         lateral_sign,
         joint_along,
+        point_spacing: 0.5 * longest * (1.0 + 1e-9),
     }
 }
 

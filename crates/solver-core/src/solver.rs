@@ -414,14 +414,17 @@ impl<T: Real, const N: usize> Solver<T, N> {
     /// caller stepping to the times of its own grid keeps an exact clock). The
     /// host's adaptive runs step this way (`decoy_sim`'s step rule). The first stage
     /// reuses the evaluation [`Solver::outputs`] left at this state, as
-    /// [`Solver::step`]'s does; the stages keep the forces [`Solver::step`] keeps.
+    /// [`Solver::step`]'s does; the later stages keep only T_0 and T_N.
     /// On any error the state is left exactly as it was.
     pub fn step_to<P: FlightPath<T> + ?Sized>(
         &mut self,
         path: &P,
         t_end: f64,
     ) -> Result<(), SolveError> {
-        let mut towed: Towed<'_, T, N, P, true> = Towed {
+        // The stages keep only T_0 and T_N (the last stage's are the error
+        // estimate's, [`Solver::step_to_checked`]): the same derivatives, bit for
+        // bit, without storing and probing every joint's force three times a step.
+        let mut towed: Towed<'_, T, N, P, false> = Towed {
             model: &self.model,
             path,
             method: self.method,
