@@ -7,7 +7,8 @@
 //!   no_std cross build, each board's firmware build and lints), failing fast;
 //!   `test --list` prints the stages and their commands without running them.
 //! - `run`: the main job on the built-in reference system (see [`main_job`]).
-//! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` (see
+//! - `bench-report`: run the benchmarks and write `docs/benchmarks.md` and
+//!   `docs/host-steps.md` (see
 //!   [`bench_report`]), then the bridge's soak.
 //! - `soak`: the bridge's soak alone (see [`soak`]): `docs/soak.md`, `docs/soak.json`.
 //! - `firmware build|clippy|run --board NAME`: a board's firmware as
@@ -625,7 +626,9 @@ fn soak(root: &Path, duration: &str) -> Result<()> {
 /// `gungraun-runner` of the library's version), the criterion and gungraun
 /// benchmarks, the optional Pinocchio reference (when `import pinocchio` works),
 /// then the `bench_report` binary, which runs the firmware under QEMU for several
-/// segment counts and writes `docs/benchmarks.md` and the scaling figure.
+/// segment counts and writes `docs/benchmarks.md` and the scaling figure, and the
+/// `host_steps` binary, which writes `docs/host-steps.md` (the host's adaptive
+/// steps against fixed ones).
 fn bench_report(root: &Path) -> Result<()> {
     setup::setup(root, Scope::Full)?;
     setup::gungraun_runner()?;
@@ -688,6 +691,13 @@ fn bench_report(root: &Path) -> Result<()> {
             "--pinocchio",
             PINOCCHIO_RESULT,
         ],
+    ))?;
+
+    println!();
+    println!("==> host steps, adaptive against fixed (docs/host-steps.md)");
+    process::run(&mut cargo(
+        root,
+        &["run", "--release", "-p", "benches", "--bin", "host_steps"],
     ))
 }
 

@@ -43,10 +43,10 @@ const COUNT_TOLERANCE: f64 = 1e-9;
 /// ([`solver_core::StepError::end_force`]: the change of the end forces between
 /// the step's last stage and its new state, relative to the connection force).
 /// Chosen against fixed steps of 0.0625 ms on the shipped scenarios and the
-/// pull-up and turn at 0.05, 0.10 and 0.20 rad/s (docs/outputs.md, "Time
-/// steps", has the table): the peak connection tension and the pitch amplitude
-/// within 0.07 % and the peak's time within 3 ms. Off that list the table also
-/// shows where it is not within 0.1 % (0.30 rad/s, a turn at 14 km).
+/// pull-up and turn at 0.05, 0.10 and 0.20 rad/s: the peak connection tension
+/// and the pitch amplitude within 0.07 % and the peak's time within 3 ms
+/// (docs/host-steps.md, which also shows the cases off that list where it is
+/// not within 0.1 %: a 0.30 rad/s pull-up and turn, a turn at 14 km).
 pub const END_FORCE_TOLERANCE: f64 = 5e-5;
 /// Safety factor of the step from the error estimate.
 const SAFETY: f64 = 0.9;

@@ -141,7 +141,6 @@ pub(super) fn collect<F: FnMut(f64)>(
         let options = RunOptions {
             segments: Some(embedded_n),
             grading: Some(embedded_ratio),
-            dt: Some(config.solver.time_step_host),
             rate: Some(rate),
             plots: false,
             ..RunOptions::default()

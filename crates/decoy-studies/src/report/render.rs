@@ -26,7 +26,6 @@ pub(super) fn render(
     let mut s = String::new();
     let host = describe_layout(&data.host);
     let embedded = describe_layout(&data.embedded);
-    let dt_ms = trim_number(config.solver.time_step_host * 1000.0, 6);
     let _ = writeln!(s, "# Reproduction of the paper's results\n");
     let _ = writeln!(
         s,
@@ -45,7 +44,7 @@ pub(super) fn render(
     );
     let _ = writeln!(
         s,
-        "Models: the host model, {host} (the paper's converged discretisation), RK4 at {dt_ms} ms, for the steady trims, the acceleration and the turns; the embedded model, {embedded}, for the pull-up rates and the towing-point and CG runs (section 6 shows it reproduces the host model). Positions are relative to the aircraft reference point in the flight-path frame (`docs/outputs.md`): *below* the flight path, *outward* from the turn.\n"
+        "Models: the host model, {host} (the paper's converged discretisation), RK4 with the adaptive step rule (`docs/outputs.md`, \"Time steps\"), for the steady trims, the acceleration and the turns; the embedded model, {embedded}, for the pull-up rates and the towing-point and CG runs (section 6 shows it reproduces the host model). Positions are relative to the aircraft reference point in the flight-path frame (`docs/outputs.md`): *below* the flight path, *outward* from the turn.\n"
     );
 
     installation(&mut s, config, data);
@@ -216,7 +215,7 @@ pub(super) fn render(
     let _ = writeln!(s, "## 3. Pull-up (Figs. 28-29)\n");
     let _ = writeln!(
         s,
-        "Mach 0.6 level at 9 km to t = 2 s, then the flight path rotates up at the rate for 5 s, then the climb is held (`decoy simulate --scenario pull-up --rate W`), {embedded}, dt {dt_ms} ms (the 300-segment model needs 0.25 ms when the cable snaps taut after the rotation, `docs/outputs.md`).\n"
+        "Mach 0.6 level at 9 km to t = 2 s, then the flight path rotates up at the rate for 5 s, then the climb is held (`decoy simulate --scenario pull-up --rate W`), {embedded}, adaptive steps (short where the cable snaps taut after the rotation, `docs/outputs.md`).\n"
     );
     let _ = writeln!(
         s,
