@@ -172,7 +172,7 @@ struct SimulateArgs {
     /// Grade the segments geometrically by this length ratio, short at the decoy (1 = uniform).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     grading: Option<f64>,
-    /// RK4 time step, s (default: the scenario's, else the configuration's solver.time_step_host).
+    /// A fixed RK4 time step, s (default: the scenario's `dt_s`, else the adaptive step rule of docs/outputs.md, "Time steps").
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     dt: Option<f64>,
     /// Simulated time, s.

@@ -10,7 +10,7 @@ use decoy_sim::trim::host_layout;
 use decoy_studies::report::{ReportOptions, Verdict, write_report};
 use decoy_studies::study::{StudySpec, discretisation_study, write_study};
 use decoy_studies::sweep::{
-    PullUpSpec, PullUpSweep, StaticMarginSpec, StaticMarginSweep, pull_up_sweep,
+    PullUpSpec, PullUpSweep, StaticMarginSpec, StaticMarginSweep, describe_steps, pull_up_sweep,
     static_margin_sweep, write_pull_up_sweep, write_static_margin_sweep,
 };
 use decoy_studies::sweep::{
@@ -88,7 +88,7 @@ pub struct SweepArgs {
     /// Segment length ratio, short at the decoy (1 = uniform; default as --segments).
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     grading: Option<f64>,
-    /// RK4 step of the settling runs, s (tow-point, cg; default solver.time_step_host).
+    /// A fixed RK4 step of the runs, s (tow-point, cg, pull-up-rate, static-margin; default: the adaptive step rule, docs/outputs.md "Time steps").
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     dt: Option<f64>,
     /// Simulated time of each settling run, s (tow-point, cg; default 10).
@@ -252,7 +252,7 @@ pub fn sweep_command(
                 spec.grading = 1.0;
             }
             spec.grading = args.grading.unwrap_or(spec.grading);
-            spec.dt = args.dt.unwrap_or(spec.dt);
+            spec.dt = args.dt.or(spec.dt);
             spec.t_end = args.t_end.unwrap_or(spec.t_end);
             spec.tolerance_radps = args.tolerance.unwrap_or(spec.tolerance_radps);
             spec.margin_m = args.margin.unwrap_or(spec.margin_m);
@@ -277,7 +277,7 @@ pub fn sweep_command(
                 settling.grading = 1.0;
             }
             settling.grading = args.grading.unwrap_or(settling.grading);
-            settling.dt = args.dt.unwrap_or(settling.dt);
+            settling.dt = args.dt.or(settling.dt);
             settling.t_end = args.t_end.unwrap_or(settling.t_end);
             settling.pitch_offset_deg = args.pitch_offset.unwrap_or(settling.pitch_offset_deg);
             settling.threshold_deg = args.threshold.unwrap_or(settling.threshold_deg);
@@ -307,7 +307,7 @@ pub fn sweep_command(
                 spec.grading = 1.0;
             }
             spec.grading = args.grading.unwrap_or(spec.grading);
-            spec.dt = args.dt.unwrap_or(spec.dt);
+            spec.dt = args.dt.or(spec.dt);
             spec.t_end = args.t_end.unwrap_or(spec.t_end);
             spec.pitch_offset_deg = args.pitch_offset.unwrap_or(spec.pitch_offset_deg);
             spec.threshold_deg = args.threshold.unwrap_or(spec.threshold_deg);
@@ -411,8 +411,12 @@ fn settling_text(
     );
     let _ = writeln!(
         s,
-        "  from trim (the straight cable where none) with the decoy pitched {:+} deg; {} segments graded {}, dt {} s, {} s;",
-        spec.pitch_offset_deg, spec.segments, spec.grading, spec.dt, spec.t_end
+        "  from trim (the straight cable where none) with the decoy pitched {:+} deg; {} segments graded {}, {}, {} s;",
+        spec.pitch_offset_deg,
+        spec.segments,
+        spec.grading,
+        describe_steps(spec.dt),
+        spec.t_end
     );
     let _ = writeln!(
         s,
@@ -473,8 +477,11 @@ fn pull_up_text(
     );
     let _ = writeln!(
         s,
-        "  level to t = 2 s, the flight path rotating up for 5 s, then the climb held; {} segments graded {}, dt {} s, {} s;",
-        spec.segments, spec.grading, spec.dt, spec.t_end
+        "  level to t = 2 s, the flight path rotating up for 5 s, then the climb held; {} segments graded {}, {}, {} s;",
+        spec.segments,
+        spec.grading,
+        describe_steps(spec.dt),
+        spec.t_end
     );
     let _ = writeln!(
         s,
@@ -535,11 +542,11 @@ fn static_margin_text(
     );
     let _ = writeln!(
         s,
-        "  the band of towing points that settle from a {:+} deg pitch ({} segments graded {}, dt {} s, {} s; settled: half the peak-to-peak pitch in the last {} s at most {} deg)",
+        "  the band of towing points that settle from a {:+} deg pitch ({} segments graded {}, {}, {} s; settled: half the peak-to-peak pitch in the last {} s at most {} deg)",
         spec.pitch_offset_deg,
         spec.segments,
         spec.grading,
-        spec.dt,
+        describe_steps(spec.dt),
         spec.t_end,
         spec.window_s,
         spec.threshold_deg

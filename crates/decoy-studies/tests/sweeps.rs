@@ -193,7 +193,10 @@ fn settling_errors_name_the_source_of_the_time_step() {
     let config = config();
     let spec = SettlingSpec::paper(StationVariable::Cg, &config);
     assert!(spec.plan(&config).is_ok());
-    let flagged = SettlingSpec { dt: 30.0, ..spec };
+    let flagged = SettlingSpec {
+        dt: Some(30.0),
+        ..spec
+    };
     let e = flagged.plan(&config).unwrap_err();
     let decoy_sim::SimError::InvalidInput { origin, field, .. } = &e else {
         panic!("expected an invalid input, got {e:?}");

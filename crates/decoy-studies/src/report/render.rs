@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use decoy_config::SystemConfig;
 
-use crate::sweep::{SteadyVariable, trim_number};
+use crate::sweep::{SteadyVariable, describe_steps, trim_number};
 use decoy_sim::format::describe_layout;
 
 use super::data::{
@@ -303,11 +303,11 @@ pub(super) fn render(
     let spec = &data.tow_point.spec;
     let _ = writeln!(
         s,
-        "For each station: the trim of steady level flight at Mach {} and {} km (decoy pitch and connection tension, the paper's Figs. 23-24), then a {} s run with the {embedded} (dt {} ms) started from that trim with the decoy pitched {} deg nose-up about its towing point and no rates (from the straight cable, equally pitched, where no trim exists). The decoy *settles* when half the peak-to-peak pitch over the last {} s is at most {} deg; the settling time is when the pitch last leaves a ±{} deg band about its final value (`decoy sweep tow-point`, `decoy sweep cg`).\n",
+        "For each station: the trim of steady level flight at Mach {} and {} km (decoy pitch and connection tension, the paper's Figs. 23-24), then a {} s run with the {embedded} ({}) started from that trim with the decoy pitched {} deg nose-up about its towing point and no rates (from the straight cable, equally pitched, where no trim exists). The decoy *settles* when half the peak-to-peak pitch over the last {} s is at most {} deg; the settling time is when the pitch last leaves a ±{} deg band about its final value (`decoy sweep tow-point`, `decoy sweep cg`).\n",
         trim_number(spec.mach, 2),
         trim_number(spec.altitude_m / 1000.0, 1),
         trim_number(spec.t_end, 2),
-        trim_number(spec.dt * 1000.0, 6),
+        describe_steps(spec.dt),
         trim_number(spec.pitch_offset_deg, 2),
         trim_number(spec.window_s, 2),
         trim_number(spec.threshold_deg, 3),
@@ -504,7 +504,7 @@ fn pull_up_limit(s: &mut String, data: &Data) {
     let _ = writeln!(s, "### 3.1 The rate limit (`decoy sweep pull-up-rate`)\n");
     let _ = writeln!(
         s,
-        "The same pull-up at every rate from {} to {} rad/s by {}, then a bisection between the fastest rate that stays clear and the next, which does not, down to {} rad/s; *clear* means the smallest cable-plume clearance over the whole run (every step, every joint and segment midpoint, {} s) is at least {} m. {}, dt {} ms.\n",
+        "The same pull-up at every rate from {} to {} rad/s by {}, then a bisection between the fastest rate that stays clear and the next, which does not, down to {} rad/s; *clear* means the smallest cable-plume clearance over the whole run (every step, every joint and segment midpoint, {} s) is at least {} m. {}, {}.\n",
         trim_number(spec.rates.first().copied().unwrap_or(f64::NAN), 4),
         trim_number(spec.rates.last().copied().unwrap_or(f64::NAN), 4),
         trim_number(spec.rates.get(1).map_or(0.0, |r| r - spec.rates[0]), 4),
@@ -512,7 +512,7 @@ fn pull_up_limit(s: &mut String, data: &Data) {
         trim_number(spec.t_end, 2),
         trim_number(spec.margin_m, 3),
         describe_layout(&data.embedded),
-        trim_number(spec.dt * 1000.0, 6)
+        describe_steps(spec.dt)
     );
     let _ = writeln!(
         s,

@@ -183,6 +183,15 @@ pub(crate) fn evenly<T: Copy>(items: &[T], most: usize) -> Vec<T> {
     indices.into_iter().map(|i| items[i]).collect()
 }
 
+/// The time steps of a study's runs in words: `fixed steps of 1 ms` or
+/// `adaptive steps` (the default rule, docs/outputs.md "Time steps").
+pub fn describe_steps(dt: Option<f64>) -> String {
+    match dt {
+        Some(dt) => format!("fixed steps of {} ms", trim_number(dt * 1000.0, 6)),
+        None => "adaptive steps".to_owned(),
+    }
+}
+
 /// `v` with at most `decimals` decimals, trailing zeros dropped (0.50 -> 0.5).
 pub(crate) fn trim_number(v: f64, decimals: usize) -> String {
     let s = format!("{v:.decimals$}");

@@ -45,8 +45,9 @@ pub struct PullUpSpec {
     pub segments: usize,
     /// Segment length ratio (1 = uniform).
     pub grading: f64,
-    /// RK4 time step, s.
-    pub dt: f64,
+    /// A fixed RK4 time step, s; `None`: the adaptive step rule
+    /// (docs/outputs.md, "Time steps").
+    pub dt: Option<f64>,
     /// Simulated time of each run, s.
     pub t_end: f64,
     /// Bisection stops when the bracket is at most this wide, rad/s.
@@ -66,7 +67,7 @@ impl PullUpSpec {
             altitude_m: 9000.0,
             segments: config.solver.segments_embedded,
             grading: config.solver.grading_ratio_embedded,
-            dt: config.solver.time_step_host,
+            dt: None,
             t_end: 20.0,
             tolerance_radps: 0.001,
             margin_m: 0.0,
@@ -112,10 +113,9 @@ impl PullUpSpec {
         Ok(())
     }
 
-    /// The run plan of one rate (errors name the flags, or the configuration's
-    /// `solver.time_step_host` when the time step is that one).
+    /// The run plan of one rate (errors name the flags).
     pub fn plan(&self, config: &SystemConfig, rate: f64) -> Result<RunPlan, SimError> {
-        let dt = (self.dt != config.solver.time_step_host).then_some(self.dt);
+        let dt = self.dt;
         let options = RunOptions {
             segments: Some(self.segments),
             grading: Some(self.grading),
