@@ -344,7 +344,9 @@ def test_python_runs_while_a_thread_is_inside_simulate():
 
     def run():
         call["start"] = time.monotonic()
-        call["sim"] = decoy.simulate("pull-up", t_end=2.5, segments=200)
+        # Fixed 0.25 ms steps: long enough to see in any build (the adaptive
+        # rule flies these 2.5 s in a few hundredths of a second in release).
+        call["sim"] = decoy.simulate("pull-up", t_end=2.5, segments=200, dt=0.00025)
         call["end"] = time.monotonic()
         done.set()
 
