@@ -390,6 +390,61 @@ fn decimate(points: &[(f64, f64)], x: Span, columns: u32) -> Cow<'_, [(f64, f64)
     Cow::Owned(out)
 }
 
+/// The cosine of the turn, in pixels, past which a line is split at a vertex
+/// ([`line_pieces`]): 90 degrees.
+const REVERSAL_COSINE: f64 = 0.0;
+/// The least distance, pixels along either axis, between the points of a
+/// drawn line ([`line_pieces`]).
+const MIN_POINT_PX: f64 = 2.0;
+
+/// `points` as the pieces a line is drawn in. A thick line's joins are mitred
+/// by the bitmap backend (plotters-backend's `polygonize`) on whole pixels,
+/// and the inner side of a join is not limited: where the line turns back on
+/// itself (after the rounding: a margin jumping from one side's value to the
+/// other's and back between samples half a pixel apart did) it drew a spike
+/// far past the vertex, out of its panel. So points less than
+/// [`MIN_POINT_PX`] from the last one kept along both axes are dropped (which
+/// bounds the rounding's turn of a segment to 20 degrees; the last point of the
+/// line is always kept, in place of the one before it if that is that near),
+/// and the line is split, the vertex in both pieces, wherever it turns by more
+/// than 90 degrees: pieces have no join there, and a join turns by at most
+/// 130 degrees after the rounding, its inner vertex within 2.5 half widths.
+fn line_pieces(points: &[(f64, f64)], lay: &Layout) -> Vec<Vec<(f64, f64)>> {
+    let sx = f64::from(lay.plot_px.0.max(1)) / (lay.x.1 - lay.x.0);
+    let sy = f64::from(lay.plot_px.1.max(1)) / (lay.y.1 - lay.y.0);
+    let px = |p: (f64, f64)| (p.0 * sx, p.1 * sy);
+    let near = |a: (f64, f64), b: (f64, f64)| {
+        let (a, b) = (px(a), px(b));
+        (a.0 - b.0).abs() < MIN_POINT_PX && (a.1 - b.1).abs() < MIN_POINT_PX
+    };
+    let mut kept: Vec<(f64, f64)> = Vec::with_capacity(points.len());
+    for (i, &p) in points.iter().enumerate() {
+        match kept.last() {
+            Some(&last) if near(last, p) => {
+                if i + 1 == points.len() && kept.len() > 1 {
+                    kept.pop();
+                    kept.push(p);
+                }
+            }
+            _ => kept.push(p),
+        }
+    }
+    let mut pieces = Vec::new();
+    let mut start = 0;
+    for i in 1..kept.len().saturating_sub(1) {
+        let (a, b, c) = (px(kept[i - 1]), px(kept[i]), px(kept[i + 1]));
+        let u = (b.0 - a.0, b.1 - a.1);
+        let v = (c.0 - b.0, c.1 - b.1);
+        let norms = (u.0 * u.0 + u.1 * u.1).sqrt() * (v.0 * v.0 + v.1 * v.1).sqrt();
+        if norms > 0.0 && (u.0 * v.0 + u.1 * v.1) / norms < REVERSAL_COSINE {
+            pieces.push(kept[start..=i].to_vec());
+            start = i;
+        }
+    }
+    pieces.push(kept[start..].to_vec());
+    pieces
+}
+
 // ---------------------------------------------------------------------------------------
 // Tick labels
 
@@ -769,9 +824,11 @@ fn draw_panel<DB: DrawingBackend>(
                 drawn.push(Cow::Borrowed(run.as_slice()));
             } else {
                 let points = decimate(run, lay.x, lay.plot_px.0);
-                chart
-                    .draw_series(LineSeries::new(points.iter().copied(), line))
-                    .map_err(draw_err)?;
+                for piece in line_pieces(&points, lay) {
+                    chart
+                        .draw_series(LineSeries::new(piece, line))
+                        .map_err(draw_err)?;
+                }
                 drawn.push(points);
             }
         }
@@ -878,6 +935,54 @@ mod tests {
         let (x, y) = equalise((0.0, 1.0), (0.0, 100.0), (1000, 500));
         assert_eq!(y, (0.0, 100.0));
         assert!(((x.1 - x.0) - 200.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn lines_split_where_they_turn_back_and_drop_subpixel_steps() {
+        let lay = Layout {
+            x: (0.0, 10.0),
+            y: (0.0, 1000.0),
+            x_ticks: 5,
+            y_ticks: 5,
+            x_format: TickFormat::new(&[0.0, 2.0], (0.0, 10.0), false),
+            y_format: TickFormat::new(&[0.0, 200.0], (0.0, 1000.0), false),
+            plot_px: (1000, 200),
+            y_area_needed: 0,
+        };
+        // Down from 1000 to 12 and straight back up between samples 0.01 s
+        // (a pixel) apart: split at the bottom vertex, which both pieces keep
+        // (the turn at the top is less than a right angle).
+        let spike = [(1.0, 1000.0), (1.01, 12.0), (1.02, 1000.0), (2.0, 1000.0)];
+        assert_eq!(
+            line_pieces(&spike, &lay),
+            vec![spike[..2].to_vec(), spike[1..].to_vec()]
+        );
+        // Points within a pixel of the last one kept go; the line's last
+        // point stays.
+        let steps = [
+            (1.0, 500.0),
+            (1.004, 501.0),
+            (1.008, 502.0),
+            (3.0, 500.0),
+            (3.001, 500.0),
+        ];
+        assert_eq!(
+            line_pieces(&steps, &lay),
+            vec![vec![(1.0, 500.0), (3.001, 500.0)]]
+        );
+        // A smooth curve and a right angle are one piece, every point kept.
+        let smooth: Vec<(f64, f64)> = (0..100)
+            .map(|i| {
+                (
+                    f64::from(i) * 0.1,
+                    500.0 + 400.0 * (f64::from(i) * 0.1).sin(),
+                )
+            })
+            .collect();
+        assert_eq!(line_pieces(&smooth, &lay), vec![smooth.clone()]);
+        let corner = [(0.0, 0.0), (5.0, 0.0), (5.0, 500.0)];
+        assert_eq!(line_pieces(&corner, &lay), vec![corner.to_vec()]);
+        assert_eq!(line_pieces(&spike[..1], &lay), vec![spike[..1].to_vec()]);
     }
 
     #[test]

@@ -7,7 +7,7 @@ use decoy_link::MonitorLevel;
 use decoy_plots::{
     Aspect, Plot, PlotError, Series, write_plot, write_stacked, write_stacked_shaded,
 };
-use decoy_schema::Requirement;
+use decoy_schema::{PerRequirement, Requirement};
 
 use crate::geometry::{Envelope, ExhaustPlume, envelope_from_config, plume_from_config};
 
@@ -172,18 +172,20 @@ pub(crate) fn write_all(
         write_plot(&profile, &dir.join("tension-profile")),
     )?;
 
-    files.extend(write_management_plot(name, samples, dir)?);
+    files.extend(write_management_plot(name, samples, config, dir)?);
     Ok(files)
 }
 
 /// Draws the management timeline (`management.png/.svg`, [`management_panels`])
-/// of `samples` into `dir`; returns the files written.
+/// of `samples`, against the thresholds of `config`, into `dir`; returns the
+/// files written.
 pub fn write_management_plot(
     name: &str,
     samples: &[Sample],
+    config: &SystemConfig,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, SimError> {
-    let (panels, shaded) = management_panels(name, samples);
+    let (panels, shaded) = management_panels(name, samples, config);
     write_stacked_shaded(&panels, &shaded, &dir.join("management"))
         .map(Vec::from)
         .map_err(|e| SimError::Plot {
@@ -192,33 +194,80 @@ pub fn write_management_plot(
         })
 }
 
-/// The management timeline: per requirement a panel with its level (0 normal,
-/// 1 caution, 2 warning, 3 violated) over time, the look-ahead's advisories
-/// marked as a line at 3.5 while they stand, and the violations shaded.
-pub fn management_panels(name: &str, samples: &[Sample]) -> (Vec<Plot>, Vec<Vec<(f64, f64)>>) {
+/// The level thresholds of each requirement's margin in its file unit
+/// ([`Requirement::file_unit`]), labelled (`caution 3 m`): caution and warning,
+/// and for the tension both its sides (over-tension and slack), whose margins
+/// share the column. None when `config` gives no management configuration.
+pub fn margin_bands(config: &SystemConfig) -> Option<PerRequirement<Vec<(String, f64)>>> {
+    let management = config.params().ok()?.management();
+    Some(PerRequirement::from_fn(|requirement| {
+        let unit = requirement.file_unit();
+        let pair = |side: &str, t: &decoy_controller::monitor::LevelThresholds<f64>| {
+            let caution = requirement.to_file_unit(t.caution);
+            let warning = requirement.to_file_unit(t.warning);
+            [
+                (format!("{side}caution {caution} {unit}"), caution),
+                (format!("{side}warning {warning} {unit}"), warning),
+            ]
+        };
+        match requirement {
+            Requirement::Tension => {
+                let mut bands = pair("over-tension ", &management.thresholds[requirement]).to_vec();
+                bands.extend(pair("slack ", &management.slack_thresholds));
+                bands
+            }
+            _ => pair("", &management.thresholds[requirement]).to_vec(),
+        }
+    }))
+}
+
+/// The management timeline: per requirement a panel with its margin (in the
+/// file's unit, negative: violated) over time against its caution and warning
+/// thresholds ([`margin_bands`], horizontal lines) and zero, the margin drawn
+/// again where the look-ahead's advisory stands (continuing the manoeuvre
+/// violates the requirement), and the violations shaded.
+pub fn management_panels(
+    name: &str,
+    samples: &[Sample],
+    config: &SystemConfig,
+) -> (Vec<Plot>, Vec<Vec<(f64, f64)>>) {
+    let bands = margin_bands(config);
+    let span = match (samples.first(), samples.last()) {
+        (Some(a), Some(b)) => vec![a.t, b.t],
+        _ => Vec::new(),
+    };
+    let level_line = |label: String, value: f64| Series {
+        label,
+        x: span.clone(),
+        y: vec![value; span.len()],
+    };
     let mut panels = Vec::new();
     let mut shaded = Vec::new();
     for requirement in Requirement::ALL {
-        let level = series("level", samples, |s| {
-            f64::from(s.management.levels[requirement])
-        });
+        let margin = series("margin", samples, |s| s.management.margins[requirement]);
         let advisory = series("advisory (look-ahead: continuing violates)", samples, |s| {
             if s.management.advisories & requirement.bit() != 0 {
-                3.5
+                s.management.margins[requirement]
             } else {
                 f64::NAN
             }
         });
-        let panel = plot(
-            format!(
-                "{name}: {} (0 normal, 1 caution, 2 warning, 3 violated)",
-                requirement.name()
-            ),
+        let mut lines = vec![margin, advisory];
+        if let Some(bands) = &bands {
+            lines.extend(
+                bands[requirement]
+                    .iter()
+                    .map(|(label, value)| level_line(label.clone(), *value)),
+            );
+        }
+        lines.push(level_line("violated below 0".to_owned(), 0.0));
+        let unit = requirement.file_unit();
+        panels.push(plot(
+            format!("{name}: {} margin", requirement.name()),
             "t [s]",
-            "level",
-            vec![level, advisory],
-        );
-        panels.push(panel);
+            &format!("margin [{unit}]"),
+            lines,
+        ));
         let violated = MonitorLevel::Violated.index();
         let mut intervals = Vec::new();
         let mut start: Option<f64> = None;

@@ -474,8 +474,13 @@ pub fn run<D: Device>(
                 .map_err(StreamError::Output)?,
         );
         files.extend(
-            write_management_plot(&titles.management, &device_samples, &out_dir)
-                .map_err(|e| StreamError::Output(e.to_string()))?,
+            write_management_plot(
+                &titles.management,
+                &device_samples,
+                device.config(),
+                &out_dir,
+            )
+            .map_err(|e| StreamError::Output(e.to_string()))?,
         );
     }
     match flown.stop {
