@@ -348,26 +348,43 @@ pub fn cable_plume_clearance_pruned(
     joints: impl IntoIterator<Item = Vec3<f64>>,
     spacing: f64,
 ) -> (f64, usize) {
+    cable_plume_clearance_below(plume, aircraft, joints, spacing, f64::INFINITY)
+        .unwrap_or((f64::INFINITY, 0))
+}
+
+/// [`cable_plume_clearance_pruned`] when only a clearance below `bound` matters
+/// (the host's steps between output rows, whose clearance only lowers the
+/// smallest of the run): `Some` of the same result, bit for bit, if it is
+/// below `bound`, else `None`. The search starts from `bound` as the smallest
+/// clearance so far, so far more points are skipped.
+pub fn cable_plume_clearance_below(
+    plume: &ExhaustPlume<f64>,
+    aircraft: &AircraftState<f64>,
+    joints: impl IntoIterator<Item = Vec3<f64>>,
+    spacing: f64,
+    bound: f64,
+) -> Option<(f64, usize)> {
     let placed = PlacedPlume::new(plume, aircraft);
-    let (mut best, mut best_index) = (f64::INFINITY, 0);
+    let (mut best, mut best_index) = (bound, None);
     // The index of the next point to evaluate.
     let mut next = 0usize;
-    let mut consider = |p: &Vec3<f64>, index: usize, best: &mut f64, best_index: &mut usize| {
-        if index < next {
-            return;
-        }
-        let c = placed.clearance(p);
-        if c < *best {
-            (*best, *best_index) = (c, index);
-        }
-        let room = (c - *best - PRUNE_MARGIN_M) / spacing;
-        // Not a number (an infinite clearance, a zero spacing): no skip.
-        next = if (1.0..1e9).contains(&room) {
-            index + 1 + room as usize
-        } else {
-            index + 1
+    let mut consider =
+        |p: &Vec3<f64>, index: usize, best: &mut f64, best_index: &mut Option<usize>| {
+            if index < next {
+                return;
+            }
+            let c = placed.clearance(p);
+            if c < *best {
+                (*best, *best_index) = (c, Some(index));
+            }
+            let room = (c - *best - PRUNE_MARGIN_M) / spacing;
+            // Not a number (an infinite clearance, a zero spacing): no skip.
+            next = if (1.0..1e9).contains(&room) {
+                index + 1 + room as usize
+            } else {
+                index + 1
+            };
         };
-    };
     let mut previous: Option<Vec3<f64>> = None;
     for (j, p) in joints.into_iter().enumerate() {
         if let Some(q) = previous {
@@ -376,7 +393,7 @@ pub fn cable_plume_clearance_pruned(
         consider(&p, 2 * j, &mut best, &mut best_index);
         previous = Some(p);
     }
-    (best, best_index)
+    best_index.map(|index| (best, index))
 }
 
 /// The margin, m, by which [`cable_plume_clearance_pruned`]'s bound must exceed
@@ -462,7 +479,8 @@ mod tests {
 
     /// The pruned search gives the full search's clearance and index, bit for
     /// bit, on cables near, through and far from the plume of a manoeuvring
-    /// aircraft.
+    /// aircraft, and so does the search below a bound when the clearance is
+    /// below it (else it finds none).
     #[test]
     fn pruned_plume_clearance_is_the_full_one() {
         let plume = plume::<f64>();
@@ -506,6 +524,28 @@ mod tests {
             assert_eq!(full.0.to_bits(), pruned.0.to_bits(), "case {case}");
             assert_eq!(full.1, pruned.1, "case {case}");
             skipped_some |= full.0 > 1.0;
+            // Below a bound: the same result when it is below, else None, for
+            // bounds above, below and at the clearance.
+            for bound in [
+                full.0 + 2.0 * uniform(),
+                full.0 - 0.5 * uniform(),
+                full.0,
+                f64::INFINITY,
+            ] {
+                let below = cable_plume_clearance_below(
+                    &plume,
+                    &aircraft,
+                    joints.iter().copied(),
+                    spacing,
+                    bound,
+                );
+                if full.0 < bound {
+                    let (c, index) = below.expect("a clearance below the bound");
+                    assert_eq!((c.to_bits(), index), (full.0.to_bits(), full.1), "case {case}");
+                } else {
+                    assert_eq!(below, None, "case {case}, bound {bound}");
+                }
+            }
         }
         assert!(
             skipped_some,

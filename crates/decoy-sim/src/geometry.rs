@@ -8,7 +8,9 @@
 
 use solver_core::Real;
 
-pub use decoy_controller::geometry::{cable_plume_clearance, cable_plume_clearance_pruned};
+pub use decoy_controller::geometry::{
+    cable_plume_clearance, cable_plume_clearance_below, cable_plume_clearance_pruned,
+};
 
 /// The flight-path frame at one instant: x along the aircraft's velocity, y
 /// horizontal and to the right of it, z = x cross y (downward, perpendicular to

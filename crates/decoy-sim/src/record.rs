@@ -11,7 +11,7 @@ use solver_core::{AircraftState, Model, Outputs, SolveError};
 use crate::error::SimError;
 use crate::format::{Cell, csv_row, format_time};
 use crate::geometry::{
-    Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance_pruned, envelope_from_config,
+    Envelope, ExhaustPlume, FlightPathFrame, cable_plume_clearance_below, envelope_from_config,
     plume_from_config,
 };
 use crate::management::{ManagementSample, ManagementTrack};
@@ -157,31 +157,64 @@ pub(crate) struct Probe {
 }
 
 impl Probe {
-    /// Measures one evaluated state. `previous_yaw` unwraps the yaw angle.
+    /// The cable's smallest clearance to the exhaust plume and where it is (m
+    /// from the connection point), from the joints of a state with the aircraft
+    /// at `aircraft`, if below `bound`. Joints and segment midpoints, in the
+    /// order decoy-link numbers them; the pruned search evaluates only the
+    /// points near enough to the plume to matter (the same result, bit for bit,
+    /// as the controller's search of every point).
+    fn exhaust_below(
+        &self,
+        joints: &[Vector3<f64>],
+        aircraft: &AircraftState<f64>,
+        bound: f64,
+    ) -> Option<(f64, f64)> {
+        let (clearance, at) = cable_plume_clearance_below(
+            &self.plume,
+            aircraft,
+            joints.iter().copied(),
+            self.point_spacing,
+            bound,
+        )?;
+        let along = if at % 2 == 0 {
+            self.joint_along[at / 2]
+        } else {
+            0.5 * (self.joint_along[at / 2] + self.joint_along[at / 2 + 1])
+        };
+        Some((clearance, along))
+    }
+
+    /// The exhaust clearance and where it is, as [`Probe::exhaust_below`] with
+    /// no bound (infinity and the connection point for no clearance at all).
+    fn exhaust(&self, joints: &[Vector3<f64>], aircraft: &AircraftState<f64>) -> (f64, f64) {
+        self.exhaust_below(joints, aircraft, f64::INFINITY)
+            .unwrap_or((f64::INFINITY, self.joint_along[0]))
+    }
+
+    /// Measures one evaluated state, whose joint positions are `joints`.
+    /// `previous_yaw` unwraps the yaw angle. The exhaust clearance is exact
+    /// when `exhaust_bound` is `None`; with `Some(bound)` (a step between output
+    /// rows, whose clearance only lowers the run's smallest) it is exact only if
+    /// below the bound, else it is the bound and its place NaN, and the second
+    /// value is false.
     fn sample<const N: usize>(
         &self,
         out: &Outputs<'_, f64, N>,
+        joints: &[Vector3<f64>],
         aircraft: &AircraftState<f64>,
         previous_yaw: Option<f64>,
-    ) -> Sample {
-        let n = out.segment_count();
+        exhaust_bound: Option<f64>,
+    ) -> (Sample, bool) {
         let frame = FlightPathFrame::of(aircraft);
         let rotation = aircraft.rotation();
         let to_body =
             |p: &Vector3<f64>| rotation.inverse_transform_vector(&(p - aircraft.position));
-        // Joints and segment midpoints, in the order decoy-link numbers them.
-        // Every step is measured: the pruned search (the same result, bit for bit)
-        // evaluates only the points near enough to the plume to matter.
-        let (exhaust_clearance, at) = cable_plume_clearance_pruned(
-            &self.plume,
-            aircraft,
-            (0..=n).map(|j| out.joint_position(j)),
-            self.point_spacing,
-        );
-        let exhaust_along = if at % 2 == 0 {
-            self.joint_along[at / 2]
-        } else {
-            0.5 * (self.joint_along[at / 2] + self.joint_along[at / 2 + 1])
+        let ((exhaust_clearance, exhaust_along), exact) = match exhaust_bound {
+            None => (self.exhaust(joints, aircraft), true),
+            Some(bound) => match self.exhaust_below(joints, aircraft, bound) {
+                Some(found) => (found, true),
+                None => ((bound, f64::NAN), false),
+            },
         };
         let (cg, euler, aoa, decoy_clearance) = match out.decoy() {
             Some(d) => {
@@ -200,7 +233,7 @@ impl Probe {
         if let Some(prev) = previous_yaw {
             yaw += 360.0 * ((prev - yaw) / 360.0).round();
         }
-        Sample {
+        let sample = Sample {
             t: out.time(),
             tension_connection: out.connection_tension(),
             tension_tow: out.tow_tension(),
@@ -213,30 +246,59 @@ impl Probe {
             speed: aircraft.velocity.norm(),
             altitude: aircraft.altitude(),
             management: ManagementSample::default(),
-        }
+        };
+        (sample, exact)
     }
 
-    /// Writes the cable in the flight-path frame, relative to the aircraft
-    /// reference point, into `snapshot` (reusing its storage).
-    fn snapshot_into<const N: usize>(
-        &self,
-        out: &Outputs<'_, f64, N>,
-        aircraft: &AircraftState<f64>,
-        snapshot: &mut Snapshot,
-    ) {
+    /// The snapshot of `raw` (the cable in the flight-path frame, relative to
+    /// the aircraft reference point, with the aircraft at `aircraft`).
+    fn snapshot_of(&self, raw: &RawCable, aircraft: &AircraftState<f64>) -> Snapshot {
         let frame = FlightPathFrame::of(aircraft);
-        snapshot.t = out.time();
-        snapshot.joints.clear();
-        snapshot.joints.extend((0..=out.segment_count()).map(|j| {
-            let c = frame.components(&(out.joint_position(j) - aircraft.position));
-            [
-                self.joint_along[j],
-                -c.x,
-                self.lateral_sign * -c.y + 0.0,
-                c.z,
-                out.tension(j),
-            ]
-        }));
+        Snapshot {
+            t: raw.t,
+            joints: raw
+                .joints
+                .iter()
+                .zip(&raw.tensions)
+                .zip(&self.joint_along)
+                .map(|((p, &tension), &along)| {
+                    let c = frame.components(&(p - aircraft.position));
+                    [
+                        along,
+                        -c.x,
+                        self.lateral_sign * -c.y + 0.0,
+                        c.z,
+                        tension,
+                    ]
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The cable of one evaluated state as the solver gives it (NED joint
+/// positions and joint tensions): what a snapshot and an exact exhaust
+/// clearance are computed from when they are asked for, kept every step.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RawCable {
+    /// The state's time, s.
+    t: f64,
+    /// Joint positions, NED, m (0 = connection point).
+    joints: Vec<Vector3<f64>>,
+    /// Joint tensions, N.
+    tensions: Vec<f64>,
+}
+
+impl RawCable {
+    /// Copies the cable of `out` into `self` (reusing its storage).
+    fn capture<const N: usize>(&mut self, out: &Outputs<'_, f64, N>) {
+        let joints = 0..=out.segment_count();
+        self.t = out.time();
+        self.joints.clear();
+        self.joints
+            .extend(joints.clone().map(|j| out.joint_position(j)));
+        self.tensions.clear();
+        self.tensions.extend(joints.map(|j| out.tension(j)));
     }
 }
 
@@ -405,10 +467,14 @@ pub(crate) struct Recorder<'a> {
     /// The last good sample.
     pub last: Sample,
     /// The cable at the last good state (kept every step, so that a run that
-    /// stops can still end `cable.csv` with it).
-    pub last_cable: Snapshot,
+    /// stops can still end `cable.csv` with it, and its last row have its exact
+    /// exhaust clearance).
+    last_raw: RawCable,
     /// Scratch for the cable of the state being recorded.
-    candidate_cable: Snapshot,
+    candidate_raw: RawCable,
+    /// Whether the last good sample's exhaust clearance is exact (a step
+    /// between rows measures it only below the run's smallest).
+    last_exact: bool,
     /// True once a state has been recorded.
     pub recorded_any: bool,
     pub last_written: bool,
@@ -490,14 +556,9 @@ impl<'a> Recorder<'a> {
             samples: Vec::new(),
             snapshots: Vec::new(),
             last: Sample::default(),
-            last_cable: Snapshot {
-                t: 0.0,
-                joints: Vec::new(),
-            },
-            candidate_cable: Snapshot {
-                t: 0.0,
-                joints: Vec::new(),
-            },
+            last_raw: RawCable::default(),
+            candidate_raw: RawCable::default(),
+            last_exact: true,
             recorded_any: false,
             last_written: false,
             rows_every: intervals(sample_interval, plan.timeline.row_interval()),
@@ -527,9 +588,17 @@ impl<'a> Recorder<'a> {
         let write_row = marks.end || (marks.row && row.is_multiple_of(self.rows_every));
         let take_snapshot = marks.end || (marks.row && row.is_multiple_of(self.rows_per_snapshot));
         let previous_yaw = (k > 0).then_some(self.last.euler_deg[2]);
-        let mut sample = self.probe.sample(out, &aircraft, previous_yaw);
-        self.probe
-            .snapshot_into(out, &aircraft, &mut self.candidate_cable);
+        self.candidate_raw.capture(out);
+        // A state that is not written needs its exhaust clearance only if it
+        // lowers the run's smallest.
+        let bound = (!write_row).then_some(self.statistics.min_exhaust);
+        let (mut sample, exact) = self.probe.sample(
+            out,
+            &self.candidate_raw.joints,
+            &aircraft,
+            previous_yaw,
+            bound,
+        );
         if !(sample.tension_connection.is_finite() && sample.tension_tow.is_finite()) {
             return Ok(Some(Stop::failure(
                 format!(
@@ -547,7 +616,8 @@ impl<'a> Recorder<'a> {
             self.rows_seen += 1;
         }
         self.last = sample;
-        std::mem::swap(&mut self.last_cable, &mut self.candidate_cable);
+        self.last_exact = exact;
+        std::mem::swap(&mut self.last_raw, &mut self.candidate_raw);
         self.recorded_any = true;
         self.statistics.add(&sample);
         self.last_written = write_row;
@@ -581,10 +651,12 @@ impl<'a> Recorder<'a> {
 
     /// Keeps (and writes) the snapshot of the last good state.
     fn keep_last_cable(&mut self) -> Result<(), SimError> {
+        let aircraft = self.path.state_at(self.last_raw.t);
+        let snapshot = self.probe.snapshot_of(&self.last_raw, &aircraft);
         if let Some(csv) = &mut self.cable {
-            write_snapshot(csv, &self.last_cable)?;
+            write_snapshot(csv, &snapshot)?;
         }
-        self.snapshots.push(self.last_cable.clone());
+        self.snapshots.push(snapshot);
         Ok(())
     }
 
@@ -598,6 +670,12 @@ impl<'a> Recorder<'a> {
             self.keep_last_cable()?;
         }
         if !self.last_written {
+            if !self.last_exact {
+                let aircraft = self.path.state_at(self.last.t);
+                (self.last.exhaust_clearance, self.last.exhaust_along) =
+                    self.probe.exhaust(&self.last_raw.joints, &aircraft);
+                self.last_exact = true;
+            }
             if let Some(csv) = &mut self.timeseries {
                 csv.write(&self.last.csv_row())?;
             }
@@ -738,7 +816,10 @@ mod tests {
             let mut solver = Solver::new(model, trim(&model, &aircraft).unwrap()).unwrap();
             let path = solver_core::Uniform { initial: aircraft };
             let probe = probe(&config, &model, 1.0);
-            let sample = probe.sample(&solver.outputs(&path).unwrap(), &aircraft, None);
+            let out = solver.outputs(&path).unwrap();
+            let mut raw = RawCable::default();
+            raw.capture(&out);
+            let (sample, _) = probe.sample(&out, &raw.joints, &aircraft, None, None);
 
             let mut controller: Controller<f64, 16> =
                 Controller::new(config.controller_config(layout).unwrap()).unwrap();
