@@ -107,6 +107,7 @@ CASES = [
     ("steady", {"segments": 8, "t_end": 1.5}),
     ("acceleration", {"segments": 10, "grading": 1.3, "t_end": 3.0, "dt": 0.002}),
     ("pull-up", {"segments": 12, "t_end": 3.0, "rate": 0.2}),
+    ("pull-up", {"segments": 12, "t_end": 3.0, "rate": 0.2, "onset": 0.5}),
     ("turn", {"segments": 8, "t_end": 2.0, "rate": -0.1, "initial": "straight"}),
     ("recorded", {"segments": 6, "t_end": 1.5}),
 ]
@@ -207,7 +208,7 @@ def test_a_nan_rate_is_the_command_lines_error(cli):
     with pytest.raises(decoy.InputError) as e:
         decoy.simulate("steady", rate=0.1)
     assert str(e.value) == cli_error(cli, "simulate", "--scenario", "steady", "--rate", "0.1")
-    for flag, value in (("segments", 0), ("t_end", -1.0), ("mach", 2.5), ("altitude", 30000.0), ("grading", 0.5), ("dt", 0.0)):
+    for flag, value in (("segments", 0), ("t_end", -1.0), ("mach", 2.5), ("altitude", 30000.0), ("grading", 0.5), ("dt", 0.0), ("onset", -1.0), ("onset", 0.5)):
         with pytest.raises(decoy.InputError) as e:
             decoy.simulate("steady", **{flag: value})
         assert str(e.value) == cli_error(cli, "simulate", "--scenario", "steady", f"--{flag.replace('_', '-')}", str(value)), flag

@@ -187,6 +187,11 @@ struct SimulateArgs {
     /// Flight-path rotation rate of a pull-up or turn, rad/s (the paper's: 0.05, 0.10, 0.20).
     #[arg(long, value_name = "W", allow_negative_numbers = true)]
     rate: Option<f64>,
+    /// Time over which a pull-up or turn builds its rate (and a pull-up removes
+    /// it), s: a flyable entry at a finite angular acceleration (about 0.5 s for
+    /// a fighter). Default: the scenario's `onset_s`, else 0, the paper's step.
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    onset: Option<f64>,
     /// Initial state: the trim of the flight condition at t = 0, or a straight cable.
     #[arg(long, value_enum, default_value_t = Initial::Trim)]
     initial: Initial,
@@ -350,6 +355,7 @@ fn simulate_command(
         altitude: args.altitude,
         mach: args.mach,
         rate: args.rate,
+        onset: args.onset,
         initial: match args.initial {
             Initial::Trim => InitialState::Trim,
             Initial::Straight => InitialState::Straight,

@@ -541,7 +541,11 @@ mod tests {
                 );
                 if full.0 < bound {
                     let (c, index) = below.expect("a clearance below the bound");
-                    assert_eq!((c.to_bits(), index), (full.0.to_bits(), full.1), "case {case}");
+                    assert_eq!(
+                        (c.to_bits(), index),
+                        (full.0.to_bits(), full.1),
+                        "case {case}"
+                    );
                 } else {
                     assert_eq!(below, None, "case {case}, bound {bound}");
                 }

@@ -221,7 +221,8 @@ fn trim(
 /// scenario: a shipped scenario's name (SCENARIOS), the path of a scenario TOML
 /// file, or a dict of its keys (builtin_scenario(name) gives one to edit).
 /// The keyword arguments override the scenario as the command line's flags do:
-/// rate (--rate, rad/s), altitude (--altitude, m), mach (--mach), t_end
+/// rate (--rate, rad/s), onset (--onset, s: a pull-up's or turn's rate built
+/// over it; 0: the paper's step), altitude (--altitude, m), mach (--mach), t_end
 /// (--t-end, s), segments (--segments), grading (--grading), dt (--dt, s: a
 /// fixed RK4 step; None: the scenario's step rule), initial ("trim" or
 /// "straight", --initial); config: the system (None: the built-in reference
@@ -237,7 +238,7 @@ fn trim(
 /// KeyboardInterrupt at Ctrl-C (the run stops at the next step).
 #[pyfunction]
 #[pyo3(signature = (
-    scenario, *, rate=None, altitude=None, mach=None, t_end=None, segments=None,
+    scenario, *, rate=None, onset=None, altitude=None, mach=None, t_end=None, segments=None,
     grading=None, dt=None, initial="trim", config=None, out=None, plots=true
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -245,6 +246,7 @@ fn simulate(
     py: Python<'_>,
     scenario: &Bound<'_, PyAny>,
     rate: Option<f64>,
+    onset: Option<f64>,
     altitude: Option<f64>,
     mach: Option<f64>,
     t_end: Option<f64>,
@@ -276,6 +278,7 @@ fn simulate(
         altitude,
         mach,
         rate,
+        onset,
         initial,
         out_dir: out,
         plots,

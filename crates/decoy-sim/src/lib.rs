@@ -40,7 +40,8 @@
 //!
 //! 1. `error`, `format` (number and layout formats), `capacity` (the solver
 //!    capacity chosen from the segment count), `geometry`, `options`
-//!    ([`RunOptions`]);
+//!    ([`RunOptions`]), `flyable` (pull-ups and turns built over an onset,
+//!    [`Flyable`]);
 //! 2. `recorded` (recorded flights), `profile` ([`FlightProfile`]), `steps`
 //!    (the step rule and the run's timeline, [`StepRule`], [`Timeline`]);
 //! 3. `scenario` (scenario files and [`RunPlan`]), `trim` (the steady trim of
@@ -71,6 +72,7 @@
 
 mod capacity;
 pub mod error;
+pub mod flyable;
 pub mod format;
 pub mod geometry;
 pub mod management;
@@ -91,6 +93,7 @@ pub mod trim;
 /// output file of a run goes through).
 pub use decoy_plots::atomic;
 pub use error::SimError;
+pub use flyable::{Flyable, FlyablePullUp, FlyableTurn};
 pub use format::{Cell, csv_row, describe_layout, format_time, format_value, missing_cells};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame};
 pub use management::{ManagementSample, ManagementSummary, RequirementSummary};

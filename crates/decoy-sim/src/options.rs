@@ -31,6 +31,9 @@ pub struct RunOptions {
     pub mach: Option<f64>,
     /// Flight-path rotation rate, rad/s (pull-up, turn).
     pub rate: Option<f64>,
+    /// Time to build (and remove) the rotation rate, s (pull-up, turn;
+    /// [`crate::flyable`]; 0: the paper's step).
+    pub onset: Option<f64>,
     /// How the run starts.
     pub initial: InitialState,
     /// Output directory (default `out/<scenario name>`, relative to the working directory).
@@ -49,6 +52,7 @@ impl Default for RunOptions {
             altitude: None,
             mach: None,
             rate: None,
+            onset: None,
             initial: InitialState::Trim,
             out_dir: None,
             plots: true,

@@ -4,6 +4,7 @@
 use solver_core::profiles::ManoeuvrePath;
 use solver_core::{AircraftState, FlightPath, Real};
 
+use crate::flyable::Flyable;
 use crate::recorded::RecordedFlight;
 
 /// The prescribed aircraft motion of a run.
@@ -11,6 +12,8 @@ use crate::recorded::RecordedFlight;
 pub enum FlightProfile {
     /// One of `decoy_schema`'s manoeuvres, flown by solver-core's profile.
     Manoeuvre(ManoeuvrePath),
+    /// A pull-up or turn built over a finite onset ([`crate::flyable`]).
+    Flyable(Flyable),
     /// A recorded flight, interpolated.
     Recorded(RecordedFlight),
 }
@@ -22,17 +25,20 @@ impl FlightProfile {
     pub fn manoeuvre_start(&self) -> f64 {
         match self {
             FlightProfile::Manoeuvre(p) => p.manoeuvre_start(),
+            FlightProfile::Flyable(p) => p.manoeuvre_start(),
             FlightProfile::Recorded(_) => 0.0,
         }
     }
 
     /// The times in (0, `t_end`), s, at which the path's acceleration or rotation
-    /// rate jumps, increasing: a manoeuvre's start and end, a recorded flight's
+    /// rate jumps (or, built over an onset, its angular acceleration does),
+    /// increasing: a manoeuvre's start and end (and its ramps'), a recorded flight's
     /// samples (its cubic Hermite is continuous in velocity, not in acceleration,
     /// at every sample). The run's steps end exactly at each ([`crate::steps`]).
     pub fn breakpoints(&self, t_end: f64) -> Vec<f64> {
         let mut times: Vec<f64> = match self {
             FlightProfile::Manoeuvre(p) => p.breakpoints().into_iter().flatten().collect(),
+            FlightProfile::Flyable(p) => p.breakpoints(),
             FlightProfile::Recorded(r) => {
                 let first = r.samples()[0].time;
                 r.samples().iter().map(|s| s.time - first).collect()
@@ -68,6 +74,7 @@ impl<T: Real> FlightPath<T> for FlightProfile {
     fn state_at(&self, t: f64) -> AircraftState<T> {
         match self {
             FlightProfile::Manoeuvre(p) => p.state_at(t),
+            FlightProfile::Flyable(p) => FlightPath::<T>::state_at(p, t),
             FlightProfile::Recorded(p) => FlightPath::<T>::state_at(p, t),
         }
     }

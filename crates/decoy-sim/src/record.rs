@@ -263,13 +263,7 @@ impl Probe {
                 .zip(&self.joint_along)
                 .map(|((p, &tension), &along)| {
                     let c = frame.components(&(p - aircraft.position));
-                    [
-                        along,
-                        -c.x,
-                        self.lateral_sign * -c.y + 0.0,
-                        c.z,
-                        tension,
-                    ]
+                    [along, -c.x, self.lateral_sign * -c.y + 0.0, c.z, tension]
                 })
                 .collect(),
         }

@@ -23,6 +23,7 @@ use solver_core::SegmentLayout;
 use solver_core::profiles::{ManoeuvreParams, ManoeuvrePath};
 
 use crate::error::SimError;
+use crate::flyable::{Flyable, FlyablePullUp, FlyableTurn};
 use crate::format::format_number;
 use crate::options::RunOptions;
 use crate::profile::FlightProfile;
@@ -263,6 +264,11 @@ pub struct Scenario {
     pub start_s: Option<f64>,
     /// Duration of the rotation, s (pull-up).
     pub duration_s: Option<f64>,
+    /// Time to build (and, for the pull-up, to remove) the rotation rate, s
+    /// (pull-up, turn; [`crate::flyable`]); none or 0: the paper's step in
+    /// the rate.
+    #[serde(default)]
+    pub onset_s: Option<f64>,
     /// Recorded-flight CSV, relative to the scenario file (recorded).
     pub file: Option<String>,
     /// Simulated time, s.
@@ -315,15 +321,22 @@ impl RunPlan {
         };
         let mut text = format!("{mach} at {altitude:.0} m ({airspeed:.2} m/s airspeed)");
         // A rotating manoeuvre's rate, in its own words (`turning at ...`).
-        if let (Some(manoeuvre), FlightProfile::Manoeuvre(path)) =
-            (self.kind.manoeuvre(), &self.profile)
-            && let (Some(words), Some(rate)) = (manoeuvre.info().rotation, path.rate())
+        let rotation = match &self.profile {
+            FlightProfile::Manoeuvre(path) => path.rate().map(|rate| (rate, None)),
+            FlightProfile::Flyable(path) => Some((path.rate(), Some(path.onset()))),
+            FlightProfile::Recorded(_) => None,
+        };
+        if let (Some(manoeuvre), Some((rate, onset))) = (self.kind.manoeuvre(), rotation)
+            && let Some(words) = manoeuvre.info().rotation
         {
             text.push_str(&format!(
                 ", {words} at {} rad/s from t = {} s",
                 format_number(rate),
-                format_number(path.manoeuvre_start())
+                format_number(self.profile.manoeuvre_start())
             ));
+            if let Some(onset) = onset {
+                text.push_str(&format!(" (built over {} s)", format_number(onset)));
+            }
         }
         text
     }
@@ -556,6 +569,14 @@ impl Scenario {
         if let Some(w) = rate {
             check_rate(&invalid, "rate_radps", w)?;
         }
+        let onset = match (options.onset, self.onset_s) {
+            (Some(t), _) => Some((t, Source::new(cli, "--onset"))),
+            (None, Some(t)) => Some((t, from_file("onset_s"))),
+            (None, None) => None,
+        };
+        if let Some((t, source)) = &onset {
+            source.check(check_non_negative, *t)?;
+        }
         let mut lateral_sign = 1.0;
         let profile = match kind {
             ScenarioKind::Manoeuvre(manoeuvre) => {
@@ -577,9 +598,14 @@ impl Scenario {
                 if path.turns_left() {
                     lateral_sign = -1.0;
                 }
-                FlightProfile::Manoeuvre(path)
+                flown_with_onset(path, onset)?
             }
             ScenarioKind::Recorded => {
+                if let Some((_, source)) = &onset {
+                    return Err(source.invalid(
+                        "applies to a pull-up or a turn, not a recorded flight".to_owned(),
+                    ));
+                }
                 let file = self.file.as_deref().unwrap_or_default();
                 let flight = self.load_recording(file)?;
                 flight.check_mach(config, MAX_MACH)?;
@@ -660,6 +686,34 @@ impl Scenario {
             source,
         })?;
         RecordedFlight::parse(&path.display().to_string(), &text)
+    }
+}
+
+/// The profile that flies `path` with the onset `onset` (and where it was
+/// given): the step profile without one (or 0), else the pull-up or the turn
+/// built over it ([`crate::flyable`]; a pull-up's onset at most its duration).
+fn flown_with_onset(
+    path: ManoeuvrePath,
+    onset: Option<(f64, Source)>,
+) -> Result<FlightProfile, SimError> {
+    let Some((onset, source)) = onset.filter(|(t, _)| *t > 0.0) else {
+        return Ok(FlightProfile::Manoeuvre(path));
+    };
+    match path {
+        ManoeuvrePath::PullUp(p) if onset > p.duration => Err(source.invalid(format!(
+            "{} s is longer than the pull-up's duration {} s (the rate must be built before it is removed)",
+            format_number(onset),
+            format_number(p.duration)
+        ))),
+        ManoeuvrePath::PullUp(p) => Ok(FlightProfile::Flyable(Flyable::PullUp(
+            FlyablePullUp::new(p, onset),
+        ))),
+        ManoeuvrePath::Turn(p) => Ok(FlightProfile::Flyable(Flyable::Turn(FlyableTurn::new(
+            p, onset,
+        )))),
+        ManoeuvrePath::Level(_) => Err(source.invalid(
+            "applies to a pull-up or a turn, not to level flight or an acceleration".to_owned(),
+        )),
     }
 }
 

@@ -333,6 +333,98 @@ fn faster_pull_up_closes_the_cable_on_the_exhaust() {
     assert!(hard.max_tension_connection_n > gentle.max_tension_connection_n);
 }
 
+/// A pull-up built over an onset (`--onset`, `onset_s`) steps exactly on its
+/// four breakpoints and starts without the step profile's tension transient;
+/// an onset where it does not apply, negative or longer than the pull-up is a
+/// typed error naming where it came from.
+#[test]
+fn an_onset_smooths_the_manoeuvre_and_is_checked() {
+    let tension = column("tension_connection_N");
+    let jolt = |onset: Option<f64>| -> f64 {
+        let options = RunOptions {
+            rate: Some(0.2),
+            t_end: Some(3.0),
+            onset,
+            dt: None,
+            ..reduced(&format!("pull-up-onset-{onset:?}"))
+        };
+        let out = run("pull-up", &options);
+        let rows = timeseries(&out.out_dir);
+        rows.windows(2)
+            .filter(|w| w[0][0] > 1.9 && w[0][0] < 2.6)
+            .map(|w| (w[1][tension] - w[0][tension]).abs())
+            .fold(0.0, f64::max)
+    };
+    // The step profile's connection point jumps by 0.52 m/s at t = 2 s.
+    let (step, smooth) = (jolt(None), jolt(Some(0.5)));
+    assert!(
+        step > 2.0 && smooth < 1.0,
+        "step {step} N, onset 0.5 s {smooth} N"
+    );
+
+    let pull_up = Scenario::builtin("pull-up").unwrap();
+    let plan = pull_up
+        .plan(
+            &config(),
+            &RunOptions {
+                onset: Some(0.5),
+                ..RunOptions::default()
+            },
+        )
+        .unwrap();
+    assert_eq!(plan.profile.breakpoints(20.0), vec![2.0, 2.5, 7.0, 7.5]);
+    let described = plan.describe_initial_condition(&config());
+    assert!(described.ends_with("(built over 0.5 s)"), "{described}");
+    // In a file too; 0 is the step profile.
+    let text = include_str!("../../../scenarios/pull-up.toml");
+    let file: Scenario = toml::from_str(&format!("{text}\nonset_s = 0.25\n")).unwrap();
+    let plan = file.plan(&config(), &RunOptions::default()).unwrap();
+    assert_eq!(plan.profile.breakpoints(20.0), vec![2.0, 2.25, 7.0, 7.25]);
+    let zero = RunOptions {
+        onset: Some(0.0),
+        ..RunOptions::default()
+    };
+    let plan = pull_up.plan(&config(), &zero).unwrap();
+    assert_eq!(plan.profile.breakpoints(20.0), vec![2.0, 7.0]);
+
+    let onset = |t: f64| RunOptions {
+        onset: Some(t),
+        ..RunOptions::default()
+    };
+    let steady = Scenario::builtin("steady").unwrap();
+    let recorded = Scenario::builtin("recorded").unwrap();
+    for (scenario, options, message) in [
+        (
+            &steady,
+            onset(0.5),
+            "command line: --onset applies to a pull-up or a turn, not to level flight or an acceleration",
+        ),
+        (
+            &recorded,
+            onset(0.5),
+            "command line: --onset applies to a pull-up or a turn, not a recorded flight",
+        ),
+        (
+            &pull_up,
+            onset(-0.1),
+            "command line: --onset must not be negative, got -0.1",
+        ),
+        (
+            &pull_up,
+            onset(f64::NAN),
+            "command line: --onset must be a finite number",
+        ),
+        (
+            &pull_up,
+            onset(6.0),
+            "command line: --onset 6 s is longer than the pull-up's duration 5 s (the rate must be built before it is removed)",
+        ),
+    ] {
+        let e = plan_error(scenario, &options);
+        assert!(e.to_string().starts_with(message), "{e}");
+    }
+}
+
 /// A recording of `path` sampled at `hz` from 0 to `t_end`.
 fn record<P: FlightPath<f64> + ?Sized>(path: &P, hz: f64, t_end: f64) -> RecordedFlight {
     let n = (t_end * hz).round() as usize;

@@ -123,6 +123,7 @@ def simulate(
     scenario: ScenarioLike,
     *,
     rate: float | None = None,
+    onset: float | None = None,
     altitude: float | None = None,
     mach: float | None = None,
     t_end: float | None = None,
@@ -141,7 +142,9 @@ def simulate(
     value leaves its key out).
 
     The keywords override the scenario as the command line's flags do: rate
-    (``--rate``, rad/s, pull-up and turn), altitude (``--altitude``, m), mach
+    (``--rate``, rad/s, pull-up and turn), onset (``--onset``, s: the pull-up's
+    or turn's rate built over it at a finite angular acceleration; 0: the
+    paper's step), altitude (``--altitude``, m), mach
     (``--mach``), t_end (``--t-end``, s), segments (``--segments``), grading
     (``--grading``), dt (``--dt``, s: a fixed RK4 step; None: the scenario's
     step rule), initial (``--initial``: the trim of the flight condition at
