@@ -33,6 +33,7 @@ use std::process::ExitCode;
 
 mod board_arg;
 mod bridge_cmd;
+mod envelope_cmd;
 mod failure;
 mod progress;
 mod scenario_arg;
@@ -88,6 +89,9 @@ enum Command {
     /// Sweep a flight condition or a decoy station (the paper's Figs. 15-24):
     /// a table (CSV, printed, or JSON) and plots.
     Sweep(studies::SweepArgs),
+    /// The manoeuvre envelope map: for each altitude x Mach, the largest pull-up
+    /// or turn rate that violates no requirement, and what limits it.
+    Envelope(envelope_cmd::EnvelopeArgs),
     /// A study: `discretisation` (the paper's Figs. 13-14) and the embedded
     /// model's choice.
     Study(studies::StudyArgs),
@@ -304,6 +308,13 @@ fn run(cli: &Cli) -> Result<String, Failure> {
                 None => SystemConfig::builtin()?,
             };
             studies::sweep_command(&config, args, cli.json)
+        }
+        Command::Envelope(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin()?,
+            };
+            envelope_cmd::envelope_command(&config, args, cli.json)
         }
         Command::Study(args) => {
             let config = match config {

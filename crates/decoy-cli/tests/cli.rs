@@ -1441,3 +1441,100 @@ fn messages_name_the_source_and_the_problem() {
         );
     }
 }
+
+/// `decoy envelope`: the JSON of the shape, the files, a resumed run,
+/// and one-line errors for a bad list, a bad onset and a directory of other
+/// inputs.
+#[test]
+fn envelope_maps_resumes_and_checks() {
+    let dir = sim_out("envelope");
+    let dir_s = dir.to_str().unwrap();
+    let args = |extra: &[&'static str]| -> Vec<String> {
+        let mut v: Vec<String> = [
+            "envelope",
+            "--manoeuvre",
+            "pull-up",
+            "--altitudes",
+            "9000",
+            "--machs",
+            "0.6,0.8",
+            "--segments",
+            "12",
+            "--grading",
+            "1.26",
+            "--tolerance",
+            "0.01",
+            "--workers",
+            "2",
+            "--out",
+            dir_s,
+        ]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+        v.extend(extra.iter().map(|s| (*s).to_owned()));
+        v
+    };
+    let run = |extra: &[&'static str]| {
+        let a = args(extra);
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        json(&refs)
+    };
+    let map = run(&["--json"]);
+    assert_eq!(map["manoeuvre"], "pull-up");
+    let cells = map["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2);
+    for cell in cells {
+        assert_eq!(
+            keys(cell),
+            BTreeSet::from([
+                "altitude_m",
+                "cap",
+                "limit",
+                "limiting_requirement",
+                "mach",
+                "margin",
+                "steady_margins"
+            ])
+        );
+        assert!(num(cell, "limit") > 0.0 && num(cell, "limit") <= num(cell, "cap"));
+        assert_eq!(
+            keys(&cell["steady_margins"]),
+            BTreeSet::from(["collision", "exhaust", "posture", "tension"])
+        );
+    }
+    for file in [
+        "envelope.csv",
+        "envelope.json",
+        "summary.txt",
+        "inputs.json",
+    ] {
+        assert!(dir.join(file).is_file(), "{file}");
+    }
+    // Again into the same directory: every cell resumed, the same map.
+    let a = args(&[]);
+    let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+    let text = stdout_of(&refs);
+    assert!(text.contains("2 cells (2 resumed"), "{text}");
+    assert_eq!(run(&["--json"]), map);
+
+    // A flag's value replaced (or the flag added): a one-line usage error.
+    let bad = |flag: &str, value: &str, message: &str| {
+        let mut a = args(&[]);
+        match a.iter().position(|x| x == flag) {
+            Some(i) => a[i + 1] = value.to_owned(),
+            None => a.extend([flag.to_owned(), value.to_owned()]),
+        }
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        let e = error_of(&refs, 2);
+        assert!(e.contains(message), "{e}");
+    };
+    bad(
+        "--machs",
+        "0.6:0.5:0.1",
+        "--machs: `0.6:0.5:0.1` needs start <= stop",
+    );
+    bad("--onset", "-1", "--onset must be a non-negative number");
+    bad("--onset", "0.25", "a map of other inputs");
+    bad("--workers", "0", "--workers must be at least 1");
+}

@@ -10,13 +10,15 @@
 //!   static margin (`decoy sweep`).
 //! - [`study`]: the discretisation study (Figs. 13-14) and the choice of the
 //!   embedded model (`decoy study discretisation`).
+//! - [`envelope`]: the manoeuvre envelope map over altitude x Mach (`decoy
+//!   envelope`).
 //! - [`report`]: `docs/paper-reproduction.md`, every claim of the paper against
 //!   what the project computes (`decoy report`; outputs in `docs/sweeps.md`).
 //!
 //! ## Layering
 //!
 //! Each module uses only modules on the lines above its own, so the module graph
-//! has no cycle: `sweep` (`mod.rs`: ranges and table/plot helpers; then
+//! has no cycle: `envelope` (on decoy-sim alone), `sweep` (`mod.rs`: ranges and table/plot helpers; then
 //! `steady`, `settling`, `pull_up`, `static_margin`), then `study`, then
 //! `report` (`spec.rs`: what it flies, its options, claims and verdicts; `data`, `claims`,
 //! `figures`, `render`; `mod.rs`: the entry point). Errors are decoy-sim's
@@ -24,6 +26,7 @@
 //! [`decoy_sim::SimError::AtPoint`]).
 #![deny(missing_docs)]
 
+pub mod envelope;
 pub mod report;
 pub mod study;
 pub mod sweep;

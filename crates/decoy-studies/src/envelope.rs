@@ -1,0 +1,684 @@
+//! The manoeuvre envelope map (`decoy envelope`): for every flight condition
+//! of a grid of altitude x Mach, the largest pull-up or turn rate that violates
+//! none of the four requirements over the manoeuvre and its aftermath, the
+//! requirement that sets it, and the cell's steady-flight margins.
+//!
+//! **A cell.** Its steady margins are the management's worst margins over 1 s
+//! of steady level flight from the trim. Its limit is found by bisection on the
+//! rate between 0 and the cap the declared operating envelope allows there
+//! (`[envelope]`: the normal load factor's upper bound, n = 1 + V w / g at the
+//! pull-up's bottom and n = sqrt(1 + (V w / g)^2) in the turn, and the body rate
+//! bound), to [`EnvelopeSpec::tolerance`]: each trial is the shipped scenario
+//! (`pull-up`: 5 s of rotation from t = 2 s, then the climb, 20 s; `turn`: from
+//! t = 0, 20 s) flown at the cell's altitude and Mach with the trial rate,
+//! built over the onset ([`decoy_sim::flyable`]), on the spec's model, and it
+//! violates a requirement when the management monitors (the same as
+//! `decoy simulate`'s `management` summary) report it violated at any row. The
+//! limit is the largest rate found clear; the limiting requirement the one
+//! violated first at the smallest rate found violating (or the cap, `load
+//! factor` or `body rate`, when the capped rate is clear; or the requirement
+//! violated in steady flight, limit 0, when the cell is not clear even there).
+//!
+//! **Resumable and deterministic.** Each cell's result is written atomically to
+//! `cells/` in the output directory as soon as it is known, beside
+//! `inputs.json` (the configuration and the spec); a run into a directory that
+//! holds a map of the same inputs takes the cells it finds and computes the
+//! rest, and one of other inputs is an error. Cells are independent and their
+//! results are put in grid order, so the map is the same bits whatever the
+//! number of workers or the order they finish in.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use decoy_config::SystemConfig;
+use decoy_plots::atomic::write_atomically;
+pub use decoy_schema::Manoeuvre;
+use decoy_schema::{PerRequirement, Requirement};
+use decoy_sim::{InitialState, RunOptions, Scenario, SimError, simulate_recorded};
+use serde::{Deserialize, Serialize};
+
+/// Simulated time of a cell's steady-flight run, s.
+const STEADY_S: f64 = 1.0;
+
+/// What to map.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EnvelopeSpec {
+    /// `pull-up` or `turn`.
+    pub manoeuvre: Manoeuvre,
+    /// The grid's altitudes, m.
+    pub altitudes_m: Vec<f64>,
+    /// The grid's Mach numbers.
+    pub machs: Vec<f64>,
+    /// Cable segments of the model.
+    pub segments: usize,
+    /// Segment length ratio, short at the decoy (1: uniform).
+    pub grading: f64,
+    /// Time over which the rate is built (and the pull-up's removed), s.
+    pub onset_s: f64,
+    /// Bisection tolerance on the rate, rad/s.
+    pub tolerance: f64,
+}
+
+/// What limits a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Limit {
+    /// A requirement is violated just above the limit.
+    Requirement(Requirement),
+    /// The envelope's load factor caps the rate, and the cap is clear.
+    LoadFactor,
+    /// The envelope's body rate bound caps the rate, and the cap is clear.
+    BodyRate,
+}
+
+impl Limit {
+    /// In words: the requirement's name, `load factor` or `body rate`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Limit::Requirement(r) => r.name(),
+            Limit::LoadFactor => "load factor",
+            Limit::BodyRate => "body rate",
+        }
+    }
+}
+
+/// One cell of the map.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cell {
+    /// Altitude, m.
+    pub altitude_m: f64,
+    /// Mach number.
+    pub mach: f64,
+    /// The largest rate found clear, rad/s.
+    pub limit: f64,
+    /// The rate the envelope's load factor and body rate allow here, rad/s.
+    pub cap: f64,
+    /// What sets the limit.
+    pub limiting: Limit,
+    /// The limiting requirement's worst margin at the limit (in its file
+    /// unit); None when the cap limits.
+    pub margin: Option<f64>,
+    /// Each requirement's worst margin in steady flight (file units).
+    pub steady_margins: PerRequirement<Option<f64>>,
+    /// Runs flown for the cell.
+    pub runs: u32,
+}
+
+/// The map: the spec and its cells in grid order (altitude-major).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EnvelopeMap {
+    /// What was mapped.
+    pub spec: EnvelopeSpec,
+    /// The cells, altitude by altitude, each altitude's Mach numbers in order.
+    pub cells: Vec<Cell>,
+    /// Cells taken from an earlier run into the same directory.
+    pub resumed: usize,
+}
+
+/// What an output directory's `inputs.json` holds: a map's inputs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Inputs {
+    config: SystemConfig,
+    spec: EnvelopeSpec,
+}
+
+impl EnvelopeSpec {
+    /// Checks the spec: a pull-up or turn, a non-empty grid, a positive tolerance.
+    pub fn check(&self) -> Result<(), SimError> {
+        let invalid = |field: &str, message: String| SimError::invalid("envelope", field, message);
+        if !matches!(self.manoeuvre, Manoeuvre::PullUp | Manoeuvre::Turn) {
+            return Err(invalid(
+                "--manoeuvre",
+                format!("must be pull-up or turn, got {}", self.manoeuvre.name()),
+            ));
+        }
+        if self.altitudes_m.is_empty() || self.machs.is_empty() {
+            return Err(invalid(
+                "--altitudes/--machs",
+                "the grid needs at least one altitude and one Mach number".to_owned(),
+            ));
+        }
+        if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
+            return Err(invalid(
+                "tolerance",
+                format!("must be positive, got {}", self.tolerance),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The cells' flight conditions in grid order.
+    fn conditions(&self) -> Vec<(f64, f64)> {
+        self.altitudes_m
+            .iter()
+            .flat_map(|&h| self.machs.iter().map(move |&m| (h, m)))
+            .collect()
+    }
+}
+
+/// The rate the envelope allows at speed `speed` (m/s): the load factor's and
+/// the body rate's caps, the smaller and which it is.
+fn cap(config: &SystemConfig, manoeuvre: Manoeuvre, speed: f64) -> (f64, Limit) {
+    let g = config.environment.gravity;
+    let n = config.envelope.load_factor[1];
+    let load = match manoeuvre {
+        Manoeuvre::Turn => g * (n * n - 1.0).max(0.0).sqrt() / speed,
+        _ => (n - 1.0).max(0.0) * g / speed,
+    };
+    let body = config.envelope.max_body_rate_radps;
+    if load <= body {
+        (load, Limit::LoadFactor)
+    } else {
+        (body, Limit::BodyRate)
+    }
+}
+
+/// The outcome of one trial: the requirement violated first (if any) and
+/// every requirement's worst margin.
+struct Trial {
+    violated: Option<Requirement>,
+    margins: PerRequirement<Option<f64>>,
+}
+
+/// Flies `scenario` at the cell's condition with `rate` (None: the scenario's
+/// own kind without a rate, steady flight) for `t_end` (None: the scenario's).
+fn fly(
+    config: &SystemConfig,
+    spec: &EnvelopeSpec,
+    scenario: &Scenario,
+    (altitude, mach): (f64, f64),
+    rate: Option<f64>,
+    t_end: Option<f64>,
+) -> Result<Trial, SimError> {
+    let options = RunOptions {
+        segments: Some(spec.segments),
+        grading: Some(spec.grading),
+        t_end,
+        altitude: Some(altitude),
+        mach: Some(mach),
+        rate,
+        onset: rate.map(|_| spec.onset_s),
+        initial: InitialState::Trim,
+        plots: false,
+        ..RunOptions::default()
+    };
+    let recording = simulate_recorded(config, scenario, &options, |_| {}, || None)?;
+    if let Some(e) = recording.ended {
+        return Err(e);
+    }
+    let requirements = recording.summary.management.requirements;
+    let violated = Requirement::ALL
+        .into_iter()
+        .filter_map(|r| requirements[r].first_violation_s.map(|t| (t, r)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, r)| r);
+    Ok(Trial {
+        violated,
+        margins: requirements.map(|r| r.worst_margin),
+    })
+}
+
+/// Maps one cell.
+fn map_cell(
+    config: &SystemConfig,
+    spec: &EnvelopeSpec,
+    (altitude, mach): (f64, f64),
+) -> Result<Cell, SimError> {
+    let point = format!("{altitude} m, Mach {mach}");
+    let at = |e: SimError| e.at(point.clone());
+    let steady = Scenario::builtin("steady").map_err(at)?;
+    let manoeuvre = Scenario::builtin(spec.manoeuvre.name()).map_err(at)?;
+    let condition = (altitude, mach);
+    let speed = config
+        .mach_to_speed(altitude, mach)
+        .map_err(|e| at(e.into()))?;
+    let (cap, capped_by) = cap(config, spec.manoeuvre, speed);
+    let steady_trial = fly(config, spec, &steady, condition, None, Some(STEADY_S)).map_err(at)?;
+    let mut runs = 1;
+    let cell = |limit: f64, limiting: Limit, margin: Option<f64>, runs: u32| Cell {
+        altitude_m: altitude,
+        mach,
+        limit,
+        cap,
+        limiting,
+        margin,
+        steady_margins: steady_trial.margins,
+        runs,
+    };
+    if let Some(r) = steady_trial.violated {
+        return Ok(cell(
+            0.0,
+            Limit::Requirement(r),
+            steady_trial.margins[r],
+            runs,
+        ));
+    }
+    let at_cap = fly(config, spec, &manoeuvre, condition, Some(cap), None).map_err(at)?;
+    runs += 1;
+    let Some(mut limiting) = at_cap.violated else {
+        return Ok(cell(cap, capped_by, None, runs));
+    };
+    // Bisection: `lo` clear, `hi` violating `limiting` first.
+    let (mut lo, mut hi) = (0.0, cap);
+    let mut margin = steady_trial.margins[limiting];
+    let mut clear_margins = steady_trial.margins;
+    while hi - lo > spec.tolerance {
+        let mid = 0.5 * (lo + hi);
+        let trial = fly(config, spec, &manoeuvre, condition, Some(mid), None).map_err(at)?;
+        runs += 1;
+        match trial.violated {
+            Some(r) => {
+                hi = mid;
+                limiting = r;
+            }
+            None => {
+                lo = mid;
+                clear_margins = trial.margins;
+            }
+        }
+        margin = clear_margins[limiting];
+    }
+    Ok(cell(lo, Limit::Requirement(limiting), margin, runs))
+}
+
+/// Maps `spec` over its grid with `workers` threads (at least one), writing
+/// each cell to `out_dir/cells/` as it is known (and reusing those a run of
+/// the same inputs left there); `progress` is told (cells done, cells in all)
+/// after every cell.
+pub fn map_envelope(
+    config: &SystemConfig,
+    spec: &EnvelopeSpec,
+    workers: usize,
+    out_dir: Option<&Path>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<EnvelopeMap, SimError> {
+    spec.check()?;
+    let conditions = spec.conditions();
+    let mut done: Vec<Option<Cell>> = vec![None; conditions.len()];
+    if let Some(dir) = out_dir {
+        prepare_dir(config, spec, dir)?;
+        for (slot, &condition) in done.iter_mut().zip(&conditions) {
+            *slot = read_cell(&cell_path(dir, condition))?;
+        }
+    }
+    let resumed = done.iter().filter(|c| c.is_some()).count();
+    let todo: Vec<usize> = (0..conditions.len())
+        .filter(|&i| done[i].is_none())
+        .collect();
+    let finished = AtomicUsize::new(resumed);
+    progress(resumed, conditions.len());
+    let next = AtomicUsize::new(0);
+    let results = Mutex::new(done);
+    let failure: Mutex<Option<(usize, SimError)>> = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..workers.clamp(1, todo.len().max(1)) {
+            scope.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&i) = todo.get(k) else { break };
+                    if failure.lock().map(|f| f.is_some()).unwrap_or(true) {
+                        break;
+                    }
+                    let outcome = map_cell(config, spec, conditions[i]).and_then(|cell| {
+                        if let Some(dir) = out_dir {
+                            write_cell(&cell_path(dir, conditions[i]), &cell)?;
+                        }
+                        Ok(cell)
+                    });
+                    match outcome {
+                        Ok(cell) => {
+                            if let Ok(mut r) = results.lock() {
+                                r[i] = Some(cell);
+                            }
+                            let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                            progress(n, conditions.len());
+                        }
+                        Err(e) => {
+                            if let Ok(mut f) = failure.lock() {
+                                // The first cell in grid order among the failed.
+                                if f.as_ref().is_none_or(|(j, _)| i < *j) {
+                                    *f = Some((i, e));
+                                }
+                            }
+                        }
+                    }
+                }
+            });
+        }
+    });
+    if let Some((_, e)) = failure.into_inner().ok().flatten() {
+        return Err(e);
+    }
+    let cells = results
+        .into_inner()
+        .map_err(|_| SimError::invalid("envelope", "workers", "a worker panicked".to_owned()))?
+        .into_iter()
+        .map(|c| c.expect("every cell mapped"))
+        .collect();
+    Ok(EnvelopeMap {
+        spec: spec.clone(),
+        cells,
+        resumed,
+    })
+}
+
+/// Creates `dir` and its `cells/`, and writes `inputs.json` there, or checks
+/// that the one there is of the same inputs.
+fn prepare_dir(config: &SystemConfig, spec: &EnvelopeSpec, dir: &Path) -> Result<(), SimError> {
+    let io = |action: &'static str, path: &Path| {
+        let path = path.to_owned();
+        move |source| SimError::Io {
+            action,
+            path,
+            source,
+        }
+    };
+    let cells = dir.join("cells");
+    std::fs::create_dir_all(&cells).map_err(io("create the directory", &cells))?;
+    let inputs = Inputs {
+        config: config.clone(),
+        spec: spec.clone(),
+    };
+    let path = dir.join("inputs.json");
+    let json = to_json(&inputs, &path)?;
+    match std::fs::read_to_string(&path) {
+        Ok(existing) if existing == json => Ok(()),
+        Ok(_) => Err(SimError::invalid(
+            path.display().to_string(),
+            "inputs",
+            "the directory holds a map of other inputs (configuration, manoeuvre, grid, model, onset or tolerance): give another --out, or remove it".to_owned(),
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            write_atomically(&path, json.as_bytes()).map_err(io("write", &path))
+        }
+        Err(e) => Err(io("read", &path)(e)),
+    }
+}
+
+/// A cell's file in `dir`.
+fn cell_path(dir: &Path, (altitude, mach): (f64, f64)) -> PathBuf {
+    dir.join("cells").join(format!("h{altitude}-m{mach}.json"))
+}
+
+fn read_cell(path: &Path) -> Result<Option<Cell>, SimError> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => serde_json::from_str(&text).map(Some).map_err(|e| {
+            SimError::invalid(
+                path.display().to_string(),
+                "cell",
+                format!("is not a cell of a map ({e}): remove it to map the cell again"),
+            )
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(SimError::Io {
+            action: "read",
+            path: path.to_owned(),
+            source,
+        }),
+    }
+}
+
+fn write_cell(path: &Path, cell: &Cell) -> Result<(), SimError> {
+    let json = to_json(cell, path)?;
+    write_atomically(path, json.as_bytes()).map_err(|source| SimError::Io {
+        action: "write",
+        path: path.to_owned(),
+        source,
+    })
+}
+
+fn to_json(value: &impl Serialize, path: &Path) -> Result<String, SimError> {
+    serde_json::to_string_pretty(value)
+        .map(|mut s| {
+            s.push('\n');
+            s
+        })
+        .map_err(|e| SimError::Io {
+            action: "write",
+            path: path.to_owned(),
+            source: std::io::Error::other(e),
+        })
+}
+
+impl EnvelopeMap {
+    /// `envelope.csv`: a row per cell, grid order.
+    pub fn csv(&self) -> String {
+        let mut out = String::from(
+            "altitude_m,mach,limit_radps,cap_radps,limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m\n",
+        );
+        let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
+        for c in &self.cells {
+            let s = &c.steady_margins;
+            out.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{},{}\n",
+                c.altitude_m,
+                c.mach,
+                c.limit,
+                c.cap,
+                c.limiting.name(),
+                opt(c.margin),
+                opt(s.posture),
+                opt(s.collision),
+                opt(s.tension),
+                opt(s.exhaust)
+            ));
+        }
+        out
+    }
+
+    /// The JSON `--json` prints: `{"manoeuvre", "cells": [{"altitude_m",
+    /// "mach", "limit", "limiting_requirement", "margin", "cap",
+    /// "steady_margins": {posture, collision, tension, exhaust}}]}`.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "manoeuvre": self.spec.manoeuvre.name(),
+            "limit_unit": "rad/s",
+            "onset_s": self.spec.onset_s,
+            "segments": self.spec.segments,
+            "grading": self.spec.grading,
+            "tolerance": self.spec.tolerance,
+            "cells": self.cells.iter().map(|c| serde_json::json!({
+                "altitude_m": c.altitude_m,
+                "mach": c.mach,
+                "limit": c.limit,
+                "limiting_requirement": c.limiting.name(),
+                "margin": c.margin,
+                "cap": c.cap,
+                "steady_margins": {
+                    "posture": c.steady_margins.posture,
+                    "collision": c.steady_margins.collision,
+                    "tension": c.steady_margins.tension,
+                    "exhaust": c.steady_margins.exhaust,
+                },
+            })).collect::<Vec<_>>(),
+        })
+    }
+
+    /// The map in words: per altitude a line of the limits over Mach (with the
+    /// limiting requirement's initial), and where the paper's 0.10 rad/s
+    /// pull-up advice holds.
+    pub fn summary(&self) -> String {
+        let spec = &self.spec;
+        let mut out = format!(
+            "{} envelope: largest rate clear of every requirement, rad/s ({} segments{}, onset {} s, to {} rad/s); P posture, C collision, T tension, E exhaust, n load factor, w body rate\n",
+            spec.manoeuvre.name(),
+            spec.segments,
+            if spec.grading == 1.0 {
+                String::new()
+            } else {
+                format!(" graded {}", spec.grading)
+            },
+            spec.onset_s,
+            spec.tolerance
+        );
+        out.push_str("altitude \\ Mach");
+        for m in &spec.machs {
+            out.push_str(&format!(" {m:>9}"));
+        }
+        out.push('\n');
+        for (row, h) in self.cells.chunks(spec.machs.len()).zip(&spec.altitudes_m) {
+            out.push_str(&format!("{:>13} m", h));
+            for c in row {
+                let mark = match c.limiting {
+                    Limit::Requirement(r) => r.name()[..1].to_uppercase(),
+                    Limit::LoadFactor => "n".to_owned(),
+                    Limit::BodyRate => "w".to_owned(),
+                };
+                out.push_str(&format!(" {:>7.3} {mark}", c.limit));
+            }
+            out.push('\n');
+        }
+        if spec.manoeuvre == Manoeuvre::PullUp {
+            let holds = self.cells.iter().filter(|c| c.limit >= 0.10).count();
+            out.push_str(&format!(
+                "The paper's advice (pull-up rate below 0.10 rad/s keeps clear) holds in {holds} of {} cells",
+                self.cells.len()
+            ));
+            let short: Vec<String> = self
+                .cells
+                .iter()
+                .filter(|c| c.limit < 0.10)
+                .map(|c| format!("{} m Mach {}", c.altitude_m, c.mach))
+                .collect();
+            if short.is_empty() {
+                out.push_str(".\n");
+            } else {
+                out.push_str(&format!(
+                    "; 0.10 rad/s is not clear at {}.\n",
+                    short.join(", ")
+                ));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec() -> EnvelopeSpec {
+        EnvelopeSpec {
+            manoeuvre: Manoeuvre::PullUp,
+            altitudes_m: vec![3000.0, 9000.0],
+            machs: vec![0.6, 0.8],
+            segments: 12,
+            grading: 1.26,
+            onset_s: 0.5,
+            tolerance: 0.01,
+        }
+    }
+
+    fn out(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("decoy-envelope-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dir
+    }
+
+    /// The map is the same whatever the workers; a cell's limit is clear and
+    /// the next rate up by the tolerance is not (flown again independently);
+    /// a map resumes from the cells it finds and refuses a directory of other
+    /// inputs.
+    #[test]
+    fn the_map_is_deterministic_bisected_and_resumable() {
+        let config = SystemConfig::builtin().unwrap();
+        let spec = spec();
+        let none = |_: usize, _: usize| {};
+        let one = map_envelope(&config, &spec, 1, None, &none).unwrap();
+        let dir = out("resume");
+        let two = map_envelope(&config, &spec, 2, Some(&dir), &none).unwrap();
+        assert_eq!(one.cells, two.cells);
+        assert_eq!(two.resumed, 0);
+        let manoeuvre = Scenario::builtin("pull-up").unwrap();
+        for c in &one.cells {
+            assert!(c.limit <= c.cap && c.runs >= 2, "{c:?}");
+            if let Limit::Requirement(r) = c.limiting {
+                let condition = (c.altitude_m, c.mach);
+                let clear =
+                    fly(&config, &spec, &manoeuvre, condition, Some(c.limit), None).unwrap();
+                assert_eq!(clear.violated, None, "{c:?}");
+                let above = (c.limit + spec.tolerance).min(c.cap);
+                let over = fly(&config, &spec, &manoeuvre, condition, Some(above), None).unwrap();
+                assert!(
+                    over.violated.is_some(),
+                    "{c:?}: {r:?} not violated at {above}"
+                );
+            }
+        }
+        // Remove a cell: the next run maps it again and takes the others.
+        std::fs::remove_file(cell_path(&dir, (9000.0, 0.8))).unwrap();
+        let counted = AtomicUsize::new(0);
+        let count = |done: usize, _: usize| {
+            counted.store(done, Ordering::Relaxed);
+        };
+        let resumed = map_envelope(&config, &spec, 2, Some(&dir), &count).unwrap();
+        assert_eq!(resumed.resumed, 3);
+        assert_eq!(resumed.cells, one.cells);
+        assert_eq!(counted.load(Ordering::Relaxed), 4);
+        // Other inputs: an error, the directory untouched.
+        let other = EnvelopeSpec {
+            onset_s: 0.25,
+            ..spec.clone()
+        };
+        let e = map_envelope(&config, &other, 1, Some(&dir), &none).unwrap_err();
+        assert!(e.to_string().contains("a map of other inputs"), "{e}");
+        assert_eq!(
+            map_envelope(&config, &spec, 1, Some(&dir), &none)
+                .unwrap()
+                .resumed,
+            4
+        );
+        // The summary marks the limits and the paper's advice.
+        let text = one.summary();
+        assert!(text.contains("The paper's advice"), "{text}");
+        assert_eq!(one.csv().lines().count(), 5);
+    }
+
+    #[test]
+    fn bad_specs_are_typed_errors() {
+        let config = SystemConfig::builtin().unwrap();
+        let none = |_: usize, _: usize| {};
+        for (spec, message) in [
+            (
+                EnvelopeSpec {
+                    manoeuvre: Manoeuvre::Steady,
+                    ..spec()
+                },
+                "--manoeuvre must be pull-up or turn, got steady",
+            ),
+            (
+                EnvelopeSpec {
+                    machs: vec![],
+                    ..spec()
+                },
+                "at least one altitude and one Mach number",
+            ),
+            (
+                EnvelopeSpec {
+                    tolerance: 0.0,
+                    ..spec()
+                },
+                "tolerance must be positive",
+            ),
+        ] {
+            let e = map_envelope(&config, &spec, 1, None, &none).unwrap_err();
+            assert!(e.to_string().contains(message), "{e}");
+        }
+        // A Mach the solver rejects: the cell named.
+        let e = map_envelope(
+            &config,
+            &EnvelopeSpec {
+                machs: vec![2.5],
+                altitudes_m: vec![9000.0],
+                ..spec()
+            },
+            1,
+            None,
+            &none,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("9000 m, Mach 2.5"), "{e}");
+    }
+}
