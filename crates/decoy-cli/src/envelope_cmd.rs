@@ -88,7 +88,10 @@ fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>, Failure> {
             if count > 1000 {
                 return Err(usage(format!("{flag}: `{text}` has more than 1000 values")));
             }
-            (0..count).map(|i| start + step * i as f64).collect()
+            // Rounded to 1e-9, so that 0.3:0.9:0.1 gives 0.6, not 0.6000000000000001.
+            (0..count)
+                .map(|i| ((start + step * i as f64) * 1e9).round() / 1e9)
+                .collect()
         }
         [_] => text.split(',').map(number).collect::<Result<Vec<_>, _>>()?,
         _ => {
@@ -117,8 +120,8 @@ fn default_machs(config: &SystemConfig) -> Vec<f64> {
     machs
 }
 
-/// Runs `decoy envelope`: maps, writes `envelope.csv`, `envelope.json` and
-/// `summary.txt` into the output directory, and returns the summary (or the
+/// Runs `decoy envelope`: maps, writes `envelope.csv`, `envelope.json`,
+/// `summary.txt` and the heat map `limit.png/.svg` into the output directory, and returns the summary (or the
 /// JSON).
 pub fn envelope_command(
     config: &SystemConfig,
@@ -191,6 +194,7 @@ pub fn envelope_command(
     write("envelope.csv", &map.csv())?;
     let summary = map.summary();
     write("summary.txt", &summary)?;
+    map.write_heatmap(&out)?;
     if json {
         return Ok(to_json(&value));
     }
@@ -213,7 +217,10 @@ mod tests {
             parse_list("--altitudes", "0:15000:3000").unwrap(),
             vec![0.0, 3000.0, 6000.0, 9000.0, 12000.0, 15000.0]
         );
-        assert_eq!(parse_list("--machs", "0.3:0.5:0.1").unwrap().len(), 3);
+        assert_eq!(
+            parse_list("--machs", "0.3:0.9:0.1").unwrap(),
+            vec![0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
+        );
         for bad in ["", "a", "1:2", "1:0:1", "0:1:0", "0:1:-1", "1,x", "nan"] {
             assert!(parse_list("--machs", bad).is_err(), "{bad}");
         }

@@ -60,6 +60,9 @@
 //! ```
 
 pub mod atomic;
+mod heatmap;
+
+pub use heatmap::{HeatMap, write_heatmap};
 
 use std::borrow::Cow;
 use std::ffi::OsString;
@@ -651,7 +654,18 @@ fn write_figure_shaded(
         draw_figure(&root, &data)?;
         root.present().map_err(draw_err)?;
     }
-    let png = encode_png(&pixels, size)?;
+    save_figure(stem, &pixels, size, &svg)
+}
+
+/// Writes a drawn figure: `pixels` (RGB, `size`) as `stem.png`, `svg` as
+/// `stem.svg`, each whole or not at all.
+fn save_figure(
+    stem: &Path,
+    pixels: &[u8],
+    size: (u32, u32),
+    svg: &str,
+) -> Result<[PathBuf; 2], PlotError> {
+    let png = encode_png(pixels, size)?;
 
     let png_path = with_suffix(stem, ".png");
     let svg_path = with_suffix(stem, ".svg");

@@ -33,6 +33,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use decoy_config::SystemConfig;
 use decoy_plots::atomic::write_atomically;
+use decoy_plots::{HeatMap, write_heatmap};
 pub use decoy_schema::Manoeuvre;
 use decoy_schema::{PerRequirement, Requirement};
 use decoy_sim::{InitialState, RunOptions, Scenario, SimError, simulate_recorded};
@@ -73,6 +74,19 @@ pub enum Limit {
 }
 
 impl Limit {
+    /// One letter: the requirement's initial (`P`, `C`, `T`, `E`), `n` (load
+    /// factor) or `w` (body rate).
+    pub fn mark(&self) -> &'static str {
+        match self {
+            Limit::Requirement(Requirement::Posture) => "P",
+            Limit::Requirement(Requirement::Collision) => "C",
+            Limit::Requirement(Requirement::Tension) => "T",
+            Limit::Requirement(Requirement::Exhaust) => "E",
+            Limit::LoadFactor => "n",
+            Limit::BodyRate => "w",
+        }
+    }
+
     /// In words: the requirement's name, `load factor` or `body rate`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -442,6 +456,16 @@ fn to_json(value: &impl Serialize, path: &Path) -> Result<String, SimError> {
 }
 
 impl EnvelopeMap {
+    /// Writes the heat map ([`EnvelopeMap::heatmap`]) as `limit.png` and
+    /// `limit.svg` in `dir`; returns the files.
+    pub fn write_heatmap(&self, dir: &Path) -> Result<[PathBuf; 2], SimError> {
+        let stem = dir.join("limit");
+        write_heatmap(&self.heatmap(), &stem).map_err(|e| SimError::Plot {
+            stem,
+            message: e.to_string(),
+        })
+    }
+
     /// `envelope.csv`: a row per cell, grid order.
     pub fn csv(&self) -> String {
         let mut out = String::from(
@@ -495,6 +519,62 @@ impl EnvelopeMap {
         })
     }
 
+    /// The heat map of the limits over Mach x altitude (highest altitude on
+    /// top), each cell marked with what limits it; for the pull-up, the
+    /// contour of the paper's 0.10 rad/s.
+    pub fn heatmap(&self) -> HeatMap {
+        let spec = &self.spec;
+        let n = spec.machs.len();
+        let rows: Vec<&[Cell]> = self.cells.chunks(n).rev().collect();
+        let pull_up = spec.manoeuvre == Manoeuvre::PullUp;
+        HeatMap {
+            title: format!(
+                "{}: largest rate clear of every requirement [rad/s]",
+                spec.manoeuvre.name()
+            ),
+            subtitle: vec![
+                format!(
+                    "{} segments{}, rates built over {} s, bisected to {} rad/s",
+                    spec.segments,
+                    if spec.grading == 1.0 {
+                        String::new()
+                    } else {
+                        format!(" graded {}", spec.grading)
+                    },
+                    spec.onset_s,
+                    spec.tolerance
+                ),
+                format!(
+                    "limited by P posture, C collision, T tension, E exhaust; n load factor, w body rate: the envelope's cap{}",
+                    if pull_up {
+                        "; thick line: 0.10 rad/s, the paper's advice"
+                    } else {
+                        ""
+                    }
+                ),
+            ],
+            x_label: "Mach".to_owned(),
+            y_label: "altitude [m]".to_owned(),
+            columns: spec.machs.iter().map(|m| format!("{m}")).collect(),
+            rows: spec
+                .altitudes_m
+                .iter()
+                .rev()
+                .map(|h| format!("{h}"))
+                .collect(),
+            values: rows
+                .iter()
+                .map(|r| r.iter().map(|c| c.limit).collect())
+                .collect(),
+            marks: rows
+                .iter()
+                .map(|r| r.iter().map(|c| c.limiting.mark().to_owned()).collect())
+                .collect(),
+            decimals: 3,
+            contour: pull_up.then_some(0.10),
+        }
+    }
+
     /// The map in words: per altitude a line of the limits over Mach (with the
     /// limiting requirement's initial), and where the paper's 0.10 rad/s
     /// pull-up advice holds.
@@ -520,12 +600,7 @@ impl EnvelopeMap {
         for (row, h) in self.cells.chunks(spec.machs.len()).zip(&spec.altitudes_m) {
             out.push_str(&format!("{:>13} m", h));
             for c in row {
-                let mark = match c.limiting {
-                    Limit::Requirement(r) => r.name()[..1].to_uppercase(),
-                    Limit::LoadFactor => "n".to_owned(),
-                    Limit::BodyRate => "w".to_owned(),
-                };
-                out.push_str(&format!(" {:>7.3} {mark}", c.limit));
+                out.push_str(&format!(" {:>7.3} {}", c.limit, c.limiting.mark()));
             }
             out.push('\n');
         }
