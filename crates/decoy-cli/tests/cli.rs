@@ -1488,12 +1488,17 @@ fn envelope_maps_resumes_and_checks() {
         assert_eq!(
             keys(cell),
             BTreeSet::from([
+                "advised",
+                "advisory_lead_s",
                 "altitude_m",
                 "cap",
+                "clear_runs",
+                "false_advisories",
                 "limit",
                 "limiting_requirement",
                 "mach",
                 "margin",
+                "runs",
                 "steady_margins"
             ])
         );

@@ -8,8 +8,8 @@
 //!
 //! - `trim(altitude, mach, *, segments, grading, config)`: `decoy trim --json`'s
 //!   dict ([`decoy_sim::trim::level_trim`]);
-//! - `simulate(scenario, *, rate, altitude, mach, t_end, segments, grading, dt,
-//!   initial, config, out, plots)`: `decoy simulate`'s run
+//! - `simulate(scenario, *, rate, onset, altitude, mach, t_end, segments,
+//!   grading, dt, initial, config, out, plots)`: `decoy simulate`'s run
 //!   ([`decoy_sim::simulate_recorded`]) as a `Simulation`: the summary
 //!   (`summary.json`'s dict), the time series and the cable snapshots (the
 //!   columns of `timeseries.csv` and `cable.csv` as NumPy arrays); files only

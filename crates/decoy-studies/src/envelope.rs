@@ -117,6 +117,24 @@ pub struct Cell {
     pub steady_margins: PerRequirement<Option<f64>>,
     /// Runs flown for the cell.
     pub runs: u32,
+    /// The onboard look-ahead's advisory lead on the limiting requirement at
+    /// the smallest rate found violating it, s (first violation - first
+    /// advisory; negative: late); None when no run violated it, or it was
+    /// violated unadvised ([`Cell::advised`]).
+    #[serde(default)]
+    pub advisory_lead_s: Option<f64>,
+    /// Whether that violation was advised at all (None: no run violated a
+    /// requirement).
+    #[serde(default)]
+    pub advised: Option<bool>,
+    /// Runs of the cell that stayed clear of every requirement but in which
+    /// the look-ahead advised against one (steady flight included): false
+    /// advisories.
+    #[serde(default)]
+    pub false_advisories: u32,
+    /// Runs of the cell that stayed clear of every requirement.
+    #[serde(default)]
+    pub clear_runs: u32,
 }
 
 /// The map: the spec and its cells in grid order (altitude-major).
@@ -193,6 +211,11 @@ fn cap(config: &SystemConfig, manoeuvre: Manoeuvre, speed: f64) -> (f64, Limit) 
 struct Trial {
     violated: Option<Requirement>,
     margins: PerRequirement<Option<f64>>,
+    /// Whether the look-ahead advised against any requirement.
+    advised: bool,
+    /// The violated requirement's advisory lead, s (first violation - first
+    /// advisory; None: not advised before it).
+    lead: Option<f64>,
 }
 
 /// Flies `scenario` at the cell's condition with `rate` (None: the scenario's
@@ -230,6 +253,10 @@ fn fly(
     Ok(Trial {
         violated,
         margins: requirements.map(|r| r.worst_margin),
+        advised: Requirement::ALL
+            .into_iter()
+            .any(|r| requirements[r].first_advisory_s.is_some()),
+        lead: violated.and_then(|r| requirements[r].advisory_lead_s),
     })
 }
 
@@ -248,9 +275,13 @@ fn map_cell(
         .mach_to_speed(altitude, mach)
         .map_err(|e| at(e.into()))?;
     let (cap, capped_by) = cap(config, spec.manoeuvre, speed);
-    let steady_trial = fly(config, spec, &steady, condition, None, Some(STEADY_S)).map_err(at)?;
-    let mut runs = 1;
-    let cell = |limit: f64, limiting: Limit, margin: Option<f64>, runs: u32| Cell {
+    // Every trial's advisories: the false ones (a clear run advised against)
+    // and the lead of the last violation (the smallest violating rate's).
+    let mut tally = Tally::default();
+    let steady_trial = tally
+        .note(fly(config, spec, &steady, condition, None, Some(STEADY_S)))
+        .map_err(at)?;
+    let cell = |limit: f64, limiting: Limit, margin: Option<f64>, tally: &Tally| Cell {
         altitude_m: altitude,
         mach,
         limit,
@@ -258,20 +289,25 @@ fn map_cell(
         limiting,
         margin,
         steady_margins: steady_trial.margins,
-        runs,
+        runs: tally.runs,
+        advisory_lead_s: tally.lead,
+        advised: tally.advised,
+        false_advisories: tally.false_advisories,
+        clear_runs: tally.clear_runs,
     };
     if let Some(r) = steady_trial.violated {
         return Ok(cell(
             0.0,
             Limit::Requirement(r),
             steady_trial.margins[r],
-            runs,
+            &tally,
         ));
     }
-    let at_cap = fly(config, spec, &manoeuvre, condition, Some(cap), None).map_err(at)?;
-    runs += 1;
+    let at_cap = tally
+        .note(fly(config, spec, &manoeuvre, condition, Some(cap), None))
+        .map_err(at)?;
     let Some(mut limiting) = at_cap.violated else {
-        return Ok(cell(cap, capped_by, None, runs));
+        return Ok(cell(cap, capped_by, None, &tally));
     };
     // Bisection: `lo` clear, `hi` violating `limiting` first.
     let (mut lo, mut hi) = (0.0, cap);
@@ -279,8 +315,9 @@ fn map_cell(
     let mut clear_margins = steady_trial.margins;
     while hi - lo > spec.tolerance {
         let mid = 0.5 * (lo + hi);
-        let trial = fly(config, spec, &manoeuvre, condition, Some(mid), None).map_err(at)?;
-        runs += 1;
+        let trial = tally
+            .note(fly(config, spec, &manoeuvre, condition, Some(mid), None))
+            .map_err(at)?;
         match trial.violated {
             Some(r) => {
                 hi = mid;
@@ -293,7 +330,36 @@ fn map_cell(
         }
         margin = clear_margins[limiting];
     }
-    Ok(cell(lo, Limit::Requirement(limiting), margin, runs))
+    Ok(cell(lo, Limit::Requirement(limiting), margin, &tally))
+}
+
+/// What a cell's trials said of the advisories.
+#[derive(Default)]
+struct Tally {
+    runs: u32,
+    clear_runs: u32,
+    false_advisories: u32,
+    /// The last violating trial's lead and whether it was advised (the
+    /// bisection's violating rates fall, so the last is the smallest).
+    lead: Option<f64>,
+    advised: Option<bool>,
+}
+
+impl Tally {
+    fn note(&mut self, trial: Result<Trial, SimError>) -> Result<Trial, SimError> {
+        let trial = trial?;
+        self.runs += 1;
+        if trial.violated.is_some() {
+            self.lead = trial.lead;
+            self.advised = Some(trial.lead.is_some());
+        } else {
+            self.clear_runs += 1;
+            if trial.advised {
+                self.false_advisories += 1;
+            }
+        }
+        Ok(trial)
+    }
 }
 
 /// Maps `spec` over its grid with `workers` threads (at least one), writing
@@ -469,13 +535,13 @@ impl EnvelopeMap {
     /// `envelope.csv`: a row per cell, grid order.
     pub fn csv(&self) -> String {
         let mut out = String::from(
-            "altitude_m,mach,limit_radps,cap_radps,limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m\n",
+            "altitude_m,mach,limit_radps,cap_radps,limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,false_advisories\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
         for c in &self.cells {
             let s = &c.steady_margins;
             out.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 c.altitude_m,
                 c.mach,
                 c.limit,
@@ -485,7 +551,11 @@ impl EnvelopeMap {
                 opt(s.posture),
                 opt(s.collision),
                 opt(s.tension),
-                opt(s.exhaust)
+                opt(s.exhaust),
+                opt(c.advisory_lead_s),
+                c.runs,
+                c.clear_runs,
+                c.false_advisories
             ));
         }
         out
@@ -509,6 +579,11 @@ impl EnvelopeMap {
                 "limiting_requirement": c.limiting.name(),
                 "margin": c.margin,
                 "cap": c.cap,
+                "advisory_lead_s": c.advisory_lead_s,
+                "advised": c.advised,
+                "runs": c.runs,
+                "clear_runs": c.clear_runs,
+                "false_advisories": c.false_advisories,
                 "steady_margins": {
                     "posture": c.steady_margins.posture,
                     "collision": c.steady_margins.collision,
@@ -575,6 +650,30 @@ impl EnvelopeMap {
         }
     }
 
+    /// The onboard look-ahead's advisories over the map, in words: how many
+    /// of the cells' violations (at the smallest violating rate) were
+    /// advised at least 1 s ahead, later, or not at all, and the false
+    /// advisories in the runs that stayed clear.
+    pub fn advisories(&self) -> String {
+        let violated: Vec<&Cell> = self.cells.iter().filter(|c| c.advised.is_some()).collect();
+        let ahead = violated
+            .iter()
+            .filter(|c| c.advisory_lead_s.is_some_and(|l| l >= 1.0))
+            .count();
+        let late = violated
+            .iter()
+            .filter(|c| c.advisory_lead_s.is_some_and(|l| l < 1.0))
+            .count();
+        let missed = violated.iter().filter(|c| c.advised == Some(false)).count();
+        let clear: u32 = self.cells.iter().map(|c| c.clear_runs).sum();
+        let false_advisories: u32 = self.cells.iter().map(|c| c.false_advisories).sum();
+        let cells_false = self.cells.iter().filter(|c| c.false_advisories > 0).count();
+        format!(
+            "Advisories (the onboard look-ahead): of {} cells' violations (at the smallest violating rate), {ahead} advised at least 1 s ahead, {late} less than 1 s ahead, {missed} not advised; {false_advisories} false advisories in {clear} runs that stayed clear ({cells_false} cells)\n",
+            violated.len()
+        )
+    }
+
     /// The map in words: per altitude a line of the limits over Mach (with the
     /// limiting requirement's initial), and where the paper's 0.10 rad/s
     /// pull-up advice holds.
@@ -604,6 +703,7 @@ impl EnvelopeMap {
             }
             out.push('\n');
         }
+        out.push_str(&self.advisories());
         if spec.manoeuvre == Manoeuvre::PullUp {
             let holds = self.cells.iter().filter(|c| c.limit >= 0.10).count();
             out.push_str(&format!(
@@ -669,6 +769,15 @@ mod tests {
         let manoeuvre = Scenario::builtin("pull-up").unwrap();
         for c in &one.cells {
             assert!(c.limit <= c.cap && c.runs >= 2, "{c:?}");
+            // A violation was met (and its advisory judged) exactly when a
+            // requirement limits; the tallies are of the cell's runs.
+            assert_eq!(
+                c.advised.is_some(),
+                matches!(c.limiting, Limit::Requirement(_)),
+                "{c:?}"
+            );
+            assert_eq!(c.advised == Some(true), c.advisory_lead_s.is_some());
+            assert!(c.false_advisories <= c.clear_runs && c.clear_runs <= c.runs);
             if let Limit::Requirement(r) = c.limiting {
                 let condition = (c.altitude_m, c.mach);
                 let clear =
@@ -708,6 +817,10 @@ mod tests {
         // The summary marks the limits and the paper's advice.
         let text = one.summary();
         assert!(text.contains("The paper's advice"), "{text}");
+        assert!(
+            text.contains("Advisories (the onboard look-ahead): of 4 cells"),
+            "{text}"
+        );
         assert_eq!(one.csv().lines().count(), 5);
     }
 

@@ -6,9 +6,9 @@ unless asked, the numbers bit for bit the command line's.
 
 - ``trim(altitude, mach, *, segments=None, grading=None, config=None)``: the
   steady level-flight trim, the dict ``decoy trim --json`` prints;
-- ``simulate(scenario, *, rate=None, altitude=None, mach=None, t_end=None,
-  segments=None, grading=None, dt=None, initial="trim", config=None, out=None,
-  plots=True)``: a flight as ``decoy simulate``, returned as a ``Simulation``
+- ``simulate(scenario, *, rate=None, onset=None, altitude=None, mach=None,
+  t_end=None, segments=None, grading=None, dt=None, initial="trim", config=None,
+  out=None, plots=True)``: a flight as ``decoy simulate``, returned as a ``Simulation``
   (``summary``: summary.json's dict; ``timeseries``, ``cable``: the columns of
   timeseries.csv and cable.csv as float64 NumPy arrays; ``files``);
 - ``builtin_config()``, ``builtin_scenario(name)``, ``SCENARIOS``: the built-in
