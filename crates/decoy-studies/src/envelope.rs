@@ -36,8 +36,9 @@ use decoy_plots::atomic::write_atomically;
 use decoy_plots::{HeatMap, write_heatmap};
 pub use decoy_schema::Manoeuvre;
 use decoy_schema::{PerRequirement, Requirement};
-use decoy_sim::{InitialState, RunOptions, Scenario, SimError, simulate_recorded};
+use decoy_sim::{InitialState, RunOptions, Scenario, SimError, describe_layout, simulate_recorded};
 use serde::{Deserialize, Serialize};
+use solver_core::SegmentLayout;
 
 /// Simulated time of a cell's steady-flight run, s.
 const STEADY_S: f64 = 1.0;
@@ -178,6 +179,21 @@ impl EnvelopeSpec {
             ));
         }
         Ok(())
+    }
+
+    /// The model in words (`300 uniform segments`, decoy-sim's
+    /// [`describe_layout`]).
+    pub fn describe_model(&self) -> String {
+        describe_layout(&if self.grading == 1.0 {
+            SegmentLayout::Uniform {
+                count: self.segments,
+            }
+        } else {
+            SegmentLayout::Graded {
+                count: self.segments,
+                ratio: self.grading,
+            }
+        })
     }
 
     /// The cells' flight conditions in grid order.
@@ -609,13 +625,8 @@ impl EnvelopeMap {
             ),
             subtitle: vec![
                 format!(
-                    "{} segments{}, rates built over {} s, bisected to {} rad/s",
-                    spec.segments,
-                    if spec.grading == 1.0 {
-                        String::new()
-                    } else {
-                        format!(" graded {}", spec.grading)
-                    },
+                    "{}, rates built over {} s, bisected to {} rad/s",
+                    spec.describe_model(),
                     spec.onset_s,
                     spec.tolerance
                 ),
@@ -680,14 +691,9 @@ impl EnvelopeMap {
     pub fn summary(&self) -> String {
         let spec = &self.spec;
         let mut out = format!(
-            "{} envelope: largest rate clear of every requirement, rad/s ({} segments{}, onset {} s, to {} rad/s); P posture, C collision, T tension, E exhaust, n load factor, w body rate\n",
+            "{} envelope: largest rate clear of every requirement, rad/s ({}, onset {} s, to {} rad/s); P posture, C collision, T tension, E exhaust, n load factor, w body rate\n",
             spec.manoeuvre.name(),
-            spec.segments,
-            if spec.grading == 1.0 {
-                String::new()
-            } else {
-                format!(" graded {}", spec.grading)
-            },
+            spec.describe_model(),
             spec.onset_s,
             spec.tolerance
         );
