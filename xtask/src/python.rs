@@ -2,7 +2,8 @@
 //! xtask setup` and used by the `python client (pytest)` test stage.
 //!
 //! What goes in: `clients/python/requirements.txt` (pinned: `iceoryx2` of the Rust
-//! crate's version, `jsbsim`, `numpy`, `matplotlib`, `pytest`, `maturin`), the
+//! crate's version, `jsbsim`, `numpy`, `matplotlib`, `pytest`, `maturin`, and
+//! `ray` with its dependencies), the
 //! bridge's client package (`pip install -e clients/python`), and the solver's
 //! package `decoy` (`crates/decoy-py`): a wheel that maturin builds into the
 //! workspace's `target/` with the host tests' profile, installed with pip.
@@ -31,7 +32,8 @@ const REQUIREMENTS: &str = "clients/python/requirements.txt";
 /// The record of what the environment was made from, relative to the environment.
 const STAMP: &str = "decoy-setup.stamp";
 /// Modules that must import for the environment to count as present.
-const IMPORTS: &str = "import iceoryx2, jsbsim, numpy, matplotlib, pytest, maturin, decoy_bridge";
+const IMPORTS: &str =
+    "import iceoryx2, jsbsim, numpy, matplotlib, pytest, maturin, ray, decoy_bridge";
 /// Time limit of one `pip install` (about 30 s with a warm cache, a few minutes cold).
 const PIP_TIMEOUT: Duration = Duration::from_secs(900);
 /// The solver's package (the crate `decoy-py`), relative to the root.

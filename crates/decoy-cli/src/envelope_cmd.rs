@@ -1,11 +1,19 @@
-//! `decoy envelope`: the manoeuvre envelope map (`decoy_studies::envelope`).
+//! `decoy envelope`: the manoeuvre envelope map (`decoy_studies::envelope`),
+//! on this machine's cores or, with `--ray ADDRESS`, as Ray tasks of the
+//! Python package `decoy` (`decoy._envelope`), whose cells the map then
+//! resumes from its directory.
 
+use std::io::{BufRead as _, BufReader, Read as _};
 use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 use std::sync::Mutex;
+use std::time::Instant;
 
 use clap::{Args, ValueEnum};
 use decoy_config::SystemConfig;
-use decoy_studies::envelope::{EnvelopeSpec, Manoeuvre, map_envelope};
+use decoy_studies::envelope::{
+    EnvelopePlan, EnvelopeRequest, EnvelopeSpec, Manoeuvre, map_envelope, pending_cells,
+};
 
 use crate::failure::{Failure, to_json, usage};
 use crate::progress::Progress;
@@ -17,12 +25,14 @@ pub enum EnvelopeManoeuvre {
     PullUp,
     /// The level coordinated turn.
     Turn,
+    /// The level acceleration along the flight path (by `--mach-gain`).
+    Acceleration,
 }
 
 /// `decoy envelope`.
 #[derive(Args, Debug)]
 pub struct EnvelopeArgs {
-    /// The manoeuvre whose largest clear rate is mapped.
+    /// The manoeuvre whose largest clear rate (or acceleration) is mapped.
     #[arg(long, value_enum)]
     manoeuvre: EnvelopeManoeuvre,
     /// Altitudes, m: `a,b,c` or `start:stop:step` (default: the configuration's
@@ -30,7 +40,8 @@ pub struct EnvelopeArgs {
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     altitudes: Option<String>,
     /// Mach numbers: `a,b,c` or `start:stop:step` (default: the configuration's
-    /// `[envelope]` Mach range by 0.1, and its upper end).
+    /// `[envelope]` Mach range by 0.1, and its upper end; for the acceleration,
+    /// up to the upper end less the Mach gain).
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     machs: Option<String>,
     /// Cable segments (default: the configuration's host model, `solver.segments_host`).
@@ -40,25 +51,26 @@ pub struct EnvelopeArgs {
     #[arg(long, value_name = "R", allow_negative_numbers = true)]
     grading: Option<f64>,
     /// Time over which the rate is built (and the pull-up's removed), s
-    /// (docs/outputs.md "Flyable manoeuvres").
-    #[arg(
-        long,
-        value_name = "S",
-        default_value_t = 0.5,
-        allow_negative_numbers = true
-    )]
-    onset: f64,
-    /// Bisection tolerance on the rate, rad/s.
-    #[arg(
-        long,
-        value_name = "W",
-        default_value_t = 0.005,
-        allow_negative_numbers = true
-    )]
-    tolerance: f64,
+    /// (default 0.5; docs/outputs.md "Flyable manoeuvres"; not for the
+    /// acceleration).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    onset: Option<f64>,
+    /// The acceleration's gain in Mach number from each cell's (default 0.1;
+    /// to the envelope's upper Mach at most).
+    #[arg(long, value_name = "DM", allow_negative_numbers = true)]
+    mach_gain: Option<f64>,
+    /// Bisection tolerance: rad/s on a rate (default 0.005), m/s^2 on the
+    /// acceleration (default 0.05).
+    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    tolerance: Option<f64>,
     /// Cells mapped side by side (default: the machine's cores).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     workers: Option<usize>,
+    /// Map the cells as tasks on the Ray cluster at ADDRESS (`host:port`, or
+    /// `auto`), through the Python package `decoy` (the interpreter
+    /// `$DECOY_PYTHON`, else the nearest `.venv/bin/python`, else `python3`).
+    #[arg(long, value_name = "ADDRESS", conflicts_with = "workers")]
+    ray: Option<String>,
     /// Output directory (default out/envelope-MANOEUVRE); a map of the same
     /// inputs there is resumed.
     #[arg(long, value_name = "DIR")]
@@ -106,23 +118,9 @@ fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>, Failure> {
     Ok(values)
 }
 
-/// The default Mach numbers: from the envelope's lower end by 0.1, and its
-/// upper end.
-fn default_machs(config: &SystemConfig) -> Vec<f64> {
-    let [lo, hi] = config.envelope.mach;
-    let mut machs: Vec<f64> = (0..)
-        .map(|i| ((lo + 0.1 * f64::from(i)) * 1000.0).round() / 1000.0)
-        .take_while(|m| *m <= hi + 1e-9)
-        .collect();
-    if machs.last().is_none_or(|m| *m < hi - 1e-9) {
-        machs.push(hi);
-    }
-    machs
-}
-
-/// Runs `decoy envelope`: maps, writes `envelope.csv`, `envelope.json`,
-/// `summary.txt` and the heat map `limit.png/.svg` into the output directory, and returns the summary (or the
-/// JSON).
+/// Runs `decoy envelope`: maps (here or on Ray), writes `envelope.csv`,
+/// `envelope.json`, `summary.txt` and the heat map `limit.png/.svg` into the
+/// output directory, and returns the summary (or the JSON).
 pub fn envelope_command(
     config: &SystemConfig,
     args: &EnvelopeArgs,
@@ -131,79 +129,176 @@ pub fn envelope_command(
     let manoeuvre = match args.manoeuvre {
         EnvelopeManoeuvre::PullUp => Manoeuvre::PullUp,
         EnvelopeManoeuvre::Turn => Manoeuvre::Turn,
+        EnvelopeManoeuvre::Acceleration => Manoeuvre::Acceleration,
     };
     let altitudes_m = match &args.altitudes {
-        Some(list) => parse_list("--altitudes", list)?,
-        None => {
-            let [lo, hi] = config.envelope.altitude_m;
-            parse_list("--altitudes", &format!("{lo}:{hi}:3000"))?
-        }
+        Some(list) => Some(parse_list("--altitudes", list)?),
+        None => None,
     };
     let machs = match &args.machs {
-        Some(list) => parse_list("--machs", list)?,
-        None => default_machs(config),
+        Some(list) => Some(parse_list("--machs", list)?),
+        None => None,
     };
     if args.workers == Some(0) {
         return Err(usage("--workers must be at least 1"));
     }
-    if args.onset < 0.0 || !args.onset.is_finite() {
-        return Err(usage(format!(
-            "--onset must be a non-negative number of seconds, got {}",
-            args.onset
-        )));
-    }
+    let spec = EnvelopeSpec::new(
+        config,
+        manoeuvre,
+        &EnvelopeRequest {
+            altitudes_m,
+            machs,
+            segments: args.segments,
+            grading: args.grading,
+            onset_s: args.onset,
+            tolerance: args.tolerance,
+            mach_gain: args.mach_gain,
+        },
+    )?;
     let workers = args.workers.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(usize::from)
             .unwrap_or(1)
     });
-    let spec = EnvelopeSpec {
-        manoeuvre,
-        altitudes_m,
-        machs,
-        segments: args.segments.unwrap_or(config.solver.segments_host),
-        grading: args.grading.unwrap_or(1.0),
-        onset_s: args.onset,
-        tolerance: args.tolerance,
-    };
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(format!("envelope-{}", manoeuvre.name())));
+    let started = Instant::now();
     let bar = Mutex::new(Progress::new("mapping", json));
     let progress = |done: usize, all: usize| {
         if let Ok(mut b) = bar.lock() {
             b.update(done as f64 / all.max(1) as f64);
         }
     };
+    // On Ray the cells land in `out`, and the map below resumes from them.
+    let mut on_ray = None;
+    if let Some(address) = &args.ray {
+        let plan = EnvelopePlan::new(config, &spec)?;
+        let pending = pending_cells(&plan, &out)?;
+        let all = spec.conditions().len();
+        map_on_ray(address, &out, pending.len(), all, &progress)?;
+        on_ray = Some((address, pending.len()));
+    }
     let map = map_envelope(config, &spec, workers, Some(&out), &progress);
     if let Ok(b) = bar.into_inner() {
         b.finish();
     }
     let map = map?;
-    let write = |name: &str, text: &str| -> Result<(), Failure> {
-        let path = out.join(name);
-        decoy_sim::atomic::write_atomically(&path, text.as_bytes())
-            .map_err(|e| Failure::Solver(format!("cannot write {}: {e}", path.display())))
-    };
-    let value = map.json();
-    let mut pretty = serde_json::to_string_pretty(&value)
-        .map_err(|e| Failure::Solver(format!("cannot write envelope.json: {e}")))?;
-    pretty.push('\n');
-    write("envelope.json", &pretty)?;
-    write("envelope.csv", &map.csv())?;
-    let summary = map.summary();
-    write("summary.txt", &summary)?;
-    map.write_heatmap(&out)?;
+    let elapsed = started.elapsed().as_secs_f64();
+    map.write_outputs(&out)?;
     if json {
-        return Ok(to_json(&value));
+        return Ok(to_json(&map.json()));
     }
+    let cells = map.cells.len();
+    let (mapped, resumed, where_) = match on_ray {
+        Some((address, mapped)) => (
+            mapped,
+            cells - mapped,
+            format!("on the Ray cluster {address}"),
+        ),
+        None => (
+            cells - map.resumed,
+            map.resumed,
+            format!("on {workers} worker{}", if workers == 1 { "" } else { "s" }),
+        ),
+    };
     Ok(format!(
-        "{summary}{} cells ({} resumed from an earlier run); written to {}\n",
-        map.cells.len(),
-        map.resumed,
+        "{}{cells} cells ({resumed} resumed from an earlier run; {mapped} mapped {where_} in {elapsed:.1} s, {:.2} cells/s); written to {}\n",
+        map.summary(),
+        mapped as f64 / elapsed.max(1e-9),
         out.display()
     ))
+}
+
+/// The Python interpreter `--ray` runs: `$DECOY_PYTHON`, else the nearest
+/// `.venv/bin/python` above the working directory or this executable (the
+/// repository's, which `cargo xtask setup` makes), else `python3`.
+fn python() -> PathBuf {
+    if let Some(p) = std::env::var_os("DECOY_PYTHON") {
+        return PathBuf::from(p);
+    }
+    let starts = [std::env::current_dir().ok(), std::env::current_exe().ok()];
+    starts
+        .into_iter()
+        .flatten()
+        .flat_map(|start| {
+            start
+                .ancestors()
+                .map(|dir| dir.join(".venv/bin/python"))
+                .collect::<Vec<_>>()
+        })
+        .find(|candidate| candidate.is_file())
+        .unwrap_or_else(|| PathBuf::from("python3"))
+}
+
+/// Maps the `pending` cells of the map prepared in `out` as Ray tasks
+/// (`python -m decoy._envelope ADDRESS OUT`, which stores each cell in `out`
+/// as it comes and prints `cells DONE TOTAL` lines), telling `progress` of them.
+fn map_on_ray(
+    address: &str,
+    out: &Path,
+    pending: usize,
+    all: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(), Failure> {
+    if pending == 0 {
+        return Ok(());
+    }
+    let python = python();
+    let failed = |what: String| {
+        Failure::Solver(format!(
+            "--ray: {what} (the cells are Ray tasks of the Python package `decoy`: `cargo xtask setup` installs it and Ray into .venv/, and DECOY_PYTHON names another interpreter)"
+        ))
+    };
+    let mut child = Command::new(&python)
+        .args(["-m", "decoy._envelope", address])
+        .arg(out)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| failed(format!("cannot run {}: {e}", python.display())))?;
+    // Ray's own logging goes to stderr: read it aside, keep its last lines.
+    let mut stderr = child.stderr.take();
+    let reader = std::thread::spawn(move || {
+        let mut text = String::new();
+        if let Some(s) = stderr.as_mut() {
+            let _ = s.read_to_string(&mut text);
+        }
+        text
+    });
+    if let Some(stdout) = child.stdout.take() {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            // `cells DONE TOTAL`, DONE counting the cells resumed.
+            let done = line
+                .strip_prefix("cells ")
+                .and_then(|rest| rest.split_whitespace().next())
+                .and_then(|d| d.parse::<usize>().ok());
+            if let Some(done) = done {
+                progress(done, all);
+            }
+        }
+    }
+    let status = child
+        .wait()
+        .map_err(|e| failed(format!("{} did not finish: {e}", python.display())))?;
+    let stderr = reader.join().unwrap_or_default();
+    if status.success() {
+        return Ok(());
+    }
+    // The module's own message is its last `error: ` line; else Python's last line.
+    let message = stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("error: "))
+        .or_else(|| stderr.lines().rev().find(|l| !l.trim().is_empty()))
+        .unwrap_or("no message")
+        .to_owned();
+    Err(failed(format!(
+        "{} -m decoy._envelope failed ({status}): {message}",
+        python.display()
+    )))
 }
 
 #[cfg(test)]
@@ -225,9 +320,15 @@ mod tests {
             assert!(parse_list("--machs", bad).is_err(), "{bad}");
         }
         let config = SystemConfig::builtin().unwrap();
+        let defaults =
+            EnvelopeSpec::new(&config, Manoeuvre::Turn, &EnvelopeRequest::default()).unwrap();
         assert_eq!(
-            default_machs(&config),
+            defaults.machs,
             vec![0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95]
+        );
+        assert_eq!(
+            defaults.altitudes_m,
+            parse_list("--altitudes", "0:15000:3000").unwrap()
         );
     }
 }

@@ -1542,4 +1542,83 @@ fn envelope_maps_resumes_and_checks() {
     bad("--onset", "-1", "--onset must be a non-negative number");
     bad("--onset", "0.25", "a map of other inputs");
     bad("--workers", "0", "--workers must be at least 1");
+    bad(
+        "--mach-gain",
+        "0.1",
+        "--mach-gain applies to an acceleration, not to a pull-up",
+    );
+    bad("--ray", "127.0.0.1:1", "cannot be used with '--ray");
+}
+
+/// `decoy envelope --manoeuvre acceleration`: the limit in m/s^2 up to the
+/// envelope's bound, the Mach gain in the JSON, and the acceleration's own
+/// one-line errors (a Mach with no room to accelerate, an onset).
+#[test]
+fn envelope_maps_the_acceleration() {
+    let dir = sim_out("envelope-acceleration");
+    let args = |extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = [
+            "envelope",
+            "--manoeuvre",
+            "acceleration",
+            "--altitudes",
+            "9000",
+            "--machs",
+            "0.6",
+            "--segments",
+            "12",
+            "--grading",
+            "1.26",
+            "--tolerance",
+            "1",
+            "--out",
+            dir.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+        v.extend(extra.iter().map(|s| (*s).to_owned()));
+        v
+    };
+    let a = args(&["--json"]);
+    let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+    let map = json(&refs);
+    assert_eq!(map["manoeuvre"], "acceleration");
+    assert_eq!(map["limit_unit"], "m/s^2");
+    assert_eq!(map["mach_gain"], 0.1);
+    let cell = &map["cells"][0];
+    assert!(
+        num(cell, "limit") <= 10.0 && num(cell, "cap") == 10.0,
+        "{cell}"
+    );
+    let csv = std::fs::read_to_string(dir.join("envelope.csv")).unwrap();
+    assert!(
+        csv.starts_with("altitude_m,mach,limit_mps2,cap_mps2,"),
+        "{csv}"
+    );
+    for (extra, message) in [
+        (
+            &["--machs", "0.95"][..],
+            "must be below the envelope's upper Mach 0.95",
+        ),
+        (
+            &["--onset", "0.5"][..],
+            "--onset applies to a pull-up or a turn",
+        ),
+        (
+            &["--mach-gain", "0"][..],
+            "--mach-gain must be positive, got 0",
+        ),
+    ] {
+        let mut a = args(&[]);
+        for pair in extra.chunks(2) {
+            match a.iter().position(|x| x == pair[0]) {
+                Some(i) => a[i + 1] = pair[1].to_owned(),
+                None => a.extend([pair[0].to_owned(), pair[1].to_owned()]),
+            }
+        }
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        let e = error_of(&refs, 2);
+        assert!(e.contains(message), "{e}");
+    }
 }

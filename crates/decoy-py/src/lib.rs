@@ -14,6 +14,10 @@
 //!   (`summary.json`'s dict), the time series and the cable snapshots (the
 //!   columns of `timeseries.csv` and `cable.csv` as NumPy arrays); files only
 //!   with `out=`;
+//! - `envelope_plan`, `envelope_cell`, `envelope_pending`, `envelope_store`,
+//!   `envelope_map` (`envelope`): the manoeuvre envelope map's primitives,
+//!   which `python/decoy/_envelope.py` composes into `decoy.envelope()` (on
+//!   threads here, or as Ray tasks);
 //! - `builtin_config()`, `builtin_scenario(name)`, `SCENARIOS`: the built-in
 //!   configuration and shipped scenarios as dicts, to edit and pass back;
 //! - the exceptions (`errors`): `DecoyError` and its kinds, with the command
@@ -26,23 +30,22 @@
 
 use std::path::PathBuf;
 
-use decoy_config::SystemConfig;
 use decoy_schema::columns::{SIMULATE_CABLE, SIMULATE_TIMESERIES};
-use decoy_sim::scenario::MAX_SEGMENTS;
 use decoy_sim::trim::{TrimRequest, level_trim};
 use decoy_sim::{BUILTIN_SCENARIOS, InitialState, Recording, RunOptions, Scenario, SimError};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyMapping, PyString, PyTuple};
 
+mod args;
 mod convert;
+mod envelope;
 mod errors;
 mod worker;
 
-use errors::{argument_error, config_error, sim_error};
+use args::{load_config, segment_count};
+use errors::{argument_error, sim_error};
 
-/// How a dict given as the configuration is named in messages.
-const CONFIG_DICT: &str = "config dict";
 /// How a dict given as the scenario is named in messages (before its TOML's).
 const SCENARIO_DICT: &str = "scenario dict";
 
@@ -123,29 +126,6 @@ impl Simulation {
     }
 }
 
-/// The system configuration: `None` the built-in reference system, a path a
-/// TOML file (as `--config`), a dict that file's tables.
-fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemConfig> {
-    let loaded = match config {
-        None => SystemConfig::builtin(),
-        Some(c) if c.cast::<PyMapping>().is_ok() => {
-            let text = convert::toml_text(c, CONFIG_DICT)?;
-            let dir = std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
-            SystemConfig::from_text_in(CONFIG_DICT, &text, &dir)
-        }
-        Some(c) => match c.extract::<PathBuf>() {
-            Ok(path) => SystemConfig::from_file(path),
-            Err(_) => {
-                return Err(PyTypeError::new_err(format!(
-                    "config: expected None, a path or a dict, got a {}",
-                    c.get_type().name()?
-                )));
-            }
-        },
-    };
-    loaded.map_err(|e| config_error(&e))
-}
-
 /// The scenario: a shipped name or a TOML path (as `--scenario`), a path-like
 /// object a TOML file, a dict that file's keys.
 fn load_scenario(py: Python<'_>, scenario: &Bound<'_, PyAny>) -> PyResult<Scenario> {
@@ -162,21 +142,6 @@ fn load_scenario(py: Python<'_>, scenario: &Bound<'_, PyAny>) -> PyResult<Scenar
         )));
     };
     loaded.map_err(|e| sim_error(py, &e))
-}
-
-/// A segment count as the command line takes it (`--segments N`): a negative
-/// one is refused with the range the solver accepts.
-fn segment_count(segments: Option<i64>) -> PyResult<Option<usize>> {
-    segments
-        .map(|n| {
-            usize::try_from(n).map_err(|_| {
-                argument_error(
-                    "--segments",
-                    format!("must be between 1 and {MAX_SEGMENTS}, got {n}"),
-                )
-            })
-        })
-        .transpose()
 }
 
 /// The steady level-flight trim of the towed system, as `decoy trim --json`.
@@ -341,6 +306,11 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(builtin_config, m)?)?;
     m.add_function(wrap_pyfunction!(builtin_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(envelope::envelope_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(envelope::envelope_cell, m)?)?;
+    m.add_function(wrap_pyfunction!(envelope::envelope_pending, m)?)?;
+    m.add_function(wrap_pyfunction!(envelope::envelope_store, m)?)?;
+    m.add_function(wrap_pyfunction!(envelope::envelope_map, m)?)?;
     let names: Vec<&str> = BUILTIN_SCENARIOS.iter().map(|(n, _)| *n).collect();
     m.add("SCENARIOS", PyTuple::new(m.py(), names)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -1,7 +1,8 @@
 //! The manoeuvre envelope map (`decoy envelope`): for every flight condition
-//! of a grid of altitude x Mach, the largest pull-up or turn rate that violates
-//! none of the four requirements over the manoeuvre and its aftermath, the
-//! requirement that sets it, and the cell's steady-flight margins.
+//! of a grid of altitude x Mach, the largest pull-up or turn rate, or the
+//! largest along-path acceleration, that violates none of the four
+//! requirements over the manoeuvre and its aftermath, the requirement that
+//! sets it, and the cell's steady-flight margins.
 //!
 //! **A cell.** Its steady margins are the management's worst margins over 1 s
 //! of steady level flight from the trim. Its limit is found by bisection on the
@@ -31,7 +32,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use decoy_config::SystemConfig;
+use decoy_config::{AeroRow, SystemConfig};
 use decoy_plots::atomic::write_atomically;
 use decoy_plots::{HeatMap, write_heatmap};
 pub use decoy_schema::Manoeuvre;
@@ -43,10 +44,17 @@ use solver_core::SegmentLayout;
 /// Simulated time of a cell's steady-flight run, s.
 const STEADY_S: f64 = 1.0;
 
+/// Flight after an acceleration reached its final speed, s (the shipped
+/// acceleration flies 17 s after it).
+pub const AFTERMATH_S: f64 = 15.0;
+
+/// The acceleration map's default Mach gain: each cell accelerates by 0.1.
+pub const DEFAULT_MACH_GAIN: f64 = 0.1;
+
 /// What to map.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EnvelopeSpec {
-    /// `pull-up` or `turn`.
+    /// `pull-up`, `turn` or `acceleration`.
     pub manoeuvre: Manoeuvre,
     /// The grid's altitudes, m.
     pub altitudes_m: Vec<f64>,
@@ -58,8 +66,12 @@ pub struct EnvelopeSpec {
     pub grading: f64,
     /// Time over which the rate is built (and the pull-up's removed), s.
     pub onset_s: f64,
-    /// Bisection tolerance on the rate, rad/s.
+    /// Bisection tolerance on the rate, rad/s (on the acceleration, m/s^2).
     pub tolerance: f64,
+    /// The acceleration's gain in Mach number from the cell's (acceleration
+    /// only; to the envelope's upper Mach at most).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mach_gain: Option<f64>,
 }
 
 /// What limits a cell.
@@ -72,11 +84,14 @@ pub enum Limit {
     LoadFactor,
     /// The envelope's body rate bound caps the rate, and the cap is clear.
     BodyRate,
+    /// The envelope's along-path acceleration bound caps the acceleration,
+    /// and the cap is clear.
+    AccelerationBound,
 }
 
 impl Limit {
     /// One letter: the requirement's initial (`P`, `C`, `T`, `E`), `n` (load
-    /// factor) or `w` (body rate).
+    /// factor), `w` (body rate) or `a` (acceleration bound).
     pub fn mark(&self) -> &'static str {
         match self {
             Limit::Requirement(Requirement::Posture) => "P",
@@ -85,15 +100,18 @@ impl Limit {
             Limit::Requirement(Requirement::Exhaust) => "E",
             Limit::LoadFactor => "n",
             Limit::BodyRate => "w",
+            Limit::AccelerationBound => "a",
         }
     }
 
-    /// In words: the requirement's name, `load factor` or `body rate`.
+    /// In words: the requirement's name, `load factor`, `body rate` or
+    /// `acceleration bound`.
     pub fn name(&self) -> &'static str {
         match self {
             Limit::Requirement(r) => r.name(),
             Limit::LoadFactor => "load factor",
             Limit::BodyRate => "body rate",
+            Limit::AccelerationBound => "acceleration bound",
         }
     }
 }
@@ -105,9 +123,10 @@ pub struct Cell {
     pub altitude_m: f64,
     /// Mach number.
     pub mach: f64,
-    /// The largest rate found clear, rad/s.
+    /// The largest rate found clear, rad/s (acceleration, m/s^2).
     pub limit: f64,
-    /// The rate the envelope's load factor and body rate allow here, rad/s.
+    /// The rate the envelope's load factor and body rate allow here, rad/s
+    /// (the acceleration its bound allows, m/s^2).
     pub cap: f64,
     /// What sets the limit.
     pub limiting: Limit,
@@ -149,22 +168,212 @@ pub struct EnvelopeMap {
     pub resumed: usize,
 }
 
-/// What an output directory's `inputs.json` holds: a map's inputs.
+/// A map's inputs, what an output directory's `inputs.json` holds: the
+/// configuration and the spec. Its JSON ([`EnvelopePlan::to_json`]) is what
+/// another engine's workers get to map a cell ([`map_cell`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct Inputs {
-    config: SystemConfig,
-    spec: EnvelopeSpec,
+pub struct EnvelopePlan {
+    /// The system.
+    pub config: SystemConfig,
+    /// The system's aerodynamic table (its TOML names the file, and
+    /// `SystemConfig` does not serialize the rows): a map of another table is
+    /// a map of other inputs.
+    aero_rows: Vec<AeroRow>,
+    /// What to map.
+    pub spec: EnvelopeSpec,
 }
 
+impl EnvelopePlan {
+    /// The plan of `spec` on `config`, checked.
+    pub fn new(config: &SystemConfig, spec: &EnvelopeSpec) -> Result<EnvelopePlan, SimError> {
+        spec.check(config)?;
+        Ok(EnvelopePlan {
+            config: config.clone(),
+            aero_rows: config.aero_rows.clone(),
+            spec: spec.clone(),
+        })
+    }
+
+    /// `inputs.json`'s text (pretty, one newline at the end).
+    pub fn to_json(&self) -> Result<String, SimError> {
+        to_json(self, Path::new("inputs.json"))
+    }
+
+    /// The plan of `inputs.json`'s text, checked.
+    pub fn from_json(text: &str) -> Result<EnvelopePlan, SimError> {
+        let plan: EnvelopePlan = serde_json::from_str(text).map_err(|e| {
+            SimError::invalid(
+                "envelope plan",
+                "inputs",
+                format!("is not a map's inputs.json ({e})"),
+            )
+        })?;
+        let mut plan = plan;
+        plan.config.aero_rows = plan.aero_rows.clone();
+        plan.config.source = "the map's inputs.json".to_owned();
+        plan.config.validate()?;
+        plan.spec.check(&plan.config)?;
+        Ok(plan)
+    }
+}
+
+/// What a map asks for, each value None for its default
+/// ([`EnvelopeSpec::new`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EnvelopeRequest {
+    /// The altitudes, m (default: the configuration's `[envelope]` altitudes by 3000 m).
+    pub altitudes_m: Option<Vec<f64>>,
+    /// The Mach numbers (default: the `[envelope]` Mach range by 0.1 and its
+    /// upper end; for the acceleration, those at least the gain below it and the
+    /// upper end less the gain).
+    pub machs: Option<Vec<f64>>,
+    /// Cable segments (default: the configuration's `solver.segments_host`).
+    pub segments: Option<usize>,
+    /// Segment length ratio (default 1, uniform).
+    pub grading: Option<f64>,
+    /// Onset, s (default 0.5; pull-up and turn only).
+    pub onset_s: Option<f64>,
+    /// Bisection tolerance (default 0.005 rad/s; 0.05 m/s^2 for the acceleration).
+    pub tolerance: Option<f64>,
+    /// The acceleration's Mach gain (default 0.1; acceleration only).
+    pub mach_gain: Option<f64>,
+}
+
+/// The default onset, s.
+pub const DEFAULT_ONSET_S: f64 = 0.5;
+/// The default tolerance on a rate, rad/s.
+pub const DEFAULT_RATE_TOLERANCE: f64 = 0.005;
+/// The default tolerance on an acceleration, m/s^2.
+pub const DEFAULT_ACCELERATION_TOLERANCE: f64 = 0.05;
+
 impl EnvelopeSpec {
-    /// Checks the spec: a pull-up or turn, a non-empty grid, a positive tolerance.
-    pub fn check(&self) -> Result<(), SimError> {
+    /// The spec of `request` for `manoeuvre` on `config`: the defaults filled
+    /// in, checked ([`EnvelopeSpec::check`]).
+    pub fn new(
+        config: &SystemConfig,
+        manoeuvre: Manoeuvre,
+        request: &EnvelopeRequest,
+    ) -> Result<EnvelopeSpec, SimError> {
         let invalid = |field: &str, message: String| SimError::invalid("envelope", field, message);
-        if !matches!(self.manoeuvre, Manoeuvre::PullUp | Manoeuvre::Turn) {
+        let accelerates = manoeuvre == Manoeuvre::Acceleration;
+        if accelerates && request.onset_s.is_some_and(|t| t != 0.0) {
+            return Err(invalid(
+                "--onset",
+                "applies to a pull-up or a turn, not to an acceleration".to_owned(),
+            ));
+        }
+        if !accelerates && request.mach_gain.is_some() {
+            return Err(invalid(
+                "--mach-gain",
+                format!("applies to an acceleration, not to a {}", manoeuvre.name()),
+            ));
+        }
+        let mach_gain = accelerates.then(|| request.mach_gain.unwrap_or(DEFAULT_MACH_GAIN));
+        let spec = EnvelopeSpec {
+            manoeuvre,
+            altitudes_m: request.altitudes_m.clone().unwrap_or_else(|| {
+                let [lo, hi] = config.envelope.altitude_m;
+                let steps = ((hi - lo) / 3000.0 + 1e-9).floor().max(0.0) as usize;
+                (0..=steps).map(|i| lo + 3000.0 * i as f64).collect()
+            }),
+            machs: request
+                .machs
+                .clone()
+                .unwrap_or_else(|| default_machs(config, mach_gain)),
+            segments: request.segments.unwrap_or(config.solver.segments_host),
+            grading: request.grading.unwrap_or(1.0),
+            onset_s: if accelerates {
+                0.0
+            } else {
+                request.onset_s.unwrap_or(DEFAULT_ONSET_S)
+            },
+            tolerance: request.tolerance.unwrap_or(if accelerates {
+                DEFAULT_ACCELERATION_TOLERANCE
+            } else {
+                DEFAULT_RATE_TOLERANCE
+            }),
+            mach_gain,
+        };
+        spec.check(config)?;
+        Ok(spec)
+    }
+
+    /// The limit's unit: `rad/s`, or `m/s^2` for the acceleration.
+    pub fn unit(&self) -> &'static str {
+        if self.manoeuvre == Manoeuvre::Acceleration {
+            "m/s^2"
+        } else {
+            "rad/s"
+        }
+    }
+
+    /// The Mach number an acceleration from `mach` ends at: the gain above it,
+    /// the envelope's upper Mach at most (None for a rotation).
+    pub fn final_mach(&self, config: &SystemConfig, mach: f64) -> Option<f64> {
+        self.mach_gain
+            .map(|gain| (mach + gain).min(config.envelope.mach[1]))
+    }
+
+    /// Checks the spec: a pull-up, turn or acceleration, a non-empty grid, a
+    /// positive tolerance, a non-negative onset; for the acceleration, a
+    /// positive Mach gain and Mach numbers below the envelope's upper one.
+    pub fn check(&self, config: &SystemConfig) -> Result<(), SimError> {
+        let invalid = |field: &str, message: String| SimError::invalid("envelope", field, message);
+        if !matches!(
+            self.manoeuvre,
+            Manoeuvre::PullUp | Manoeuvre::Turn | Manoeuvre::Acceleration
+        ) {
             return Err(invalid(
                 "--manoeuvre",
-                format!("must be pull-up or turn, got {}", self.manoeuvre.name()),
+                format!(
+                    "must be pull-up, turn or acceleration, got {}",
+                    self.manoeuvre.name()
+                ),
             ));
+        }
+        if !(self.onset_s >= 0.0 && self.onset_s.is_finite()) {
+            return Err(invalid(
+                "--onset",
+                format!(
+                    "must be a non-negative number of seconds, got {}",
+                    self.onset_s
+                ),
+            ));
+        }
+        match (self.manoeuvre, self.mach_gain) {
+            (Manoeuvre::Acceleration, Some(gain)) => {
+                if !(gain > 0.0 && gain.is_finite()) {
+                    return Err(invalid(
+                        "--mach-gain",
+                        format!("must be positive, got {gain}"),
+                    ));
+                }
+                let top = config.envelope.mach[1];
+                if let Some(m) = self.machs.iter().find(|&&m| m >= top || m.is_nan()) {
+                    return Err(invalid(
+                        "--machs",
+                        format!(
+                            "an acceleration map's Mach numbers must be below the envelope's upper Mach {top} (the acceleration from each ends there at most), got {m}"
+                        ),
+                    ));
+                }
+            }
+            (Manoeuvre::Acceleration, None) => {
+                return Err(invalid(
+                    "mach_gain",
+                    "an acceleration map needs its Mach gain".to_owned(),
+                ));
+            }
+            (_, Some(_)) => {
+                return Err(invalid(
+                    "--mach-gain",
+                    format!(
+                        "applies to an acceleration, not to a {}",
+                        self.manoeuvre.name()
+                    ),
+                ));
+            }
+            (_, None) => {}
         }
         if self.altitudes_m.is_empty() || self.machs.is_empty() {
             return Err(invalid(
@@ -196,8 +405,19 @@ impl EnvelopeSpec {
         })
     }
 
-    /// The cells' flight conditions in grid order.
-    fn conditions(&self) -> Vec<(f64, f64)> {
+    /// The manoeuvre in words: `rates built over 0.5 s`, or `accelerating by
+    /// Mach 0.1 (to 0.95 at most) then 15 s on`.
+    pub fn describe_manoeuvre(&self) -> String {
+        match self.mach_gain {
+            Some(gain) => format!(
+                "accelerating from each Mach by {gain} (to the envelope's upper Mach at most), then {AFTERMATH_S} s on"
+            ),
+            None => format!("rates built over {} s", self.onset_s),
+        }
+    }
+
+    /// The cells' flight conditions (altitude m, Mach) in grid order.
+    pub fn conditions(&self) -> Vec<(f64, f64)> {
         self.altitudes_m
             .iter()
             .flat_map(|&h| self.machs.iter().map(move |&m| (h, m)))
@@ -205,9 +425,33 @@ impl EnvelopeSpec {
     }
 }
 
+/// The default Mach numbers: from the envelope's lower end by 0.1, and its
+/// upper end; for an acceleration of `gain`, those the gain below the upper
+/// end at least, and the upper end less the gain.
+fn default_machs(config: &SystemConfig, gain: Option<f64>) -> Vec<f64> {
+    let [lo, hi] = config.envelope.mach;
+    let round = |m: f64| (m * 1000.0).round() / 1000.0;
+    let top = round(hi - gain.unwrap_or(0.0));
+    let mut machs: Vec<f64> = (0..)
+        .map(|i| round(lo + 0.1 * f64::from(i)))
+        .take_while(|m| *m <= top + 1e-9)
+        .collect();
+    if machs.last().is_none_or(|m| *m < top - 1e-9) && top >= lo {
+        machs.push(top);
+    }
+    machs
+}
+
 /// The rate the envelope allows at speed `speed` (m/s): the load factor's and
-/// the body rate's caps, the smaller and which it is.
+/// the body rate's caps, the smaller and which it is (for the acceleration,
+/// the along-path acceleration's bound).
 fn cap(config: &SystemConfig, manoeuvre: Manoeuvre, speed: f64) -> (f64, Limit) {
+    if manoeuvre == Manoeuvre::Acceleration {
+        return (
+            config.envelope.max_along_path_acceleration_mps2,
+            Limit::AccelerationBound,
+        );
+    }
     let g = config.environment.gravity;
     let n = config.envelope.load_factor[1];
     let load = match manoeuvre {
@@ -236,6 +480,8 @@ struct Trial {
 
 /// Flies `scenario` at the cell's condition with `rate` (None: the scenario's
 /// own kind without a rate, steady flight) for `t_end` (None: the scenario's).
+/// An acceleration's `rate` is its along-path acceleration, m/s^2: from the
+/// cell's Mach to the spec's final Mach, then [`AFTERMATH_S`] on.
 fn fly(
     config: &SystemConfig,
     spec: &EnvelopeSpec,
@@ -244,7 +490,7 @@ fn fly(
     rate: Option<f64>,
     t_end: Option<f64>,
 ) -> Result<Trial, SimError> {
-    let options = RunOptions {
+    let mut options = RunOptions {
         segments: Some(spec.segments),
         grading: Some(spec.grading),
         t_end,
@@ -255,6 +501,24 @@ fn fly(
         initial: InitialState::Trim,
         plots: false,
         ..RunOptions::default()
+    };
+    let accelerated;
+    let scenario = match (spec.final_mach(config, mach), rate) {
+        (Some(final_mach), Some(acceleration)) => {
+            let gain = config.mach_to_speed(altitude, final_mach)?
+                - config.mach_to_speed(altitude, mach)?;
+            let start = scenario.accel_start_s.unwrap_or_default();
+            accelerated = Scenario {
+                final_mach: Some(final_mach),
+                acceleration_mps2: Some(acceleration),
+                t_end_s: start + gain / acceleration + AFTERMATH_S,
+                ..scenario.clone()
+            };
+            options.rate = None;
+            options.onset = None;
+            &accelerated
+        }
+        _ => scenario,
     };
     let recording = simulate_recorded(config, scenario, &options, |_| {}, || None)?;
     if let Some(e) = recording.ended {
@@ -276,8 +540,25 @@ fn fly(
     })
 }
 
+/// Maps the cell `index` (grid order, [`EnvelopeSpec::conditions`]) of
+/// `plan`: what a worker of another engine runs.
+pub fn map_cell(plan: &EnvelopePlan, index: usize) -> Result<Cell, SimError> {
+    let conditions = plan.spec.conditions();
+    let &condition = conditions.get(index).ok_or_else(|| {
+        SimError::invalid(
+            "envelope",
+            "cell",
+            format!(
+                "index {index} is outside the grid of {} cells",
+                conditions.len()
+            ),
+        )
+    })?;
+    map_condition(&plan.config, &plan.spec, condition)
+}
+
 /// Maps one cell.
-fn map_cell(
+fn map_condition(
     config: &SystemConfig,
     spec: &EnvelopeSpec,
     (altitude, mach): (f64, f64),
@@ -318,6 +599,23 @@ fn map_cell(
             steady_trial.margins[r],
             &tally,
         ));
+    }
+    // An acceleration ends in steady flight at the final Mach: not clear
+    // there, not clear at any acceleration.
+    if let Some(final_mach) = spec.final_mach(config, mach) {
+        let arrived = tally
+            .note(fly(
+                config,
+                spec,
+                &steady,
+                (altitude, final_mach),
+                None,
+                Some(STEADY_S),
+            ))
+            .map_err(at)?;
+        if let Some(r) = arrived.violated {
+            return Ok(cell(0.0, Limit::Requirement(r), arrived.margins[r], &tally));
+        }
     }
     let at_cap = tally
         .note(fly(config, spec, &manoeuvre, condition, Some(cap), None))
@@ -389,7 +687,7 @@ pub fn map_envelope(
     out_dir: Option<&Path>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<EnvelopeMap, SimError> {
-    spec.check()?;
+    spec.check(config)?;
     let conditions = spec.conditions();
     let mut done: Vec<Option<Cell>> = vec![None; conditions.len()];
     if let Some(dir) = out_dir {
@@ -416,7 +714,7 @@ pub fn map_envelope(
                     if failure.lock().map(|f| f.is_some()).unwrap_or(true) {
                         break;
                     }
-                    let outcome = map_cell(config, spec, conditions[i]).and_then(|cell| {
+                    let outcome = map_condition(config, spec, conditions[i]).and_then(|cell| {
                         if let Some(dir) = out_dir {
                             write_cell(&cell_path(dir, conditions[i]), &cell)?;
                         }
@@ -459,6 +757,45 @@ pub fn map_envelope(
     })
 }
 
+/// The cells of `plan` that `dir` does not hold yet, in grid order, having
+/// prepared `dir` as [`map_envelope`] does (its `inputs.json` written, or
+/// checked to be `plan`'s).
+pub fn pending_cells(plan: &EnvelopePlan, dir: &Path) -> Result<Vec<usize>, SimError> {
+    prepare_dir(&plan.config, &plan.spec, dir)?;
+    let mut pending = Vec::new();
+    for (i, condition) in plan.spec.conditions().into_iter().enumerate() {
+        if read_cell(&cell_path(dir, condition))?.is_none() {
+            pending.push(i);
+        }
+    }
+    Ok(pending)
+}
+
+/// Writes `cell`, cell `index` of `plan` mapped elsewhere ([`map_cell`]),
+/// atomically into `dir` (prepared by [`pending_cells`]), where
+/// [`map_envelope`] takes it; a cell not of that index's condition is an
+/// error.
+pub fn store_cell(
+    plan: &EnvelopePlan,
+    dir: &Path,
+    index: usize,
+    cell: &Cell,
+) -> Result<(), SimError> {
+    let condition = plan.spec.conditions().get(index).copied();
+    if condition != Some((cell.altitude_m, cell.mach)) {
+        return Err(SimError::invalid(
+            "envelope",
+            "cell",
+            format!(
+                "the cell of {} m, Mach {} is not cell {index} of the grid",
+                cell.altitude_m, cell.mach
+            ),
+        ));
+    }
+    prepare_dir(&plan.config, &plan.spec, dir)?;
+    write_cell(&cell_path(dir, (cell.altitude_m, cell.mach)), cell)
+}
+
 /// Creates `dir` and its `cells/`, and writes `inputs.json` there, or checks
 /// that the one there is of the same inputs.
 fn prepare_dir(config: &SystemConfig, spec: &EnvelopeSpec, dir: &Path) -> Result<(), SimError> {
@@ -472,8 +809,9 @@ fn prepare_dir(config: &SystemConfig, spec: &EnvelopeSpec, dir: &Path) -> Result
     };
     let cells = dir.join("cells");
     std::fs::create_dir_all(&cells).map_err(io("create the directory", &cells))?;
-    let inputs = Inputs {
+    let inputs = EnvelopePlan {
         config: config.clone(),
+        aero_rows: config.aero_rows.clone(),
         spec: spec.clone(),
     };
     let path = dir.join("inputs.json");
@@ -483,7 +821,7 @@ fn prepare_dir(config: &SystemConfig, spec: &EnvelopeSpec, dir: &Path) -> Result
         Ok(_) => Err(SimError::invalid(
             path.display().to_string(),
             "inputs",
-            "the directory holds a map of other inputs (configuration, manoeuvre, grid, model, onset or tolerance): give another --out, or remove it".to_owned(),
+            "the directory holds a map of other inputs (configuration, manoeuvre, grid, model, onset, Mach gain or tolerance): give another --out, or remove it".to_owned(),
         )),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             write_atomically(&path, json.as_bytes()).map_err(io("write", &path))
@@ -548,10 +886,39 @@ impl EnvelopeMap {
         })
     }
 
-    /// `envelope.csv`: a row per cell, grid order.
+    /// Writes the map's outputs into `dir` (atomically, each): `envelope.json`
+    /// ([`EnvelopeMap::json`]), `envelope.csv`, `summary.txt` and the heat map
+    /// `limit.png/.svg`; returns the files.
+    pub fn write_outputs(&self, dir: &Path) -> Result<Vec<PathBuf>, SimError> {
+        let write = |name: &str, text: &str| -> Result<PathBuf, SimError> {
+            let path = dir.join(name);
+            write_atomically(&path, text.as_bytes()).map_err(|source| SimError::Io {
+                action: "write",
+                path: path.clone(),
+                source,
+            })?;
+            Ok(path)
+        };
+        let json = to_json(&self.json(), &dir.join("envelope.json"))?;
+        let mut files = vec![
+            write("envelope.json", &json)?,
+            write("envelope.csv", &self.csv())?,
+            write("summary.txt", &self.summary())?,
+        ];
+        files.extend(self.write_heatmap(dir)?);
+        Ok(files)
+    }
+
+    /// `envelope.csv`: a row per cell, grid order (limit and cap in rad/s, or
+    /// m/s^2 for the acceleration: the column names say which).
     pub fn csv(&self) -> String {
-        let mut out = String::from(
-            "altitude_m,mach,limit_radps,cap_radps,limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,false_advisories\n",
+        let unit = if self.spec.manoeuvre == Manoeuvre::Acceleration {
+            "mps2"
+        } else {
+            "radps"
+        };
+        let mut out = format!(
+            "altitude_m,mach,limit_{unit},cap_{unit},limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,false_advisories\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
         for c in &self.cells {
@@ -581,9 +948,9 @@ impl EnvelopeMap {
     /// "mach", "limit", "limiting_requirement", "margin", "cap",
     /// "steady_margins": {posture, collision, tension, exhaust}}]}`.
     pub fn json(&self) -> serde_json::Value {
-        serde_json::json!({
+        let mut value = serde_json::json!({
             "manoeuvre": self.spec.manoeuvre.name(),
-            "limit_unit": "rad/s",
+            "limit_unit": self.spec.unit(),
             "onset_s": self.spec.onset_s,
             "segments": self.spec.segments,
             "grading": self.spec.grading,
@@ -607,7 +974,11 @@ impl EnvelopeMap {
                     "exhaust": c.steady_margins.exhaust,
                 },
             })).collect::<Vec<_>>(),
-        })
+        });
+        if let (Some(gain), Some(object)) = (self.spec.mach_gain, value.as_object_mut()) {
+            object.insert("mach_gain".to_owned(), gain.into());
+        }
+        value
     }
 
     /// The heat map of the limits over Mach x altitude (highest altitude on
@@ -618,20 +989,33 @@ impl EnvelopeMap {
         let n = spec.machs.len();
         let rows: Vec<&[Cell]> = self.cells.chunks(n).rev().collect();
         let pull_up = spec.manoeuvre == Manoeuvre::PullUp;
+        let accelerates = spec.manoeuvre == Manoeuvre::Acceleration;
         HeatMap {
             title: format!(
-                "{}: largest rate clear of every requirement [rad/s]",
-                spec.manoeuvre.name()
+                "{}: largest {} clear of every requirement [{}]",
+                spec.manoeuvre.name(),
+                if accelerates {
+                    "along-path acceleration"
+                } else {
+                    "rate"
+                },
+                spec.unit()
             ),
             subtitle: vec![
                 format!(
-                    "{}, rates built over {} s, bisected to {} rad/s",
+                    "{}, {}, bisected to {} {}",
                     spec.describe_model(),
-                    spec.onset_s,
-                    spec.tolerance
+                    spec.describe_manoeuvre(),
+                    spec.tolerance,
+                    spec.unit()
                 ),
                 format!(
-                    "limited by P posture, C collision, T tension, E exhaust; n load factor, w body rate: the envelope's cap{}",
+                    "limited by P posture, C collision, T tension, E exhaust; {}: the envelope's cap{}",
+                    if accelerates {
+                        "a acceleration bound"
+                    } else {
+                        "n load factor, w body rate"
+                    },
                     if pull_up {
                         "; thick line: 0.10 rad/s, the paper's advice"
                     } else {
@@ -656,7 +1040,7 @@ impl EnvelopeMap {
                 .iter()
                 .map(|r| r.iter().map(|c| c.limiting.mark().to_owned()).collect())
                 .collect(),
-            decimals: 3,
+            decimals: if accelerates { 2 } else { 3 },
             contour: pull_up.then_some(0.10),
         }
     }
@@ -690,12 +1074,25 @@ impl EnvelopeMap {
     /// pull-up advice holds.
     pub fn summary(&self) -> String {
         let spec = &self.spec;
+        let accelerates = spec.manoeuvre == Manoeuvre::Acceleration;
         let mut out = format!(
-            "{} envelope: largest rate clear of every requirement, rad/s ({}, onset {} s, to {} rad/s); P posture, C collision, T tension, E exhaust, n load factor, w body rate\n",
+            "{} envelope: largest {} clear of every requirement, {} ({}, {}, to {} {}); P posture, C collision, T tension, E exhaust, {}\n",
             spec.manoeuvre.name(),
+            if accelerates {
+                "along-path acceleration"
+            } else {
+                "rate"
+            },
+            spec.unit(),
             spec.describe_model(),
-            spec.onset_s,
-            spec.tolerance
+            spec.describe_manoeuvre(),
+            spec.tolerance,
+            spec.unit(),
+            if accelerates {
+                "a acceleration bound"
+            } else {
+                "n load factor, w body rate"
+            }
         );
         out.push_str("altitude \\ Mach");
         for m in &spec.machs {
@@ -705,7 +1102,11 @@ impl EnvelopeMap {
         for (row, h) in self.cells.chunks(spec.machs.len()).zip(&spec.altitudes_m) {
             out.push_str(&format!("{:>13} m", h));
             for c in row {
-                out.push_str(&format!(" {:>7.3} {}", c.limit, c.limiting.mark()));
+                if accelerates {
+                    out.push_str(&format!(" {:>7.2} {}", c.limit, c.limiting.mark()));
+                } else {
+                    out.push_str(&format!(" {:>7.3} {}", c.limit, c.limiting.mark()));
+                }
             }
             out.push('\n');
         }
@@ -748,6 +1149,7 @@ mod tests {
             grading: 1.26,
             onset_s: 0.5,
             tolerance: 0.01,
+            mach_gain: None,
         }
     }
 
@@ -830,6 +1232,88 @@ mod tests {
         assert_eq!(one.csv().lines().count(), 5);
     }
 
+    /// The acceleration map: defaults (Mach numbers the gain below the upper
+    /// one, the tolerance in m/s^2), a limit clear and the next acceleration
+    /// up violating, the final speed's steady flight taken into account, the
+    /// outputs in m/s^2, and a Plan's cell the same as the map's.
+    #[test]
+    fn the_acceleration_map_bisects_the_acceleration() {
+        let config = SystemConfig::builtin().unwrap();
+        let defaults = EnvelopeSpec::new(
+            &config,
+            Manoeuvre::Acceleration,
+            &EnvelopeRequest::default(),
+        )
+        .unwrap();
+        assert_eq!(defaults.machs, vec![0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85]);
+        assert_eq!(defaults.mach_gain, Some(0.1));
+        assert_eq!(defaults.tolerance, DEFAULT_ACCELERATION_TOLERANCE);
+        assert_eq!(defaults.final_mach(&config, 0.85), Some(0.95));
+        let spec = EnvelopeSpec::new(
+            &config,
+            Manoeuvre::Acceleration,
+            &EnvelopeRequest {
+                altitudes_m: Some(vec![0.0, 9000.0]),
+                machs: Some(vec![0.85]),
+                segments: Some(12),
+                grading: Some(1.26),
+                tolerance: Some(0.5),
+                ..EnvelopeRequest::default()
+            },
+        )
+        .unwrap();
+        let none = |_: usize, _: usize| {};
+        let map = map_envelope(&config, &spec, 2, None, &none).unwrap();
+        let manoeuvre = Scenario::builtin("acceleration").unwrap();
+        for c in &map.cells {
+            assert!(c.limit <= c.cap && c.cap == 10.0, "{c:?}");
+            if let (Limit::Requirement(r), true) = (c.limiting, c.limit > 0.0) {
+                let condition = (c.altitude_m, c.mach);
+                let clear =
+                    fly(&config, &spec, &manoeuvre, condition, Some(c.limit), None).unwrap();
+                assert_eq!(clear.violated, None, "{c:?}");
+                let above = (c.limit + spec.tolerance).min(c.cap);
+                let over = fly(&config, &spec, &manoeuvre, condition, Some(above), None).unwrap();
+                assert!(
+                    over.violated.is_some(),
+                    "{c:?}: {r:?} not violated at {above}"
+                );
+            }
+        }
+        // Sea level, Mach 0.85 to 0.95: the tension is violated in steady
+        // flight at Mach 0.95 (docs/envelope.md), so no acceleration is clear.
+        let sea = &map.cells[0];
+        assert_eq!(
+            (sea.limit, sea.limiting),
+            (0.0, Limit::Requirement(Requirement::Tension)),
+            "{sea:?}"
+        );
+        assert!(sea.steady_margins.tension.unwrap() > 0.0, "{sea:?}");
+        assert!(
+            map.csv()
+                .starts_with("altitude_m,mach,limit_mps2,cap_mps2,")
+        );
+        let json = map.json();
+        assert_eq!(json["limit_unit"], "m/s^2");
+        assert_eq!(json["mach_gain"], 0.1);
+        assert!(map.summary().contains("largest along-path acceleration"));
+        // A cell mapped from the plan (another engine's worker) is the map's.
+        let plan = EnvelopePlan::from_json(
+            &EnvelopePlan::new(&config, &spec)
+                .unwrap()
+                .to_json()
+                .unwrap(),
+        )
+        .unwrap();
+        assert_eq!(map_cell(&plan, 1).unwrap(), map.cells[1]);
+        assert!(
+            map_cell(&plan, 2)
+                .unwrap_err()
+                .to_string()
+                .contains("outside the grid of 2 cells")
+        );
+    }
+
     #[test]
     fn bad_specs_are_typed_errors() {
         let config = SystemConfig::builtin().unwrap();
@@ -840,7 +1324,7 @@ mod tests {
                     manoeuvre: Manoeuvre::Steady,
                     ..spec()
                 },
-                "--manoeuvre must be pull-up or turn, got steady",
+                "--manoeuvre must be pull-up, turn or acceleration, got steady",
             ),
             (
                 EnvelopeSpec {
@@ -856,10 +1340,56 @@ mod tests {
                 },
                 "tolerance must be positive",
             ),
+            (
+                EnvelopeSpec {
+                    onset_s: f64::NAN,
+                    ..spec()
+                },
+                "--onset must be a non-negative number of seconds, got NaN",
+            ),
+            (
+                EnvelopeSpec {
+                    mach_gain: Some(0.1),
+                    ..spec()
+                },
+                "--mach-gain applies to an acceleration, not to a pull-up",
+            ),
+            (
+                EnvelopeSpec {
+                    manoeuvre: Manoeuvre::Acceleration,
+                    mach_gain: Some(0.1),
+                    machs: vec![0.6, 0.95],
+                    ..spec()
+                },
+                "must be below the envelope's upper Mach 0.95",
+            ),
+            (
+                EnvelopeSpec {
+                    manoeuvre: Manoeuvre::Acceleration,
+                    mach_gain: Some(-0.1),
+                    ..spec()
+                },
+                "--mach-gain must be positive, got -0.1",
+            ),
         ] {
             let e = map_envelope(&config, &spec, 1, None, &none).unwrap_err();
             assert!(e.to_string().contains(message), "{e}");
         }
+        let onset = EnvelopeSpec::new(
+            &config,
+            Manoeuvre::Acceleration,
+            &EnvelopeRequest {
+                onset_s: Some(0.5),
+                ..EnvelopeRequest::default()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            onset
+                .to_string()
+                .contains("--onset applies to a pull-up or a turn"),
+            "{onset}"
+        );
         // A Mach the solver rejects: the cell named.
         let e = map_envelope(
             &config,

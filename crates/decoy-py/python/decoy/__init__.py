@@ -11,6 +11,11 @@ unless asked, the numbers bit for bit the command line's.
   out=None, plots=True)``: a flight as ``decoy simulate``, returned as a ``Simulation``
   (``summary``: summary.json's dict; ``timeseries``, ``cable``: the columns of
   timeseries.csv and cable.csv as float64 NumPy arrays; ``files``);
+- ``envelope(manoeuvre, *, altitudes=None, machs=None, segments=None,
+  grading=None, onset=None, tolerance=None, mach_gain=None, workers=None,
+  ray=None, out=None, config=None, progress=None)``: the manoeuvre envelope map
+  as ``decoy envelope --json``, on this machine's cores or as tasks on a Ray
+  cluster (``ray="host:port"``);
 - ``builtin_config()``, ``builtin_scenario(name)``, ``SCENARIOS``: the built-in
   system and the shipped scenarios as dicts, to edit and pass back;
 - ``DecoyError`` and its kinds ``ConfigError``, ``ScenarioError``,
@@ -38,6 +43,7 @@ from decoy._native import (
     simulate,
     trim,
 )
+from decoy._envelope import envelope
 
 __all__ = [
     "SCENARIOS",
@@ -52,6 +58,7 @@ __all__ = [
     "__version__",
     "builtin_config",
     "builtin_scenario",
+    "envelope",
     "simulate",
     "trim",
 ]

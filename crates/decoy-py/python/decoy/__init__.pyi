@@ -4,7 +4,7 @@ docstring, the repository's README, "The solver in Python", and
 docs/outputs.md for the columns)."""
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Final, Literal, TypeAlias
 
 import numpy as np
@@ -158,6 +158,42 @@ def simulate(
     ConfigError, SolverError or OutputError with the command line's message;
     Stopped when the integration stopped part way (``e.result`` the run up to
     its last good state); KeyboardInterrupt at Ctrl-C.
+    """
+
+def envelope(
+    manoeuvre: Literal["pull-up", "turn", "acceleration"],
+    *,
+    altitudes: Sequence[float] | None = None,
+    machs: Sequence[float] | None = None,
+    segments: int | None = None,
+    grading: float | None = None,
+    onset: float | None = None,
+    tolerance: float | None = None,
+    mach_gain: float | None = None,
+    workers: int | None = None,
+    ray: str | None = None,
+    out: str | os.PathLike[str] | None = None,
+    config: Config = None,
+    progress: Callable[[int, int], None] | bool | None = None,
+) -> dict[str, Any]:
+    """The manoeuvre envelope map, as ``decoy envelope --json`` prints it
+    (docs/envelope.md): for each cell of altitude x Mach, the largest pull-up
+    or turn rate (rad/s) or along-path acceleration (m/s^2) clear of every
+    requirement, what limits it, and the steady-flight margins.
+
+    altitudes (m), machs: the grid (default: the configuration's declared
+    envelope). segments, grading: the model (default 300 uniform segments).
+    onset: s (default 0.5; pull-up and turn). tolerance: of the bisection
+    (default 0.005 rad/s, or 0.05 m/s^2). mach_gain: the acceleration's gain in
+    Mach (default 0.1). workers: threads of a local map (default: all cores).
+    ray: a Ray cluster's address: every cell a Ray task of this package, the
+    same bits as a local map (not with workers). out: the map's directory
+    (resumed when it holds a map of the same inputs; None: no files). config:
+    the system. progress: callable(done, total), True (a bar on stderr) or
+    False (None: a bar at a terminal).
+
+    Raises InputError, ConfigError, SolverError or OutputError with the
+    command line's message.
     """
 
 def builtin_config() -> dict[str, Any]:

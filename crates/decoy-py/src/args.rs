@@ -1,0 +1,54 @@
+//! The arguments every call takes alike: the configuration (None, a path or
+//! a dict) and a segment count.
+
+use std::path::PathBuf;
+
+use decoy_config::SystemConfig;
+use decoy_sim::scenario::MAX_SEGMENTS;
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+use pyo3::types::PyMapping;
+
+use crate::convert;
+use crate::errors::{argument_error, config_error};
+
+/// How a dict given as the configuration is named in messages.
+const CONFIG_DICT: &str = "config dict";
+
+/// The system configuration: `None` the built-in reference system, a path a
+/// TOML file (as `--config`), a dict that file's tables.
+pub(crate) fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemConfig> {
+    let loaded = match config {
+        None => SystemConfig::builtin(),
+        Some(c) if c.cast::<PyMapping>().is_ok() => {
+            let text = convert::toml_text(c, CONFIG_DICT)?;
+            let dir = std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
+            SystemConfig::from_text_in(CONFIG_DICT, &text, &dir)
+        }
+        Some(c) => match c.extract::<PathBuf>() {
+            Ok(path) => SystemConfig::from_file(path),
+            Err(_) => {
+                return Err(PyTypeError::new_err(format!(
+                    "config: expected None, a path or a dict, got a {}",
+                    c.get_type().name()?
+                )));
+            }
+        },
+    };
+    loaded.map_err(|e| config_error(&e))
+}
+
+/// A segment count as the command line takes it (`--segments N`): a negative
+/// one is refused with the range the solver accepts.
+pub(crate) fn segment_count(segments: Option<i64>) -> PyResult<Option<usize>> {
+    segments
+        .map(|n| {
+            usize::try_from(n).map_err(|_| {
+                argument_error(
+                    "--segments",
+                    format!("must be between 1 and {MAX_SEGMENTS}, got {n}"),
+                )
+            })
+        })
+        .transpose()
+}
