@@ -51,7 +51,10 @@ def alive_nodes(address: str) -> int:
         "import ray; ray.init(address=%r, logging_level='ERROR', log_to_driver=False); "
         "print(sum(1 for n in ray.nodes() if n['Alive']))" % address
     )
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    try:
+        done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    except subprocess.TimeoutExpired:
+        return 0
     return int(done.stdout.strip()) if done.returncode == 0 and done.stdout.strip().isdigit() else 0
 
 
@@ -70,15 +73,16 @@ def ray_cluster() -> Iterator[str]:
     procs: list[subprocess.Popen] = []
 
     def start(name: str, *args: str) -> None:
-        procs.append(
-            subprocess.Popen(
-                [str(RAY_BIN), "start", *args, *common],
-                env=env,
-                stdout=open(logs / f"{name}.out", "w"),
-                stderr=subprocess.STDOUT,
-                start_new_session=True,
+        with open(logs / f"{name}.out", "w") as log:
+            procs.append(
+                subprocess.Popen(
+                    [str(RAY_BIN), "start", *args, *common],
+                    env=env,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    start_new_session=True,
+                )
             )
-        )
 
     try:
         start("head", "--head", f"--port={port}", "--node-ip-address=127.0.0.1",
@@ -95,12 +99,19 @@ def ray_cluster() -> Iterator[str]:
             time.sleep(1.0)
         yield address
     finally:
+        # Each `ray start --block` leads its own session: its process group is
+        # the node (GCS, raylet, workers); killing the groups stops this cluster
+        # and nothing else.
         for p in procs:
             try:
                 os.killpg(p.pid, signal.SIGKILL)
             except ProcessLookupError:
                 pass
-            p.wait(timeout=30)
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                pass
         shutil.rmtree(temp, ignore_errors=True)
 
 
@@ -197,10 +208,27 @@ def test_a_cells_error_on_ray_is_typed(ray_cluster: str, tmp_path: Path) -> None
         decoy.envelope("pull-up", altitudes=[9000.0], machs=[2.5], segments=12, grading=1.26, ray=ray_cluster)
     assert "9000 m, Mach 2.5" in str(raised.value), raised.value
     env = dict(os.environ, DECOY_PYTHON=sys.executable)
+    args = [decoy_binary(), "envelope", "--manoeuvre", "pull-up", "--altitudes", "9000", "--machs", "2.5",
+            "--segments", "12", "--grading", "1.26"]
+    local = subprocess.run([*args, "--out", str(tmp_path / "bad-local")], capture_output=True, text=True, timeout=600)
+    done = subprocess.run([*args, "--ray", ray_cluster, "--out", str(tmp_path / "bad")],
+                          capture_output=True, text=True, timeout=600, env=env)
+    # The same one-line message and exit code as the local run's.
+    assert local.returncode == 2, (local.stdout, local.stderr)
+    assert (done.returncode, done.stderr) == (local.returncode, local.stderr), (done.stdout, done.stderr)
+    assert "9000 m, Mach 2.5" in done.stderr and done.stderr.count("\n") == 1, done.stderr
+
+
+def test_ray_without_python_says_what_to_install(tmp_path: Path) -> None:
+    """`decoy envelope --ray` with no interpreter to run the cells: a one-line
+    error naming it and what installs it, the map's directory kept for a rerun."""
+    env = dict(os.environ, DECOY_PYTHON=str(tmp_path / "no-python"))
     done = subprocess.run(
-        [decoy_binary(), "envelope", "--manoeuvre", "pull-up", "--altitudes", "9000", "--machs", "2.5",
-         "--segments", "12", "--grading", "1.26", "--ray", ray_cluster, "--out", str(tmp_path / "bad")],
+        [decoy_binary(), "envelope", "--manoeuvre", "pull-up", *GRID_FLAGS, "--ray", "127.0.0.1:1",
+         "--out", str(tmp_path / "map")],
         capture_output=True, text=True, timeout=600, env=env,
     )
     assert done.returncode == 1, (done.stdout, done.stderr)
-    assert "9000 m, Mach 2.5" in done.stderr and done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith("error: --ray: cannot run ") and "cargo xtask setup" in done.stderr, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert (tmp_path / "map" / "inputs.json").is_file()

@@ -1,7 +1,7 @@
 //! `decoy envelope`: the manoeuvre envelope map (`decoy_studies::envelope`),
 //! on this machine's cores or, with `--ray ADDRESS`, as Ray tasks of the
-//! Python package `decoy` (`decoy._envelope`), whose cells the map then
-//! resumes from its directory.
+//! Python package `decoy` (`python -m decoy._ray_cells`), whose cells the map
+//! then resumes from its directory.
 
 use std::io::{BufRead as _, BufReader, Read as _};
 use std::path::{Path, PathBuf};
@@ -191,14 +191,21 @@ pub fn envelope_command(
         return Ok(to_json(&map.json()));
     }
     let cells = map.cells.len();
+    // Ray mapped what it stored; the rest of the cells not resumed (none, when
+    // Ray stored them all) were mapped here.
+    let here = cells - map.resumed;
     let (mapped, resumed, where_) = match on_ray {
-        Some((address, mapped)) => (
-            mapped,
-            cells - mapped,
-            format!("on the Ray cluster {address}"),
+        Some((address, pending)) => (
+            pending - here,
+            cells - pending,
+            if here == 0 {
+                format!("on the Ray cluster {address}")
+            } else {
+                format!("on the Ray cluster {address} and {here} here")
+            },
         ),
         None => (
-            cells - map.resumed,
+            here,
             map.resumed,
             format!("on {workers} worker{}", if workers == 1 { "" } else { "s" }),
         ),
@@ -233,8 +240,11 @@ fn python() -> PathBuf {
 }
 
 /// Maps the `pending` cells of the map prepared in `out` as Ray tasks
-/// (`python -m decoy._envelope ADDRESS OUT`, which stores each cell in `out`
-/// as it comes and prints `cells DONE TOTAL` lines), telling `progress` of them.
+/// (`python -m decoy._ray_cells ADDRESS OUT`, which stores each cell in `out`
+/// as it comes and prints `cells DONE TOTAL` lines), telling `progress` of
+/// them. Its `error: ` line is the failure's message: a usage error when it
+/// exits 2 (the inputs', as locally), else the solver's; with no such line
+/// (no Python, no package, no Ray) the message says what to install.
 fn map_on_ray(
     address: &str,
     out: &Path,
@@ -246,27 +256,27 @@ fn map_on_ray(
         return Ok(());
     }
     let python = python();
-    let failed = |what: String| {
+    let unready = |what: String| {
         Failure::Solver(format!(
             "--ray: {what} (the cells are Ray tasks of the Python package `decoy`: `cargo xtask setup` installs it and Ray into .venv/, and DECOY_PYTHON names another interpreter)"
         ))
     };
     let mut child = Command::new(&python)
-        .args(["-m", "decoy._envelope", address])
+        .args(["-m", "decoy._ray_cells", address])
         .arg(out)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| failed(format!("cannot run {}: {e}", python.display())))?;
-    // Ray's own logging goes to stderr: read it aside, keep its last lines.
+        .map_err(|e| unready(format!("cannot run {}: {e}", python.display())))?;
+    // Ray's own logging goes to stderr: read it aside, keep it for the message.
     let mut stderr = child.stderr.take();
     let reader = std::thread::spawn(move || {
-        let mut text = String::new();
+        let mut bytes = Vec::new();
         if let Some(s) = stderr.as_mut() {
-            let _ = s.read_to_string(&mut text);
+            let _ = s.read_to_end(&mut bytes);
         }
-        text
+        String::from_utf8_lossy(&bytes).into_owned()
     });
     if let Some(stdout) = child.stdout.take() {
         for line in BufReader::new(stdout).lines().map_while(Result::ok) {
@@ -282,23 +292,26 @@ fn map_on_ray(
     }
     let status = child
         .wait()
-        .map_err(|e| failed(format!("{} did not finish: {e}", python.display())))?;
+        .map_err(|e| unready(format!("{} did not finish: {e}", python.display())))?;
     let stderr = reader.join().unwrap_or_default();
     if status.success() {
         return Ok(());
     }
-    // The module's own message is its last `error: ` line; else Python's last line.
-    let message = stderr
-        .lines()
-        .rev()
-        .find_map(|l| l.strip_prefix("error: "))
-        .or_else(|| stderr.lines().rev().find(|l| !l.trim().is_empty()))
-        .unwrap_or("no message")
-        .to_owned();
-    Err(failed(format!(
-        "{} -m decoy._envelope failed ({status}): {message}",
-        python.display()
-    )))
+    match stderr.lines().rev().find_map(|l| l.strip_prefix("error: ")) {
+        Some(message) if status.code() == Some(2) => Err(usage(message)),
+        Some(message) => Err(Failure::Solver(message.to_owned())),
+        None => {
+            let last = stderr
+                .lines()
+                .rev()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("no message");
+            Err(unready(format!(
+                "{} -m decoy._ray_cells failed ({status}): {last}",
+                python.display()
+            )))
+        }
+    }
 }
 
 #[cfg(test)]

@@ -249,7 +249,7 @@ impl Default for ManagementSection {
             },
             collision: CollisionSection {
                 min_clearance_m: 1.0,
-                cable_exclusion_m: 10.0,
+                cable_exclusion_m: 15.0,
                 caution_m: 3.0,
                 warning_m: 1.5,
                 hysteresis_m: 0.25,

@@ -8,9 +8,8 @@ directory lacks is a Ray task calling this package in a worker of the cluster;
 each result is stored atomically in the directory as it comes, and the map is
 then made from the directory, as a resumed local run would: the same bits.
 
-``python -m decoy._envelope ADDRESS DIR`` maps the cells DIR's ``inputs.json``
-plans on the Ray cluster at ADDRESS (``decoy envelope --ray`` runs it), printing
-``cells DONE TOTAL`` lines, and ``error: MESSAGE`` on stderr when it fails.
+``python -m decoy._ray_cells ADDRESS DIR`` (``decoy envelope --ray`` runs it)
+maps on Ray the cells DIR's ``inputs.json`` plans.
 """
 
 from __future__ import annotations
@@ -164,22 +163,3 @@ def envelope(
         map_on_ray(plan, ray, directory, report)
         # Every cell is in the directory now: the map resumes them all.
         return _native.envelope_map(plan, workers=1, out=directory, outputs=out is not None)
-
-
-def _main(argv: Sequence[str]) -> int:
-    """``python -m decoy._envelope ADDRESS DIR`` (see the module docs)."""
-    if len(argv) != 2:
-        print("error: usage: python -m decoy._envelope RAY_ADDRESS MAP_DIR", file=sys.stderr)
-        return 2
-    address, directory = argv
-    try:
-        plan = (Path(directory) / "inputs.json").read_text()
-        map_on_ray(plan, address, directory, lambda done, total: print(f"cells {done} {total}", flush=True))
-    except (OSError, _native.DecoyError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(_main(sys.argv[1:]))
