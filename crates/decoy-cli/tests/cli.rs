@@ -1489,6 +1489,7 @@ fn envelope_maps_resumes_and_checks() {
             keys(cell),
             BTreeSet::from([
                 "advised",
+                "advised_clear_runs",
                 "advisory_lead_s",
                 "altitude_m",
                 "cap",
@@ -1498,6 +1499,7 @@ fn envelope_maps_resumes_and_checks() {
                 "limiting_requirement",
                 "mach",
                 "margin",
+                "nuisance_advisories",
                 "runs",
                 "steady_margins"
             ])

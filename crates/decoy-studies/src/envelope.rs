@@ -148,10 +148,20 @@ pub struct Cell {
     #[serde(default)]
     pub advised: Option<bool>,
     /// Runs of the cell that stayed clear of every requirement but in which
-    /// the look-ahead advised against one (steady flight included): false
-    /// advisories.
+    /// the look-ahead advised against one (steady flight included).
+    #[serde(default)]
+    pub advised_clear_runs: u32,
+    /// Of those, the runs whose first advisory was false: the manoeuvre
+    /// continued (held) to the horizon's end stays clear of every requirement
+    /// ("continuing this manoeuvre violates R within the horizon" did not
+    /// come true; one more run each).
     #[serde(default)]
     pub false_advisories: u32,
+    /// Of those, the runs in which the advised requirement, the manoeuvre
+    /// continued, does not even reach its warning level (the advisory line's
+    /// own threshold): nuisance advisories. The others are near misses.
+    #[serde(default)]
+    pub nuisance_advisories: u32,
     /// Runs of the cell that stayed clear of every requirement.
     #[serde(default)]
     pub clear_runs: u32,
@@ -488,11 +498,13 @@ fn cap(config: &SystemConfig, manoeuvre: Manoeuvre, speed: f64) -> (f64, Limit) 
 struct Trial {
     violated: Option<Requirement>,
     margins: PerRequirement<Option<f64>>,
-    /// Whether the look-ahead advised against any requirement.
-    advised: bool,
     /// The violated requirement's advisory lead, s (first violation - first
     /// advisory; None: not advised before it).
     lead: Option<f64>,
+    /// The first advisory against any requirement, s, and the requirement.
+    first_advisory: Option<(f64, Requirement)>,
+    /// Each requirement's highest level over the run (0 normal to 3 violated).
+    worst_levels: PerRequirement<u8>,
 }
 
 /// Flies `scenario` at the cell's condition with `rate` (None: the scenario's
@@ -503,9 +515,24 @@ fn fly(
     config: &SystemConfig,
     spec: &EnvelopeSpec,
     scenario: &Scenario,
+    condition: (f64, f64),
+    rate: Option<f64>,
+    t_end: Option<f64>,
+) -> Result<Trial, SimError> {
+    fly_held(config, spec, scenario, condition, rate, t_end, None)
+}
+
+/// [`fly`], with the manoeuvre held until `hold_until` (s) when given: the
+/// pull-up's rotation not ended before it, the acceleration going on to the
+/// speed it reaches then.
+fn fly_held(
+    config: &SystemConfig,
+    spec: &EnvelopeSpec,
+    scenario: &Scenario,
     (altitude, mach): (f64, f64),
     rate: Option<f64>,
     t_end: Option<f64>,
+    hold_until: Option<f64>,
 ) -> Result<Trial, SimError> {
     let mut options = RunOptions {
         segments: Some(spec.segments),
@@ -519,13 +546,20 @@ fn fly(
         plots: false,
         ..RunOptions::default()
     };
-    let accelerated;
+    let changed;
     let scenario = match (spec.final_mach(config, mach), rate) {
         (Some(final_mach), Some(acceleration)) => {
-            let gain = config.mach_to_speed(altitude, final_mach)?
-                - config.mach_to_speed(altitude, mach)?;
+            let speed = config.mach_to_speed(altitude, mach)?;
+            let gain = config.mach_to_speed(altitude, final_mach)? - speed;
             let start = scenario.accel_start_s.unwrap_or_default();
-            accelerated = Scenario {
+            let final_mach = match hold_until {
+                Some(until) => {
+                    let held = speed + acceleration * (until - start);
+                    final_mach.max(held / config.speed_of_sound(altitude)?)
+                }
+                None => final_mach,
+            };
+            changed = Scenario {
                 final_mach: Some(final_mach),
                 acceleration_mps2: Some(acceleration),
                 t_end_s: start + gain / acceleration + AFTERMATH_S,
@@ -533,7 +567,16 @@ fn fly(
             };
             options.rate = None;
             options.onset = None;
-            &accelerated
+            &changed
+        }
+        (None, Some(_)) if hold_until.is_some() && scenario.duration_s.is_some() => {
+            let start = scenario.start_s.unwrap_or_default();
+            let held = hold_until.unwrap_or_default() - start;
+            changed = Scenario {
+                duration_s: scenario.duration_s.map(|d| d.max(held)),
+                ..scenario.clone()
+            };
+            &changed
         }
         _ => scenario,
     };
@@ -550,10 +593,85 @@ fn fly(
     Ok(Trial {
         violated,
         margins: requirements.map(|r| r.worst_margin),
-        advised: Requirement::ALL
-            .into_iter()
-            .any(|r| requirements[r].first_advisory_s.is_some()),
         lead: violated.and_then(|r| requirements[r].advisory_lead_s),
+        first_advisory: Requirement::ALL
+            .into_iter()
+            .filter_map(|r| requirements[r].first_advisory_s.map(|t| (t, r)))
+            .min_by(|a, b| a.0.total_cmp(&b.0)),
+        worst_levels: recording
+            .samples
+            .iter()
+            .fold(PerRequirement::splat(0u8), |worst, s| {
+                let levels = s.management.levels;
+                PerRequirement {
+                    posture: worst.posture.max(levels.posture),
+                    collision: worst.collision.max(levels.collision),
+                    tension: worst.tension.max(levels.tension),
+                    exhaust: worst.exhaust.max(levels.exhaust),
+                }
+            }),
+    })
+}
+
+/// How the manoeuvre continued judges an advisory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Judgement {
+    /// A requirement is violated within the horizon: the advisory was right.
+    Confirmed,
+    /// Nothing is violated, but the advised requirement reaches its warning
+    /// level (the advisory line's own threshold): a near miss.
+    NearMiss,
+    /// The advised requirement stays above its warning level: a nuisance.
+    Nuisance,
+}
+
+/// Whether an advisory at `advised_at` (s) in a clear run of `scenario` at
+/// `condition` with `rate` was right: the look-ahead says "continuing this
+/// manoeuvre violates a requirement within the horizon", so the manoeuvre is
+/// flown again continued (the pull-up's rotation or the acceleration held,
+/// when the advisory came while they lasted; level flight before they
+/// started; the turn and the climb as they are) to the horizon's end, and the
+/// advisory was right when a requirement is violated by then.
+fn advisory_confirmed(
+    config: &SystemConfig,
+    spec: &EnvelopeSpec,
+    (scenario, steady): (&Scenario, &Scenario),
+    condition: (f64, f64),
+    rate: Option<f64>,
+    (advised_at, advised): (f64, Requirement),
+) -> Result<Judgement, SimError> {
+    let until = advised_at + config.management.horizon_s;
+    let start = scenario
+        .accel_start_s
+        .or(scenario.start_s)
+        .unwrap_or_default();
+    // When the manoeuvre's rotation or acceleration ends (the turn's never).
+    let ends = match (rate, spec.final_mach(config, condition.1)) {
+        (Some(a), Some(final_mach)) => {
+            let gain = config.mach_to_speed(condition.0, final_mach)?
+                - config.mach_to_speed(condition.0, condition.1)?;
+            start + gain / a
+        }
+        _ => start + scenario.duration_s.unwrap_or(f64::INFINITY),
+    };
+    let continued = match rate {
+        Some(_) if advised_at >= start => fly_held(
+            config,
+            spec,
+            scenario,
+            condition,
+            rate,
+            Some(until),
+            (advised_at <= ends).then_some(until),
+        )?,
+        _ => fly(config, spec, steady, condition, None, Some(until))?,
+    };
+    Ok(if continued.violated.is_some() {
+        Judgement::Confirmed
+    } else if continued.worst_levels[advised] >= 2 {
+        Judgement::NearMiss
+    } else {
+        Judgement::Nuisance
     })
 }
 
@@ -592,8 +710,17 @@ fn map_condition(
     // Every trial's advisories: the false ones (a clear run advised against)
     // and the lead of the last violation (the smallest violating rate's).
     let mut tally = Tally::default();
+    let scenarios = (&manoeuvre, &steady);
+    let judge = |condition: (f64, f64), rate: Option<f64>| {
+        move |advisory: (f64, Requirement)| {
+            advisory_confirmed(config, spec, scenarios, condition, rate, advisory)
+        }
+    };
     let steady_trial = tally
-        .note(fly(config, spec, &steady, condition, None, Some(STEADY_S)))
+        .note(
+            fly(config, spec, &steady, condition, None, Some(STEADY_S)),
+            judge(condition, None),
+        )
         .map_err(at)?;
     let cell = |limit: f64, limiting: Limit, margin: Option<f64>, tally: &Tally| Cell {
         altitude_m: altitude,
@@ -607,6 +734,8 @@ fn map_condition(
         advisory_lead_s: tally.lead,
         advised: tally.advised,
         false_advisories: tally.false_advisories,
+        nuisance_advisories: tally.nuisance_advisories,
+        advised_clear_runs: tally.advised_clear_runs,
         clear_runs: tally.clear_runs,
     };
     if let Some(r) = steady_trial.violated {
@@ -621,21 +750,27 @@ fn map_condition(
     // there, not clear at any acceleration.
     if let Some(final_mach) = spec.final_mach(config, mach) {
         let arrived = tally
-            .note(fly(
-                config,
-                spec,
-                &steady,
-                (altitude, final_mach),
-                None,
-                Some(STEADY_S),
-            ))
+            .note(
+                fly(
+                    config,
+                    spec,
+                    &steady,
+                    (altitude, final_mach),
+                    None,
+                    Some(STEADY_S),
+                ),
+                judge((altitude, final_mach), None),
+            )
             .map_err(at)?;
         if let Some(r) = arrived.violated {
             return Ok(cell(0.0, Limit::Requirement(r), arrived.margins[r], &tally));
         }
     }
     let at_cap = tally
-        .note(fly(config, spec, &manoeuvre, condition, Some(cap), None))
+        .note(
+            fly(config, spec, &manoeuvre, condition, Some(cap), None),
+            judge(condition, Some(cap)),
+        )
         .map_err(at)?;
     let Some(mut limiting) = at_cap.violated else {
         return Ok(cell(cap, capped_by, None, &tally));
@@ -647,7 +782,10 @@ fn map_condition(
     while hi - lo > spec.tolerance {
         let mid = 0.5 * (lo + hi);
         let trial = tally
-            .note(fly(config, spec, &manoeuvre, condition, Some(mid), None))
+            .note(
+                fly(config, spec, &manoeuvre, condition, Some(mid), None),
+                judge(condition, Some(mid)),
+            )
             .map_err(at)?;
         match trial.violated {
             Some(r) => {
@@ -669,7 +807,9 @@ fn map_condition(
 struct Tally {
     runs: u32,
     clear_runs: u32,
+    advised_clear_runs: u32,
     false_advisories: u32,
+    nuisance_advisories: u32,
     /// The last violating trial's lead and whether it was advised (the
     /// bisection's violating rates fall, so the last is the smallest).
     lead: Option<f64>,
@@ -677,7 +817,14 @@ struct Tally {
 }
 
 impl Tally {
-    fn note(&mut self, trial: Result<Trial, SimError>) -> Result<Trial, SimError> {
+    /// Counts `trial`; a clear trial that was advised against is judged by
+    /// `judge` (of the first advisory's time and requirement:
+    /// [`advisory_confirmed`]), one more run.
+    fn note(
+        &mut self,
+        trial: Result<Trial, SimError>,
+        judge: impl FnOnce((f64, Requirement)) -> Result<Judgement, SimError>,
+    ) -> Result<Trial, SimError> {
         let trial = trial?;
         self.runs += 1;
         if trial.violated.is_some() {
@@ -685,8 +832,17 @@ impl Tally {
             self.advised = Some(trial.lead.is_some());
         } else {
             self.clear_runs += 1;
-            if trial.advised {
-                self.false_advisories += 1;
+            if let Some(advisory) = trial.first_advisory {
+                self.advised_clear_runs += 1;
+                self.runs += 1;
+                match judge(advisory)? {
+                    Judgement::Confirmed => {}
+                    Judgement::NearMiss => self.false_advisories += 1,
+                    Judgement::Nuisance => {
+                        self.false_advisories += 1;
+                        self.nuisance_advisories += 1;
+                    }
+                }
             }
         }
         Ok(trial)
@@ -935,13 +1091,13 @@ impl EnvelopeMap {
             "radps"
         };
         let mut out = format!(
-            "altitude_m,mach,limit_{unit},cap_{unit},limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,false_advisories\n",
+            "altitude_m,mach,limit_{unit},cap_{unit},limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,advised_clear_runs,false_advisories,nuisance_advisories\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
         for c in &self.cells {
             let s = &c.steady_margins;
             out.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 c.altitude_m,
                 c.mach,
                 c.limit,
@@ -955,7 +1111,9 @@ impl EnvelopeMap {
                 opt(c.advisory_lead_s),
                 c.runs,
                 c.clear_runs,
-                c.false_advisories
+                c.advised_clear_runs,
+                c.false_advisories,
+                c.nuisance_advisories
             ));
         }
         out
@@ -983,7 +1141,9 @@ impl EnvelopeMap {
                 "advised": c.advised,
                 "runs": c.runs,
                 "clear_runs": c.clear_runs,
+                "advised_clear_runs": c.advised_clear_runs,
                 "false_advisories": c.false_advisories,
+                "nuisance_advisories": c.nuisance_advisories,
                 "steady_margins": {
                     "posture": c.steady_margins.posture,
                     "collision": c.steady_margins.collision,
@@ -1078,10 +1238,12 @@ impl EnvelopeMap {
             .count();
         let missed = violated.iter().filter(|c| c.advised == Some(false)).count();
         let clear: u32 = self.cells.iter().map(|c| c.clear_runs).sum();
+        let advised_clear: u32 = self.cells.iter().map(|c| c.advised_clear_runs).sum();
         let false_advisories: u32 = self.cells.iter().map(|c| c.false_advisories).sum();
+        let nuisance: u32 = self.cells.iter().map(|c| c.nuisance_advisories).sum();
         let cells_false = self.cells.iter().filter(|c| c.false_advisories > 0).count();
         format!(
-            "Advisories (the onboard look-ahead): of {} cells' violations (at the smallest violating rate), {ahead} advised at least 1 s ahead, {late} less than 1 s ahead, {missed} not advised; {false_advisories} false advisories in {clear} runs that stayed clear ({cells_false} cells)\n",
+            "Advisories (the onboard look-ahead): of {} cells' violations (at the smallest violating rate), {ahead} advised at least 1 s ahead, {late} less than 1 s ahead, {missed} not advised; of {clear} runs that stayed clear, {advised_clear} were advised against, {false_advisories} falsely (the manoeuvre continued to the horizon stays clear; {cells_false} cells), {nuisance} of them without even reaching the warning level\n",
             violated.len()
         )
     }
@@ -1202,7 +1364,12 @@ mod tests {
                 "{c:?}"
             );
             assert_eq!(c.advised == Some(true), c.advisory_lead_s.is_some());
-            assert!(c.false_advisories <= c.clear_runs && c.clear_runs <= c.runs);
+            assert!(
+                c.nuisance_advisories <= c.false_advisories
+                    && c.false_advisories <= c.advised_clear_runs
+                    && c.advised_clear_runs <= c.clear_runs
+                    && c.clear_runs <= c.runs
+            );
             if let Limit::Requirement(r) = c.limiting {
                 let condition = (c.altitude_m, c.mach);
                 let clear =
@@ -1352,6 +1519,37 @@ mod tests {
                 .to_string()
                 .contains("outside the grid of 6 cells")
         );
+    }
+
+    /// An advisory is judged by the manoeuvre continued to the horizon's end:
+    /// one in steady flight or before the pull-up is false (level flight
+    /// stays clear); one in the climb after a 0.16 rad/s pull-up (the
+    /// look-ahead's, at 7.93 s: the cable enters the plume at 9.91 s) comes
+    /// true, and the same after a 0.05 rad/s pull-up does not.
+    #[test]
+    fn advisories_are_judged_by_the_manoeuvre_continued() {
+        let config = SystemConfig::builtin().unwrap();
+        let spec = spec();
+        let pull_up = Scenario::builtin("pull-up").unwrap();
+        let steady = Scenario::builtin("steady").unwrap();
+        let scenarios = (&pull_up, &steady);
+        let condition = (9000.0, 0.6);
+        let judge = |rate: Option<f64>, at: f64| {
+            advisory_confirmed(
+                &config,
+                &spec,
+                scenarios,
+                condition,
+                rate,
+                (at, Requirement::Exhaust),
+            )
+            .unwrap()
+        };
+        assert_eq!(judge(None, 0.5), Judgement::Nuisance);
+        // Before the rotation starts (t = 2 s): level flight continued.
+        assert_eq!(judge(Some(0.16), 1.0), Judgement::Nuisance);
+        assert_eq!(judge(Some(0.16), 7.93), Judgement::Confirmed);
+        assert_eq!(judge(Some(0.05), 7.93), Judgement::Nuisance);
     }
 
     #[test]
