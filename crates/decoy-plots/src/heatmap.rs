@@ -1,7 +1,8 @@
 //! A heat map of a grid of values ([`HeatMap`], [`write_heatmap`]): one cell
 //! per grid point, coloured by its value on a sequential scale, labelled with
-//! the value and a mark, and a contour at a threshold drawn as thick lines on
-//! the edges between cells on either side of it.
+//! the value and a mark, with contours: iso-lines at given levels drawn thin,
+//! and one contour at a threshold drawn thick, each on the edges between cells
+//! on either side of its value.
 
 use std::path::{Path, PathBuf};
 
@@ -35,6 +36,9 @@ pub struct HeatMap {
     /// The contour's value: the edges between a cell at or above it and one
     /// below it are drawn thick.
     pub contour: Option<f64>,
+    /// Iso-lines: for each level, the edges between a cell at or above it and
+    /// one below it are drawn thin (dark red).
+    pub levels: Vec<f64>,
 }
 
 const WIDTH: u32 = 1200;
@@ -192,19 +196,26 @@ fn draw<DB: DrawingBackend>(
             .map_err(draw_err)?;
         }
     }
-    // The contour: thick edges between cells on either side of it.
-    if let Some(level) = map.contour {
+    // The iso-lines (thin), then the contour (thick, over them): the edges
+    // between cells on either side of each level.
+    let thin = RGBColor(178, 24, 43).stroke_width(2);
+    let thick = BLACK.stroke_width(5);
+    let lines = map
+        .levels
+        .iter()
+        .map(|&level| (level, thin))
+        .chain(map.contour.map(|level| (level, thick)));
+    for (level, style) in lines {
         let above = |r: usize, c: usize| map.values[r][c] >= level;
-        let thick = BLACK.stroke_width(5);
         for r in 0..n_rows {
             for c in 0..n_cols {
                 let (a, b) = cell(r, c);
                 if c + 1 < n_cols && above(r, c) != above(r, c + 1) {
-                    root.draw(&PathElement::new(vec![(b.0, a.1), (b.0, b.1)], thick))
+                    root.draw(&PathElement::new(vec![(b.0, a.1), (b.0, b.1)], style))
                         .map_err(draw_err)?;
                 }
                 if r + 1 < n_rows && above(r, c) != above(r + 1, c) {
-                    root.draw(&PathElement::new(vec![(a.0, b.1), (b.0, b.1)], thick))
+                    root.draw(&PathElement::new(vec![(a.0, b.1), (b.0, b.1)], style))
                         .map_err(draw_err)?;
                 }
             }
@@ -267,6 +278,7 @@ mod tests {
             ],
             decimals: 3,
             contour: Some(0.10),
+            levels: vec![0.05, 0.15],
         }
     }
 

@@ -1180,10 +1180,12 @@ impl EnvelopeMap {
             ),
             subtitle: vec![
                 format!(
-                    "{}, {}, bisected to {} {}",
+                    "{}, {}, bisected to {} {}; thin lines every {} {}",
                     spec.describe_model(),
                     spec.describe_manoeuvre(),
                     spec.tolerance,
+                    spec.unit(),
+                    self.level_step(),
                     spec.unit()
                 ),
                 format!(
@@ -1219,7 +1221,29 @@ impl EnvelopeMap {
                 .collect(),
             decimals: if accelerates { 2 } else { 3 },
             contour: pull_up.then_some(0.10),
+            levels: self.levels(),
         }
+    }
+
+    /// The heat map's iso-line step: 0.05 rad/s, or 2 m/s^2.
+    fn level_step(&self) -> f64 {
+        if self.spec.manoeuvre == Manoeuvre::Acceleration {
+            2.0
+        } else {
+            0.05
+        }
+    }
+
+    /// The heat map's iso-lines: multiples of [`EnvelopeMap::level_step`] up
+    /// to the largest limit (the pull-up's 0.10 is its thick contour).
+    fn levels(&self) -> Vec<f64> {
+        let step = self.level_step();
+        let top = self.cells.iter().map(|c| c.limit).fold(0.0, f64::max);
+        (1..)
+            .map(|k| (f64::from(k) * step * 1e6).round() / 1e6)
+            .take_while(|&level| level <= top)
+            .filter(|&level| !(self.spec.manoeuvre == Manoeuvre::PullUp && level == 0.10))
+            .collect()
     }
 
     /// The onboard look-ahead's advisories over the map, in words: how many
