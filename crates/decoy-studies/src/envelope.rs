@@ -1356,6 +1356,26 @@ mod tests {
         }
     }
 
+    /// Flies a requirement-limited cell's limit again (clear) and the limit
+    /// plus the tolerance (violating `r`'s cell).
+    fn assert_bisected(
+        config: &SystemConfig,
+        spec: &EnvelopeSpec,
+        manoeuvre: &Scenario,
+        c: &Cell,
+        r: Requirement,
+    ) {
+        let condition = (c.altitude_m, c.mach);
+        let clear = fly(config, spec, manoeuvre, condition, Some(c.limit), None).unwrap();
+        assert_eq!(clear.violated, None, "{c:?}");
+        let above = (c.limit + spec.tolerance).min(c.cap);
+        let over = fly(config, spec, manoeuvre, condition, Some(above), None).unwrap();
+        assert!(
+            over.violated.is_some(),
+            "{c:?}: {r:?} not violated at {above}"
+        );
+    }
+
     fn out(name: &str) -> PathBuf {
         let dir =
             std::env::temp_dir().join(format!("decoy-envelope-{}-{name}", std::process::id()));
@@ -1395,16 +1415,7 @@ mod tests {
                     && c.clear_runs <= c.runs
             );
             if let Limit::Requirement(r) = c.limiting {
-                let condition = (c.altitude_m, c.mach);
-                let clear =
-                    fly(&config, &spec, &manoeuvre, condition, Some(c.limit), None).unwrap();
-                assert_eq!(clear.violated, None, "{c:?}");
-                let above = (c.limit + spec.tolerance).min(c.cap);
-                let over = fly(&config, &spec, &manoeuvre, condition, Some(above), None).unwrap();
-                assert!(
-                    over.violated.is_some(),
-                    "{c:?}: {r:?} not violated at {above}"
-                );
+                assert_bisected(&config, &spec, &manoeuvre, c, r);
             }
         }
         // Remove a cell: the next run maps it again and takes the others.
@@ -1492,16 +1503,7 @@ mod tests {
             assert!(c.limit <= c.cap && c.cap == 10.0, "{c:?}");
             if let (Limit::Requirement(r), true) = (c.limiting, c.limit > 0.0) {
                 bisected += 1;
-                let condition = (c.altitude_m, c.mach);
-                let clear =
-                    fly(&config, &spec, &manoeuvre, condition, Some(c.limit), None).unwrap();
-                assert_eq!(clear.violated, None, "{c:?}");
-                let above = (c.limit + spec.tolerance).min(c.cap);
-                let over = fly(&config, &spec, &manoeuvre, condition, Some(above), None).unwrap();
-                assert!(
-                    over.violated.is_some(),
-                    "{c:?}: {r:?} not violated at {above}"
-                );
+                assert_bisected(&config, &spec, &manoeuvre, c, r);
             }
         }
         // 15 km, Mach 0.3: the posture limits below the bound (9.26 m/s^2 at
