@@ -3,6 +3,7 @@
 //! where this workspace allows `unsafe`.
 #![allow(unsafe_code)]
 
+use bytemuck::{Pod, Zeroable};
 use iceoryx2_bb_derive_macros::ZeroCopySend;
 use iceoryx2_bb_elementary_traits::zero_copy_send::ZeroCopySend;
 
@@ -79,7 +80,7 @@ pub mod flag {
 }
 
 /// The head of every sample.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.Header")]
 pub struct Header {
@@ -109,7 +110,7 @@ impl Header {
 /// The fields are those of the decoy link's `AircraftStateFrame`
 /// (docs/protocol.md §3) in the same types, so the controller receives exactly
 /// these bits. Validation is the controller's (docs/protocol.md §4).
-#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.AircraftState")]
 pub struct AircraftState {
@@ -143,7 +144,7 @@ macro_rules! output {
         /// docs/outputs.md for the quantities), ending with one [`MonitorReport`] per
         /// requirement, in the list's order. Fields are only appended (with a
         /// protocol version), never moved.
-        #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
         #[repr(C)]
         #[type_name("decoy.bridge.v3.Output")]
         pub struct Output {
@@ -233,7 +234,7 @@ decoy_schema::for_each_requirement!(output);
 /// One requirement's monitor and prediction in an [`Output`] (docs/management.md,
 /// "Margins"): the margin in the requirement's own unit, negative
 /// when violated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.MonitorReport")]
 pub struct MonitorReport {
@@ -259,7 +260,7 @@ pub struct MonitorReport {
 }
 
 /// Why a state or a command was rejected.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.Rejection")]
 pub struct Rejection {
@@ -278,7 +279,7 @@ pub struct Rejection {
 /// while the controller initialises, an [`Output`] with only its time, flags and
 /// instructions set (`header.kind` = [`kind::INITIALISING`]); the other part is
 /// all zero. The lockstep service's response and the outputs service's sample.
-#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.Answer")]
 pub struct Answer {
@@ -293,7 +294,9 @@ pub struct Answer {
 }
 
 /// The counters of a bridge since it started (u64, never reset).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, serde::Serialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable, serde::Serialize,
+)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.Counters")]
 pub struct Counters {
@@ -342,7 +345,7 @@ pub struct Counters {
 
 /// The bridge's status: published on the status service (history 1) and in every
 /// command reply.
-#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.Status")]
 pub struct Status {
@@ -384,7 +387,7 @@ pub struct Status {
 }
 
 /// A command (request of the commands service).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.Command")]
 pub struct Command {
@@ -405,7 +408,7 @@ pub struct Command {
 }
 
 /// The reply to a [`Command`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
 #[type_name("decoy.bridge.v3.CommandReply")]
 pub struct CommandReply {
@@ -652,3 +655,36 @@ pub fn type_name_of<T: ZeroCopySend>() -> &'static str {
     // name breaks iceoryx2's type check; reading it has no precondition.
     unsafe { <T as ZeroCopySend>::type_name() }
 }
+
+/// A service's payload as bytes, for a transport other than shared memory (the
+/// bridge across hosts over Zenoh, docs/bridge.md "Across hosts"): exactly the
+/// bytes the type has in shared memory (no implicit padding, so every byte is a
+/// field, `Pod` checks it at compile time), sent with its [`Wire::tag`] (the
+/// iceoryx2 type name and the size, `decoy.bridge.v3.Answer/392`), which the
+/// receiver checks as iceoryx2 checks a port's type.
+pub trait Wire: Pod + ZeroCopySend {
+    /// The bytes of `self`.
+    fn as_wire_bytes(&self) -> &[u8] {
+        bytemuck::bytes_of(self)
+    }
+
+    /// The value `bytes` hold; `None` when their length is not the type's size.
+    fn from_wire_bytes(bytes: &[u8]) -> Option<Self> {
+        bytemuck::try_pod_read_unaligned(bytes).ok()
+    }
+
+    /// The type's tag: `<type name>/<size in bytes>`.
+    fn tag() -> String {
+        format!(
+            "{}/{}",
+            type_name_of::<Self>(),
+            core::mem::size_of::<Self>()
+        )
+    }
+}
+
+impl Wire for AircraftState {}
+impl Wire for Answer {}
+impl Wire for Status {}
+impl Wire for Command {}
+impl Wire for CommandReply {}

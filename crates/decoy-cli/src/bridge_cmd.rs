@@ -4,6 +4,9 @@
 //! prints.
 
 use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Args, ValueEnum};
 use cpu_affinity::{Cpus, current_list, pin_process, shown};
@@ -15,6 +18,7 @@ use decoy_stream::fly::Mode;
 use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
 use host_bridge::backend::{BackendOptions, Precision, describe_backend, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
+use host_bridge::remote::{ZenohGateway, ZenohOptions};
 use host_bridge::services::{check_instance, iox_config, quiet_iceoryx_log};
 
 use crate::failure::{Failure, summary_json, usage};
@@ -47,6 +51,77 @@ pub struct BridgeArgs {
     /// Run on these CPUs only (Linux list format: 0, 0,2, 0-3; QEMU too). A lockstep client on the same core is fastest (docs/bridge.md, "Cores").
     #[arg(long, value_name = "LIST")]
     cpu: Option<String>,
+    #[command(flatten)]
+    zenoh: BridgeZenohArgs,
+}
+
+/// `decoy bridge`'s Zenoh options (docs/bridge.md, "Across hosts").
+#[derive(Args, Debug)]
+struct BridgeZenohArgs {
+    /// Serve across hosts over Zenoh as well, listening on ENDPOINT (tcp/127.0.0.1:7447; repeatable). Beyond loopback needs --zenoh-users or --zenoh-unauthenticated.
+    #[arg(long, value_name = "ENDPOINT")]
+    zenoh_listen: Vec<String>,
+    /// Serve over Zenoh by connecting to ENDPOINT (a router, or a client that listens; repeatable).
+    #[arg(long, value_name = "ENDPOINT")]
+    zenoh_connect: Vec<String>,
+    /// A Zenoh configuration file (JSON5: TLS, certificates, ...), read first.
+    #[arg(long, value_name = "FILE")]
+    zenoh_config: Option<PathBuf>,
+    /// Only these users connect over Zenoh (a `user:password` per line; Zenoh's user/password authentication).
+    #[arg(long, value_name = "FILE")]
+    zenoh_users: Option<PathBuf>,
+    /// Allow listening beyond loopback without authentication.
+    #[arg(long)]
+    zenoh_unauthenticated: bool,
+}
+
+impl BridgeZenohArgs {
+    /// The Zenoh options, if any Zenoh option was given.
+    fn options(&self) -> Option<ZenohOptions> {
+        let any = !self.zenoh_listen.is_empty()
+            || !self.zenoh_connect.is_empty()
+            || self.zenoh_config.is_some()
+            || self.zenoh_users.is_some()
+            || self.zenoh_unauthenticated;
+        any.then(|| ZenohOptions {
+            listen: self.zenoh_listen.clone(),
+            connect: self.zenoh_connect.clone(),
+            config_file: self.zenoh_config.clone(),
+            users_file: self.zenoh_users.clone(),
+            credentials_file: None,
+            unauthenticated: self.zenoh_unauthenticated,
+        })
+    }
+}
+
+/// `decoy feed`'s Zenoh options.
+#[derive(Args, Debug)]
+struct FeedZenohArgs {
+    /// Feed a bridge across hosts over Zenoh: connect to ENDPOINT (the bridge's --zenoh-listen; repeatable).
+    #[arg(long, value_name = "ENDPOINT")]
+    zenoh_connect: Vec<String>,
+    /// A Zenoh configuration file (JSON5: TLS, certificates, ...), read first.
+    #[arg(long, value_name = "FILE")]
+    zenoh_config: Option<PathBuf>,
+    /// This client's credentials for a bridge that authenticates (one line `user:password`).
+    #[arg(long, value_name = "FILE")]
+    zenoh_credentials: Option<PathBuf>,
+}
+
+impl FeedZenohArgs {
+    fn options(&self) -> Option<ZenohOptions> {
+        let any = !self.zenoh_connect.is_empty()
+            || self.zenoh_config.is_some()
+            || self.zenoh_credentials.is_some();
+        any.then(|| ZenohOptions {
+            listen: Vec::new(),
+            connect: self.zenoh_connect.clone(),
+            config_file: self.zenoh_config.clone(),
+            users_file: None,
+            credentials_file: self.zenoh_credentials.clone(),
+            unauthenticated: false,
+        })
+    }
 }
 
 #[derive(Args, Debug)]
@@ -73,6 +148,8 @@ pub struct FeedArgs {
     /// Run on these CPUs only (Linux list format: 0, 0,2, 0-3). Lockstep is fastest on the bridge's core (docs/bridge.md, "Cores").
     #[arg(long, value_name = "LIST")]
     cpu: Option<String>,
+    #[command(flatten)]
+    zenoh: FeedZenohArgs,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -167,15 +244,38 @@ pub fn bridge_command(
     }
     .map_err(bridge_failure)?;
     let info = backend.info().clone();
+    let zenoh = args.zenoh.options();
+    if let Some(z) = &zenoh {
+        // Bad Zenoh options are refused before the backend runs a frame.
+        host_bridge::remote::check_bridge_options(z).map_err(bridge_failure)?;
+    }
+    // Set when the Zenoh gateway cannot start: the bridge stops at its next tick.
+    let stop = Arc::new(AtomicBool::new(false));
     let bridge = BridgeOptions {
         instance: args.instance.clone(),
-        config: iox,
+        config: iox.clone(),
         status_line: !json,
-        stop: None,
+        stop: Some(Arc::clone(&stop)),
     };
-    let summary = run_bridge(&bridge, backend, |_| {
+    let mut gateway: Option<Result<ZenohGateway, host_bridge::BridgeError>> = None;
+    let result = run_bridge(&bridge, backend, |_| {
+        let across = match &zenoh {
+            Some(z) => match ZenohGateway::start(&args.instance, &iox, z) {
+                Ok(g) => {
+                    let text = format!("; over Zenoh too ({})", g.describe());
+                    gateway = Some(Ok(g));
+                    text
+                }
+                Err(e) => {
+                    gateway = Some(Err(e));
+                    stop.store(true, Ordering::Relaxed);
+                    return;
+                }
+            },
+            None => String::new(),
+        };
         eprintln!(
-            "decoy bridge: instance {} ready ({}, f{}, {} segments graded {}, CPUs {}): services decoy/{}/*; Ctrl-C to stop",
+            "decoy bridge: instance {} ready ({}, f{}, {} segments graded {}, CPUs {}): services decoy/{}/*{across}; Ctrl-C to stop",
             args.instance,
             if info.backend == bridge_types::backend::QEMU {
                 format!("qemu, firmware on {}", info.board)
@@ -188,8 +288,14 @@ pub fn bridge_command(
             shown(&current_list()),
             args.instance
         );
-    })
-    .map_err(bridge_failure)?;
+    });
+    let zenoh_summary = match gateway {
+        Some(Ok(g)) => Some(g.stop().map_err(bridge_failure)?),
+        Some(Err(e)) => return Err(bridge_failure(e)),
+        None => None,
+    };
+    let mut summary = result.map_err(bridge_failure)?;
+    summary.zenoh = zenoh_summary;
     if json {
         summary_json(&summary)
     } else {
@@ -253,9 +359,14 @@ pub fn feed_command(config: &SystemConfig, args: &FeedArgs, json: bool) -> Resul
         ModeArg::Lockstep => Mode::Lockstep,
         ModeArg::Free => Mode::Free,
     };
+    let zenoh = args.zenoh.options();
+    if let Some(z) = &zenoh {
+        host_bridge::remote::check_client_options(z).map_err(bridge_failure)?;
+    }
     let options = FeedOptions {
         instance: args.instance.clone(),
         timeout,
+        zenoh,
         stream: args.stream.options(mode, args.realtime),
     };
     // SIGINT and SIGTERM stop the flight at the next frame: the pipeline's
@@ -277,9 +388,14 @@ fn feed_text(run: &FeedRun) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "Feed `{}` through bridge {} ({}, f{}, {} segments), {}{}",
+        "Feed `{}` through bridge {}{} ({}, f{}, {} segments), {}{}",
         r.scenario,
         f.instance,
+        if f.transport == "zenoh" {
+            " over Zenoh"
+        } else {
+            ""
+        },
         describe_backend(&f.backend, &f.board),
         f.precision_bits,
         r.segments,

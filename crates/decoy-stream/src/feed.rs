@@ -19,6 +19,7 @@ use decoy_sim::{Scenario, Summary};
 use host_bridge::BridgeError;
 use host_bridge::backend::{BackendOptions, Precision, host_backend};
 use host_bridge::client::BridgeClient;
+use host_bridge::remote::ZenohOptions;
 use host_bridge::timing::Percentiles;
 use serde::Serialize;
 
@@ -33,6 +34,8 @@ pub struct FeedOptions {
     pub instance: String,
     /// Deadline of each answer.
     pub timeout: Duration,
+    /// Across hosts: the bridge over Zenoh (host_bridge::remote), not shared memory.
+    pub zenoh: Option<ZenohOptions>,
     /// What every streamed run takes (the default output directory is
     /// `out/feed-<scenario>`).
     pub stream: StreamOptions,
@@ -43,6 +46,7 @@ impl Default for FeedOptions {
         FeedOptions {
             instance: "default".to_owned(),
             timeout: host_bridge::client::ANSWER_TIMEOUT,
+            zenoh: None,
             stream: StreamOptions::default(),
         }
     }
@@ -86,6 +90,8 @@ pub struct FeedSummary {
     pub grading_ratio: f64,
     /// `lockstep` or `free`.
     pub mode: String,
+    /// `shm` (shared memory, one host) or `zenoh` (across hosts).
+    pub transport: String,
     /// Paced at real time.
     pub realtime: bool,
     /// The CPUs the client could run on (Linux's list format; `--cpu` sets
@@ -185,8 +191,13 @@ impl Device for Bridge<'_> {
     }
 
     fn open(&mut self) -> Result<(BridgeClient, Model), FeedError> {
-        let node_name = format!("feed-{}-{}", self.options.instance, std::process::id());
-        let mut client = BridgeClient::connect(&self.options.instance, &node_name, self.iox)?;
+        let mut client = match &self.options.zenoh {
+            Some(z) => BridgeClient::connect_zenoh(&self.options.instance, z)?,
+            None => {
+                let node_name = format!("feed-{}-{}", self.options.instance, std::process::id());
+                BridgeClient::connect(&self.options.instance, &node_name, self.iox)?
+            }
+        };
         client.set_timeout(self.options.timeout);
         self.status = client.get_status()?;
         let model = Model {
@@ -234,6 +245,12 @@ impl Device for Bridge<'_> {
             precision_bits: self.status.precision_bits,
             grading_ratio: self.status.grading_ratio,
             mode: self.options.stream.mode.name().to_owned(),
+            transport: if self.options.zenoh.is_some() {
+                "zenoh"
+            } else {
+                "shm"
+            }
+            .to_owned(),
             realtime: self.options.stream.realtime,
             client_cpus: cpu_affinity::current_list(),
             frames_sent: flown.sent.len(),

@@ -47,6 +47,15 @@ pub enum Stop {
     },
     /// SIGINT or SIGTERM (`SIGINT`).
     Signal(&'static str),
+    /// The transport failed after frames were answered (lockstep: no answer
+    /// within the deadline, a link cut): the flight ends at the last answered
+    /// frame, whose answers are kept.
+    Lost {
+        /// Time of the last frame the controller took, s.
+        t_s: f64,
+        /// The transport's error, in words.
+        reason: String,
+    },
 }
 
 impl Stop {
@@ -55,6 +64,7 @@ impl Stop {
         match self {
             Stop::Rejected { reason, .. } => reason.clone(),
             Stop::Signal(signal) => format!("interrupted by {signal}"),
+            Stop::Lost { reason, .. } => format!("link lost: {reason}"),
         }
     }
 }
@@ -114,14 +124,18 @@ fn describe_rejection(frame: &AircraftStateFrame, reason: &str, count: u64) -> S
 /// answer; a rejection ends the flight), calling `progress` with the fraction
 /// done now and then. A transport that fails once a signal came (the
 /// firmware's QEMU, in the terminal's process group, got it too) ends the
-/// flight as the signal does.
+/// flight as the signal does. A transport that fails once a frame was
+/// answered ends the flight there ([`Stop::Lost`]): what was answered is kept.
 pub fn lockstep<T: Transport>(
     transport: &mut T,
     frames: &[AircraftStateFrame],
     realtime: bool,
     mut progress: impl FnMut(f64),
     signals: &Interrupts,
-) -> Result<Flown<T::Answer>, T::Error> {
+) -> Result<Flown<T::Answer>, T::Error>
+where
+    T::Error: std::fmt::Display,
+{
     let started = Instant::now();
     let mut flown = Flown {
         sent: Vec::with_capacity(frames.len()),
@@ -149,7 +163,18 @@ pub fn lockstep<T: Transport>(
                     flown.stop = Some(Stop::Signal(signal));
                     break;
                 }
-                None => return Err(e),
+                None if flown.sent.is_empty() => return Err(e),
+                None => {
+                    flown.stop = Some(Stop::Lost {
+                        t_s: last_time,
+                        reason: format!(
+                            "frame {} (t = {} s): {e}",
+                            frame.seq,
+                            format_time(frame.time_s)
+                        ),
+                    });
+                    break;
+                }
             },
         };
         flown.latency_us.push(t0.elapsed().as_secs_f64() * 1e6);

@@ -104,7 +104,7 @@ pub trait DeviceError: fmt::Display {
 /// its summary and its own files.
 pub trait Device {
     /// What carries the frames.
-    type Transport: Transport;
+    type Transport: Transport<Error: fmt::Display>;
     /// Why the device failed.
     type Error: DeviceError + From<<Self::Transport as Transport>::Error>;
     /// Its `summary.json`.
@@ -254,6 +254,17 @@ pub enum StreamError<E> {
         /// Where the outputs are.
         out_dir: PathBuf,
     },
+    /// The transport failed after frames were answered (lockstep: no answer
+    /// within the deadline, a link cut): the outputs up to the last answered
+    /// frame are written, `summary.json`'s `stopped.reason` starts `link lost`.
+    LinkLost {
+        /// Time of the last answered frame, s.
+        t_s: f64,
+        /// The transport's error, in words.
+        reason: String,
+        /// Where the outputs are.
+        out_dir: PathBuf,
+    },
     /// Writing an output failed.
     Output(String),
 }
@@ -283,6 +294,17 @@ impl<E: DeviceError> fmt::Display for StreamError<E> {
             } => write!(
                 f,
                 "{} stopped accepting the scenario after t = {} s: {reason}; the outputs up to then are in {}",
+                E::WHO,
+                format_time(*t_s),
+                out_dir.display()
+            ),
+            StreamError::LinkLost {
+                t_s,
+                reason,
+                out_dir,
+            } => write!(
+                f,
+                "{} stopped answering after t = {} s: {reason}; the outputs up to then are in {}",
                 E::WHO,
                 format_time(*t_s),
                 out_dir.display()
@@ -485,6 +507,11 @@ pub fn run<D: Device>(
     }
     match flown.stop {
         Some(Stop::Rejected { t_s, reason }) => Err(StreamError::Stopped {
+            t_s,
+            reason,
+            out_dir,
+        }),
+        Some(Stop::Lost { t_s, reason }) => Err(StreamError::LinkLost {
             t_s,
             reason,
             out_dir,

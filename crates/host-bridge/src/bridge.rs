@@ -100,6 +100,10 @@ pub struct BridgeSummary {
     pub service_time_us: Percentiles,
     /// Health at the end.
     pub health: String,
+    /// The Zenoh gateway's work, when the bridge served across hosts too
+    /// (crate::remote).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zenoh: Option<crate::remote::GatewaySummary>,
 }
 
 impl BridgeSummary {
@@ -150,6 +154,9 @@ impl BridgeSummary {
             "  service time (us): p50 {:.1}, p99 {:.1}, p99.9 {:.1}, max {:.1}\n",
             t.p50, t.p99, t.p999, t.max
         );
+        if let Some(z) = &self.zenoh {
+            s += &z.text();
+        }
         s
     }
 }
@@ -429,6 +436,7 @@ impl Engine {
             rejected: self.counters.rejected(),
             service_time_us: self.timing.all.percentiles(),
             health: health::name(self.health).to_owned(),
+            zenoh: None,
         }
     }
 }

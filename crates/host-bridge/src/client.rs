@@ -16,6 +16,7 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 
 use crate::BridgeError;
+use crate::remote::{ZenohClient, ZenohOptions};
 use crate::services::{Ipc, Services, node, wait_until_ready};
 
 /// Default deadline of one answer.
@@ -25,8 +26,25 @@ pub const ANSWER_TIMEOUT: Duration = Duration::from_secs(5);
 /// mark; this leaves room for a loaded machine).
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
 
-/// A connection to bridge `instance`.
+/// A connection to bridge `instance`: over shared memory
+/// ([`BridgeClient::connect`]) or across hosts over Zenoh
+/// ([`BridgeClient::connect_zenoh`], crate::remote), with the same operations
+/// and the same answers.
 pub struct BridgeClient {
+    transport: Transport,
+    instance: String,
+    timeout: Duration,
+    command_seq: u32,
+    free_seq: u32,
+}
+
+enum Transport {
+    Shm(Box<ShmPorts>),
+    Zenoh(Box<ZenohClient>),
+}
+
+/// The iceoryx2 ports of a shared-memory client.
+struct ShmPorts {
     lockstep: IoxClient<Ipc, AircraftState, (), Answer, ()>,
     commands: IoxClient<Ipc, Command, (), CommandReply, ()>,
     state: Publisher<Ipc, AircraftState, ()>,
@@ -37,10 +55,6 @@ pub struct BridgeClient {
     _status_service: crate::services::StatusService,
     _services: Services,
     _node: Node<Ipc>,
-    instance: String,
-    timeout: Duration,
-    command_seq: u32,
-    free_seq: u32,
 }
 
 fn ipc(what: &str, e: impl std::fmt::Debug) -> BridgeError {
@@ -106,16 +120,18 @@ impl BridgeClient {
             .create()
             .map_err(|e| ipc("the event listener", e))?;
         Ok(BridgeClient {
-            lockstep,
-            commands,
-            state,
-            outputs,
-            status,
-            to_bridge,
-            from_bridge,
-            _status_service: status_service,
-            _services: services,
-            _node: node,
+            transport: Transport::Shm(Box::new(ShmPorts {
+                lockstep,
+                commands,
+                state,
+                outputs,
+                status,
+                to_bridge,
+                from_bridge,
+                _status_service: status_service,
+                _services: services,
+                _node: node,
+            })),
             instance: instance.to_owned(),
             timeout: ANSWER_TIMEOUT,
             command_seq: 0,
@@ -123,96 +139,82 @@ impl BridgeClient {
         })
     }
 
+    /// Connects to bridge `instance` across hosts over Zenoh (crate::remote)
+    /// once its readiness token is seen, waiting up to
+    /// [`crate::remote::REMOTE_CONNECT_TIMEOUT`]; [`BridgeError::NoBridge`]
+    /// when no bridge answers in that time, [`BridgeError::Usage`] for bad
+    /// options.
+    pub fn connect_zenoh(instance: &str, options: &ZenohOptions) -> Result<Self, BridgeError> {
+        let client =
+            ZenohClient::connect(instance, options, crate::remote::REMOTE_CONNECT_TIMEOUT)?;
+        Ok(BridgeClient {
+            transport: Transport::Zenoh(Box::new(client)),
+            instance: instance.to_owned(),
+            timeout: ANSWER_TIMEOUT,
+            command_seq: 0,
+            free_seq: 0,
+        })
+    }
+
+    /// `shm` or `zenoh`.
+    pub fn transport_name(&self) -> &'static str {
+        match self.transport {
+            Transport::Shm(_) => "shm",
+            Transport::Zenoh(_) => "zenoh",
+        }
+    }
+
     /// Sets the deadline of each answer.
     pub fn set_timeout(&mut self, timeout: Duration) {
         self.timeout = timeout;
     }
 
-    fn no_answer(&self, what: &str) -> BridgeError {
-        BridgeError::NoAnswer(format!(
-            "no {what} from bridge {:?} within {:?}: is `decoy bridge --instance {}` running?",
-            self.instance, self.timeout, self.instance
-        ))
-    }
-
-    /// Waits (blocked on the from-bridge event, no spinning) for the response
-    /// to `pending` until the deadline.
-    fn await_response<Req, Resp>(
-        &self,
-        pending: &PendingResponse<Ipc, Req, (), Resp, ()>,
-        what: &str,
-    ) -> Result<Resp, BridgeError>
-    where
-        Req: std::fmt::Debug + ZeroCopySend,
-        Resp: std::fmt::Debug + ZeroCopySend + Copy,
-    {
-        let deadline = Instant::now() + self.timeout;
-        loop {
-            if let Some(response) = pending
-                .receive()
-                .map_err(|e| ipc("receiving an answer", e))?
-            {
-                return Ok(*response.payload());
+    /// One lockstep exchange: `state` in, its answer out (an output or a rejection).
+    pub fn step(&mut self, state: &AircraftState) -> Result<Answer, BridgeError> {
+        match &mut self.transport {
+            Transport::Shm(p) => {
+                let pending = p
+                    .lockstep
+                    .loan_uninit()
+                    .map_err(|e| ipc("loaning a request", e))?
+                    .write_payload(*state)
+                    .send()
+                    .map_err(|e| ipc("sending a request", e))?;
+                let _ = p
+                    .to_bridge
+                    .notify_with_custom_event_id(EventId::new(event::REQUEST));
+                p.await_response(&self.instance, self.timeout, &pending, "answer")
             }
-            let left = deadline.saturating_duration_since(Instant::now());
-            if left.is_zero() {
-                return Err(self.no_answer(what));
-            }
-            if pending.number_of_server_connections() == 0 {
-                return Err(BridgeError::NoAnswer(format!(
-                    "bridge {:?} is not serving (no server took the request)",
-                    self.instance
-                )));
-            }
-            if !pending.is_connected() {
-                // Answered and released between the two calls, or dropped.
-                if let Some(response) = pending
-                    .receive()
-                    .map_err(|e| ipc("receiving an answer", e))?
-                {
-                    return Ok(*response.payload());
-                }
-                return Err(BridgeError::NoAnswer(format!(
-                    "bridge {:?} released the request without an answer (it is shutting down or died)",
-                    self.instance
-                )));
-            }
-            self.from_bridge
-                .timed_wait(|_| {}, left.min(Duration::from_millis(100)))
-                .map_err(|e| ipc("waiting for the bridge", e))?;
+            Transport::Zenoh(z) => z.step(state, self.timeout),
         }
     }
 
-    /// One lockstep exchange: `state` in, its answer out (an output or a rejection).
-    pub fn step(&mut self, state: &AircraftState) -> Result<Answer, BridgeError> {
-        let pending = self
-            .lockstep
-            .loan_uninit()
-            .map_err(|e| ipc("loaning a request", e))?
-            .write_payload(*state)
-            .send()
-            .map_err(|e| ipc("sending a request", e))?;
-        let _ = self
-            .to_bridge
-            .notify_with_custom_event_id(EventId::new(event::REQUEST));
-        self.await_response(&pending, "answer")
-    }
-
-    /// One command; its reply.
+    /// One command (numbered by this client); its reply.
     pub fn command(&mut self, mut c: Command) -> Result<CommandReply, BridgeError> {
         self.command_seq = self.command_seq.wrapping_add(1);
         c.header = Header::new(kind::COMMAND, self.command_seq);
-        let pending = self
-            .commands
-            .loan_uninit()
-            .map_err(|e| ipc("loaning a command", e))?
-            .write_payload(c)
-            .send()
-            .map_err(|e| ipc("sending a command", e))?;
-        let _ = self
-            .to_bridge
-            .notify_with_custom_event_id(EventId::new(event::COMMAND));
-        self.await_response(&pending, "command reply")
+        self.command_as_sent(c)
+    }
+
+    /// One command exactly as given (its header too: the Zenoh gateway passes
+    /// a remote client's commands on so); its reply.
+    pub fn command_as_sent(&mut self, c: Command) -> Result<CommandReply, BridgeError> {
+        match &mut self.transport {
+            Transport::Shm(p) => {
+                let pending = p
+                    .commands
+                    .loan_uninit()
+                    .map_err(|e| ipc("loaning a command", e))?
+                    .write_payload(c)
+                    .send()
+                    .map_err(|e| ipc("sending a command", e))?;
+                let _ = p
+                    .to_bridge
+                    .notify_with_custom_event_id(EventId::new(event::COMMAND));
+                p.await_response(&self.instance, self.timeout, &pending, "command reply")
+            }
+            Transport::Zenoh(z) => z.command(&c, self.timeout),
+        }
     }
 
     /// `command` with only its code set.
@@ -238,22 +240,30 @@ impl BridgeClient {
 
     /// [`BridgeClient::publish`] without waking the bridge: a publisher of
     /// many samples can wake it once per batch ([`BridgeClient::wake_for_states`]);
-    /// the bridge's 100 ms tick serves the samples anyway.
+    /// the bridge's 100 ms tick serves the samples anyway. (Over Zenoh the
+    /// gateway wakes the bridge for every sample.)
     pub fn publish_quietly(&mut self, state: &AircraftState) -> Result<(), BridgeError> {
-        self.state
-            .loan_uninit()
-            .map_err(|e| ipc("loaning a sample", e))?
-            .write_payload(*state)
-            .send()
-            .map_err(|e| ipc("publishing a state", e))?;
-        Ok(())
+        match &mut self.transport {
+            Transport::Shm(p) => {
+                p.state
+                    .loan_uninit()
+                    .map_err(|e| ipc("loaning a sample", e))?
+                    .write_payload(*state)
+                    .send()
+                    .map_err(|e| ipc("publishing a state", e))?;
+                Ok(())
+            }
+            Transport::Zenoh(z) => z.publish(state),
+        }
     }
 
     /// Wakes the bridge for the free-running samples published (`STATE`).
     pub fn wake_for_states(&self) {
-        let _ = self
-            .to_bridge
-            .notify_with_custom_event_id(EventId::new(event::STATE));
+        if let Transport::Shm(p) = &self.transport {
+            let _ = p
+                .to_bridge
+                .notify_with_custom_event_id(EventId::new(event::STATE));
+        }
     }
 
     /// The next sequence number of this client's free-running samples (from 0).
@@ -265,35 +275,107 @@ impl BridgeClient {
 
     /// Every answer received on the outputs service so far.
     pub fn take_outputs(&mut self) -> Result<Vec<Answer>, BridgeError> {
-        let mut out = Vec::new();
-        while let Some(sample) = self
-            .outputs
-            .receive()
-            .map_err(|e| ipc("receiving outputs", e))?
-        {
-            out.push(*sample.payload());
+        match &mut self.transport {
+            Transport::Shm(p) => {
+                let mut out = Vec::new();
+                while let Some(sample) = p
+                    .outputs
+                    .receive()
+                    .map_err(|e| ipc("receiving outputs", e))?
+                {
+                    out.push(*sample.payload());
+                }
+                Ok(out)
+            }
+            Transport::Zenoh(z) => z.take_outputs(),
         }
-        Ok(out)
     }
 
     /// The newest status published, if any arrived.
     pub fn latest_status(&mut self) -> Result<Option<Status>, BridgeError> {
-        let mut last = None;
-        while let Some(sample) = self
-            .status
-            .receive()
-            .map_err(|e| ipc("receiving status", e))?
-        {
-            last = Some(*sample.payload());
+        match &mut self.transport {
+            Transport::Shm(p) => {
+                let mut last = None;
+                while let Some(sample) =
+                    p.status.receive().map_err(|e| ipc("receiving status", e))?
+                {
+                    last = Some(*sample.payload());
+                }
+                Ok(last)
+            }
+            Transport::Zenoh(z) => z.latest_status(),
         }
-        Ok(last)
     }
 
-    /// Blocks until the bridge notifies something or `timeout` passes.
-    pub fn wait_event(&self, timeout: Duration) -> Result<(), BridgeError> {
-        self.from_bridge
-            .timed_wait(|_| {}, timeout)
-            .map_err(|e| ipc("waiting for the bridge", e))?;
-        Ok(())
+    /// Blocks until the bridge notifies something (over Zenoh: publishes an
+    /// answer) or `timeout` passes.
+    pub fn wait_event(&mut self, timeout: Duration) -> Result<(), BridgeError> {
+        match &mut self.transport {
+            Transport::Shm(p) => {
+                p.from_bridge
+                    .timed_wait(|_| {}, timeout)
+                    .map_err(|e| ipc("waiting for the bridge", e))?;
+                Ok(())
+            }
+            Transport::Zenoh(z) => z.wait_event(timeout),
+        }
+    }
+}
+
+fn no_answer(instance: &str, timeout: Duration, what: &str) -> BridgeError {
+    BridgeError::NoAnswer(format!(
+        "no {what} from bridge {instance:?} within {timeout:?}: is `decoy bridge --instance {instance}` running?"
+    ))
+}
+
+impl ShmPorts {
+    /// Waits (blocked on the from-bridge event, no spinning) for the response
+    /// to `pending` until the deadline.
+    fn await_response<Req, Resp>(
+        &self,
+        instance: &str,
+        timeout: Duration,
+        pending: &PendingResponse<Ipc, Req, (), Resp, ()>,
+        what: &str,
+    ) -> Result<Resp, BridgeError>
+    where
+        Req: std::fmt::Debug + ZeroCopySend,
+        Resp: std::fmt::Debug + ZeroCopySend + Copy,
+    {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(response) = pending
+                .receive()
+                .map_err(|e| ipc("receiving an answer", e))?
+            {
+                return Ok(*response.payload());
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(no_answer(instance, timeout, what));
+            }
+            if pending.number_of_server_connections() == 0 {
+                return Err(BridgeError::NoAnswer(format!(
+                    "bridge {:?} is not serving (no server took the request)",
+                    instance
+                )));
+            }
+            if !pending.is_connected() {
+                // Answered and released between the two calls, or dropped.
+                if let Some(response) = pending
+                    .receive()
+                    .map_err(|e| ipc("receiving an answer", e))?
+                {
+                    return Ok(*response.payload());
+                }
+                return Err(BridgeError::NoAnswer(format!(
+                    "bridge {:?} released the request without an answer (it is shutting down or died)",
+                    instance
+                )));
+            }
+            self.from_bridge
+                .timed_wait(|_| {}, left.min(Duration::from_millis(100)))
+                .map_err(|e| ipc("waiting for the bridge", e))?;
+        }
     }
 }

@@ -23,6 +23,8 @@
 //!   health, status, summary.
 //! - [`client`]: a client (lockstep with a deadline, free-running, commands,
 //!   outputs, status).
+//! - [`remote`]: the bridge across hosts over Zenoh: the bridge's gateway
+//!   (a client of its own shared-memory services) and a client's transport.
 //! - [`timing`]: durations in a fixed histogram (the service times, the
 //!   benchmark's round trips): bounded memory however long a bridge runs;
 //!   their percentiles.
@@ -32,6 +34,7 @@ pub mod backend;
 pub mod bridge;
 pub mod client;
 pub mod convert;
+pub mod remote;
 pub mod services;
 pub mod timing;
 
@@ -50,6 +53,10 @@ pub enum BridgeError {
     NoAnswer(String),
     /// The backend failed (QEMU, the firmware link).
     Backend(String),
+    /// The other end speaks another protocol: a payload's type tag or size is
+    /// not this build's (over Zenoh; over shared memory iceoryx2 refuses the
+    /// port).
+    Protocol(String),
 }
 
 impl BridgeError {
@@ -66,7 +73,8 @@ impl fmt::Display for BridgeError {
             | BridgeError::Ipc(m)
             | BridgeError::NoBridge(m)
             | BridgeError::NoAnswer(m)
-            | BridgeError::Backend(m) => f.write_str(m),
+            | BridgeError::Backend(m)
+            | BridgeError::Protocol(m) => f.write_str(m),
         }
     }
 }
