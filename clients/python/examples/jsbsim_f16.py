@@ -23,6 +23,16 @@ through the same bridge with ``decoy feed``, and writes to ``DIR``:
   the F-16 run and the built-in profile side by side (unless ``--no-plots``);
 * ``builtin/``: ``decoy feed``'s own output (unless ``--no-compare``).
 
+Across hosts, over Zenoh (the bridge runs with ``--zenoh-listen ENDPOINT``, and
+``--zenoh-users FILE`` beyond loopback):
+
+    .venv/bin/python clients/python/examples/jsbsim_f16.py --instance demo \\
+        --manoeuvre pull-up --zenoh-connect tcp/10.0.0.1:7447 \\
+        --zenoh-credentials pilot.cred --out out/f16-pull-up
+
+flies the same frames with the same answers (the summary says ``"transport":
+"zenoh"``), and ``decoy feed`` flies the built-in profile over Zenoh too.
+
 Exit 0 when every frame was answered by an output, 1 when frames were rejected or
 the run stopped (the files are written either way), 2 for bad arguments or no bridge.
 """
@@ -56,6 +66,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--out", required=True, type=Path, help="output directory")
     p.add_argument("--prefix", default=None,
                    help="iceoryx2 file prefix of the bridge (default $DECOY_IOX_PREFIX, else iceoryx2's)")
+    p.add_argument("--zenoh-connect", action="append", default=None, metavar="ENDPOINT",
+                   help="fly through a bridge across hosts over Zenoh: connect to ENDPOINT (the bridge's "
+                   "--zenoh-listen, tcp/10.0.0.1:7447; repeatable)")
+    p.add_argument("--zenoh-config", type=Path, default=None, metavar="FILE",
+                   help="a Zenoh configuration file (JSON5: TLS, certificates, ...), read first")
+    p.add_argument("--zenoh-credentials", type=Path, default=None, metavar="FILE",
+                   help="this client's credentials for a bridge that authenticates (one line `user:password`)")
     p.add_argument("--timeout", type=float, default=5.0, help="time limit of each answer, s")
     p.add_argument("--decoy", default=None, help="the decoy binary for the built-in comparison (default: $DECOY_BIN, "
                    "target/release/decoy, target/debug/decoy, then PATH)")
@@ -82,6 +99,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         a.rate = F.DEFAULT_RATE[a.manoeuvre]
     if a.rate is not None and not (0.0 < abs(a.rate) <= 1.0):
         p.error(f"--rate {a.rate}: 0 < |rate| <= 1 rad/s")
+    a.zenoh = a.zenoh_connect is not None or a.zenoh_config is not None or a.zenoh_credentials is not None
+    if a.zenoh and a.zenoh_connect is None and a.zenoh_config is None:
+        p.error("--zenoh-credentials needs --zenoh-connect ENDPOINT (or --zenoh-config)")
     if a.cpu is not None:
         try:
             a.cpus = parse_cpu_list(a.cpu)
@@ -148,6 +168,12 @@ def run_feed(decoy: str, a: argparse.Namespace, scenario: Path, out_dir: Path) -
            "--json"]
     if a.cpu is not None:
         cmd += ["--cpu", a.cpu]
+    for endpoint in a.zenoh_connect or []:
+        cmd += ["--zenoh-connect", endpoint]
+    if a.zenoh_config is not None:
+        cmd += ["--zenoh-config", str(a.zenoh_config)]
+    if a.zenoh_credentials is not None:
+        cmd += ["--zenoh-credentials", str(a.zenoh_credentials)]
     env = dict(os.environ)
     if a.prefix:
         env["DECOY_IOX_PREFIX"] = a.prefix
@@ -253,9 +279,18 @@ def main(argv: list[str] | None = None) -> int:
     a.out.mkdir(parents=True, exist_ok=True)
     wall0 = time.perf_counter()
     try:
-        bridge = Bridge(a.instance, prefix=a.prefix, timeout_s=a.timeout)
+        if a.zenoh:
+            bridge = Bridge(a.instance, timeout_s=a.timeout, zenoh=a.zenoh_connect, zenoh_config=a.zenoh_config,
+                            credentials=a.zenoh_credentials)
+        else:
+            bridge = Bridge(a.instance, prefix=a.prefix, timeout_s=a.timeout)
     except NoBridge as e:
-        print(f"error: {e}; start one with `decoy bridge --instance {a.instance}`", file=sys.stderr)
+        # Over Zenoh the error says where it looked and how to start a bridge there.
+        hint = "" if a.zenoh else f"; start one with `decoy bridge --instance {a.instance}`"
+        print(f"error: {e}{hint}", file=sys.stderr)
+        return 2
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
         return 2
     with bridge:
         try:
@@ -266,7 +301,8 @@ def main(argv: list[str] | None = None) -> int:
         man = F.make_manoeuvre(a.manoeuvre, fdm, a.rate)
         what = f"{a.manoeuvre}" + (f" at {a.rate:.2f} rad/s" if a.rate else "") + \
             f", F-16 trimmed at {a.altitude:.0f} m, Mach {a.mach:.2f} (alpha {fdm.trim_alpha_deg:.2f} deg)"
-        print(f"flying {what} for {a.t_end:g} s through bridge `{a.instance}`", file=sys.stderr)
+        over = f" over Zenoh ({', '.join(a.zenoh_connect or [str(a.zenoh_config)])})" if a.zenoh else ""
+        print(f"flying {what} for {a.t_end:g} s through bridge `{a.instance}`{over}", file=sys.stderr)
         traj: list[F.AircraftState] = []
 
         def states():
@@ -286,7 +322,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = flight.write_outputs(a.out / "timeseries.csv", run)
     start = getattr(man, "start", 0.0)
     summary = flight.summarize(run, rows, scenario=f"f16-{a.manoeuvre}", t_end=a.t_end, manoeuvre_start=start,
-                               status=status, instance=a.instance)
+                               status=status, instance=a.instance, transport=bridge.transport)
     flight.write_json(a.out / "summary.json", summary)
 
     builtin_summary = None

@@ -59,9 +59,11 @@ def sweep_iceoryx(prefix: str, root: Path | None) -> None:
 
 
 class RunningBridge:
-    """A ``decoy bridge`` process with its own prefix and root."""
+    """A ``decoy bridge`` process with its own prefix and root (``launcher``: a
+    command that runs it, ``ip netns exec NAME``: it must exec the bridge, whose
+    process id is then the launcher's)."""
 
-    def __init__(self, decoy: str, tmp: Path, *args: str):
+    def __init__(self, decoy: str, tmp: Path, *args: str, launcher: tuple[str, ...] = ()):
         self.instance = f"py{os.getpid()}n{next(_counter)}"
         self.prefix = unique_prefix()
         # Short: the event services' sockets live under the root and a Unix socket
@@ -69,7 +71,7 @@ class RunningBridge:
         self.root = Path(tempfile.mkdtemp(prefix="dxpy", dir="/tmp"))
         self.env = dict(os.environ, DECOY_IOX_PREFIX=self.prefix, DECOY_IOX_ROOT=str(self.root))
         self.proc = subprocess.Popen(
-            [decoy, "bridge", "--instance", self.instance, "--json", *args],
+            [*launcher, decoy, "bridge", "--instance", self.instance, "--json", *args],
             env=self.env,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
@@ -106,11 +108,11 @@ class RunningBridge:
 
 @pytest.fixture
 def bridge_factory(decoy: str, tmp_path: Path) -> Iterator:
-    """Starts bridges (``bridge_factory(*args)``); stops them and sweeps their files."""
+    """Starts bridges (``bridge_factory(*args, launcher=())``); stops them and sweeps their files."""
     started: list[RunningBridge] = []
 
-    def start(*args: str) -> RunningBridge:
-        b = RunningBridge(decoy, tmp_path / f"b{len(started)}", *args)
+    def start(*args: str, launcher: tuple[str, ...] = ()) -> RunningBridge:
+        b = RunningBridge(decoy, tmp_path / f"b{len(started)}", *args, launcher=launcher)
         started.append(b)
         return b
 

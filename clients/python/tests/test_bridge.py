@@ -235,10 +235,10 @@ def test_version_mismatch_is_named(bridge, tmp_path):
     other = wire.build_types(desc)
     import iceoryx2 as iox
 
-    from decoy_bridge.client import make_config
+    from decoy_bridge.client import _Shm, make_config
 
     node = iox.NodeBuilder.new().config(make_config(bridge.prefix, str(bridge.root))).create(iox.ServiceType.Ipc)
-    c = Bridge.__new__(Bridge)
+    c = _Shm.__new__(_Shm)  # the shared-memory transport behind Bridge
     c.instance = bridge.instance
     c._node = node
     with pytest.raises(VersionMismatch, match="differ"):

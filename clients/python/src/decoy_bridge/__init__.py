@@ -2,6 +2,9 @@
 
 * :class:`Bridge`: lockstep requests, free-running publishing, outputs and status
   subscriptions, commands; blocking waits with timeouts in an iceoryx2 WaitSet.
+  Across hosts the same over Zenoh (``Bridge(NAME, zenoh="tcp/HOST:PORT",
+  credentials=FILE)`` to ``decoy bridge --zenoh-listen``): every payload the
+  wire structure's bytes, tagged with its type name and size (:func:`wire_tag`).
 * :mod:`decoy_bridge.wire`: the wire types as ctypes structures, generated from
   the Rust crate's layout description (``decoy bridge-layout --json``).
 * :mod:`decoy_bridge.errors`: :class:`NoBridge`, :class:`BridgeTimeout`,
@@ -13,7 +16,7 @@ Units SI; world frame flat-earth NED (altitude = -z); body FRD; quaternions
 Hamilton, scalar first, body→NED.
 """
 
-from .client import Bridge, check_answer, is_initialising, make_config, make_state
+from .client import Bridge, check_answer, is_initialising, make_config, make_state, make_zenoh_config, wire_tag
 from .errors import BridgeError, BridgeTimeout, NoBridge, Rejected, VersionMismatch
 from .wire import PROTOCOL_VERSION
 
@@ -29,4 +32,6 @@ __all__ = [
     "is_initialising",
     "make_config",
     "make_state",
+    "make_zenoh_config",
+    "wire_tag",
 ]

@@ -281,6 +281,7 @@ def summarize(
     manoeuvre_start: float,
     status: Any,
     instance: str,
+    transport: str = "shm",
 ) -> dict[str, Any]:
     """``summary.json``: the keys of ``decoy feed``'s summary (docs/outputs.md and
     docs/bridge.md), computed the same way from the answered frames (10 ms rows).
@@ -288,7 +289,8 @@ def summarize(
     The two host-replay keys (``max_tension_diff_vs_host_N``,
     ``max_tension_diff_vs_host_same_precision_N``,
     ``frames_identical_to_host_same_precision``) need the Rust host controller and
-    are ``null`` here.
+    are ``null`` here. ``transport`` is :attr:`Bridge.transport <decoy_bridge.client.Bridge.transport>`
+    (``shm`` or ``zenoh``), as ``decoy feed``'s.
     """
     sent = len(run.records)
     answered = len(rows)
@@ -356,6 +358,7 @@ def summarize(
             "precision_bits": int(status.precision_bits) if status is not None else None,
             "grading_ratio": float(status.grading_ratio) if status is not None else None,
             "mode": "lockstep",
+            "transport": transport,
             "realtime": False,
             "client_cpus": current_cpus(),
             "frames_sent": sent,
