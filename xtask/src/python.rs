@@ -33,7 +33,7 @@ const REQUIREMENTS: &str = "clients/python/requirements.txt";
 const STAMP: &str = "decoy-setup.stamp";
 /// Modules that must import for the environment to count as present.
 const IMPORTS: &str =
-    "import iceoryx2, jsbsim, numpy, matplotlib, pytest, maturin, ray, decoy_bridge";
+    "import iceoryx2, zenoh, jsbsim, numpy, matplotlib, pytest, maturin, ray, decoy_bridge";
 /// Time limit of one `pip install` (about 30 s with a warm cache, a few minutes cold).
 const PIP_TIMEOUT: Duration = Duration::from_secs(900);
 /// The solver's package (the crate `decoy-py`), relative to the root.

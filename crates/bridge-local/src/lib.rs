@@ -5,7 +5,12 @@
 //! swept when dropped): for tests, benchmarks and examples that must never meet
 //! another run's services. A dev-dependency only (`cargo xtask test`'s layering
 //! stage checks that no crate depends on it otherwise).
+//!
+//! [`netns`]: two hosts on one machine (network namespaces and a veth pair)
+//! for the bridge across hosts.
 #![deny(missing_docs)]
+
+pub mod netns;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -202,4 +207,36 @@ impl Drop for LocalBridge {
             let _ = self.finish();
         }
     }
+}
+
+/// The controller's own time per frame in this process, median over
+/// `frames` after the first (the trim), us: the host backend of `options`
+/// alone, on a thread with the bridge's stack (the benchmarks' "solver p50").
+pub fn controller_time_p50(
+    config: &SystemConfig,
+    options: &BackendOptions,
+    frames: &[decoy_link::AircraftStateFrame],
+) -> Result<f64, BridgeError> {
+    use decoy_link::{Command, HostMessage};
+    let (config, options, frames) = (config.clone(), options.clone(), frames.to_vec());
+    std::thread::Builder::new()
+        .stack_size(BRIDGE_STACK_BYTES)
+        .spawn(move || -> Result<f64, BridgeError> {
+            let mut b = host_backend(&config, &options)?;
+            b.handle(HostMessage::Command(Command::ResetToTrim))?;
+            let Some((first, rest)) = frames.split_first() else {
+                return Ok(0.0);
+            };
+            b.handle(HostMessage::State(*first))?;
+            let mut t = Vec::with_capacity(rest.len());
+            for f in rest {
+                let t0 = std::time::Instant::now();
+                b.handle(HostMessage::State(*f))?;
+                t.push(t0.elapsed().as_secs_f64() * 1e6);
+            }
+            Ok(host_bridge::timing::Percentiles::of(&mut t).p50)
+        })
+        .map_err(|e| BridgeError::Backend(format!("cannot start a thread: {e}")))?
+        .join()
+        .map_err(|_| BridgeError::Backend("the controller's thread panicked".to_owned()))?
 }

@@ -660,7 +660,7 @@ pub fn type_name_of<T: ZeroCopySend>() -> &'static str {
 /// bridge across hosts over Zenoh, docs/bridge.md "Across hosts"): exactly the
 /// bytes the type has in shared memory (no implicit padding, so every byte is a
 /// field, `Pod` checks it at compile time), sent with its [`Wire::tag`] (the
-/// iceoryx2 type name and the size, `decoy.bridge.v3.Answer/392`), which the
+/// iceoryx2 type name and the size, `decoy.bridge.v3.Answer/240`), which the
 /// receiver checks as iceoryx2 checks a port's type.
 pub trait Wire: Pod + ZeroCopySend {
     /// The bytes of `self`.

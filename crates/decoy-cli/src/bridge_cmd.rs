@@ -18,7 +18,8 @@ use decoy_stream::fly::Mode;
 use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
 use host_bridge::backend::{BackendOptions, Precision, describe_backend, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
-use host_bridge::remote::{ZenohGateway, ZenohOptions};
+use host_bridge::gateway::ZenohGateway;
+use host_bridge::remote::ZenohOptions;
 use host_bridge::services::{check_instance, iox_config, quiet_iceoryx_log};
 
 use crate::failure::{Failure, summary_json, usage};

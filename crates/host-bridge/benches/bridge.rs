@@ -28,7 +28,7 @@ use bridge_types::{AircraftState, Answer, event};
 use cpu_affinity::{Cpus, pin_process};
 use decoy_config::SystemConfig;
 use decoy_hil::flight::scenario_frames;
-use decoy_link::{AircraftStateFrame, HostMessage};
+use decoy_link::AircraftStateFrame;
 use decoy_stream::qemu_backend::{QemuOptions, qemu_backend};
 use host_bridge::backend::{Backend, BackendOptions, Precision, host_backend};
 use host_bridge::bridge::{BridgeOptions, run_bridge};
@@ -239,37 +239,13 @@ fn solver_time(
     grading: f64,
     frames: &[AircraftStateFrame],
 ) -> f64 {
-    let config = SystemConfig::builtin().unwrap();
-    let frames = frames.to_vec();
-    std::thread::Builder::new()
-        .stack_size(64 << 20)
-        .spawn(move || {
-            let mut b = host_backend(
-                &config,
-                &BackendOptions {
-                    precision: Some(precision),
-                    segments: Some(segments),
-                    grading: Some(grading),
-                    ..BackendOptions::default()
-                },
-            )
-            .unwrap();
-            b.handle(HostMessage::Command(decoy_link::Command::ResetToTrim))
-                .unwrap();
-            b.handle(HostMessage::State(frames[0])).unwrap();
-            let mut t: Vec<f64> = frames[1..]
-                .iter()
-                .map(|f| {
-                    let t0 = Instant::now();
-                    b.handle(HostMessage::State(*f)).unwrap();
-                    t0.elapsed().as_secs_f64() * 1e6
-                })
-                .collect();
-            Percentiles::of(&mut t).p50
-        })
-        .unwrap()
-        .join()
-        .unwrap()
+    let options = BackendOptions {
+        precision: Some(precision),
+        segments: Some(segments),
+        grading: Some(grading),
+        ..BackendOptions::default()
+    };
+    bridge_local::controller_time_p50(&SystemConfig::builtin().unwrap(), &options, frames).unwrap()
 }
 
 /// How a server builds its backend once its thread runs.

@@ -103,7 +103,7 @@ pub struct BridgeSummary {
     /// The Zenoh gateway's work, when the bridge served across hosts too
     /// (crate::remote).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub zenoh: Option<crate::remote::GatewaySummary>,
+    pub zenoh: Option<crate::gateway::GatewaySummary>,
 }
 
 impl BridgeSummary {

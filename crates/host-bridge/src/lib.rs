@@ -23,8 +23,10 @@
 //!   health, status, summary.
 //! - [`client`]: a client (lockstep with a deadline, free-running, commands,
 //!   outputs, status).
-//! - [`remote`]: the bridge across hosts over Zenoh: the bridge's gateway
-//!   (a client of its own shared-memory services) and a client's transport.
+//! - [`remote`]: the bridge across hosts over Zenoh: key expressions, tags,
+//!   configuration rules, a client's transport.
+//! - [`gateway`]: the bridge's end across hosts (a client of its own
+//!   shared-memory services).
 //! - [`timing`]: durations in a fixed histogram (the service times, the
 //!   benchmark's round trips): bounded memory however long a bridge runs;
 //!   their percentiles.
@@ -34,6 +36,7 @@ pub mod backend;
 pub mod bridge;
 pub mod client;
 pub mod convert;
+pub mod gateway;
 pub mod remote;
 pub mod services;
 pub mod timing;

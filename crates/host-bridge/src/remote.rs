@@ -1,10 +1,13 @@
 //! The bridge across hosts over Zenoh (docs/bridge.md, "Across hosts").
 //!
 //! `decoy bridge --zenoh-listen ENDPOINT` serves the instance's services over
-//! Zenoh as well as over shared memory, through a [`ZenohGateway`]: two
-//! threads that are clients of the bridge's own shared-memory services (so a
-//! remote client's frames go through the same engine, in the same order, with
-//! the same bits as a local client's) and a Zenoh session that carries them:
+//! Zenoh as well as over shared memory, through a gateway
+//! (`crate::gateway::ZenohGateway`: two threads that are clients of the
+//! bridge's own shared-memory services, so a remote client's frames go
+//! through the same engine, in the same order, with the same bits as a local
+//! client's) and a Zenoh session that carries them. This module holds what
+//! both ends share (the key expressions, the tags, the configuration rules)
+//! and a client's end, [`ZenohClient`]:
 //!
 //! | key expression | Zenoh | payload |
 //! |---|---|---|
@@ -17,7 +20,7 @@
 //!
 //! Every payload is the wire type's bytes exactly as in shared memory
 //! ([`Wire`]), with the type's tag (type name and size,
-//! `decoy.bridge.v3.Answer/392`) as the attachment; both sides check it and a
+//! `decoy.bridge.v3.Answer/240`) as the attachment; both sides check it and a
 //! mismatch is a typed error ([`BridgeError::Protocol`]), as iceoryx2 refuses
 //! a port of another type. A query the bridge cannot answer gets one error
 //! reply saying why.
@@ -35,30 +38,22 @@
 //! waits for the status publisher (crate::services).
 
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::mpsc;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use bridge_types::{
     AircraftState, Answer, Command, CommandReply, SERVICE_ROOT, Status, Wire, service,
 };
-use iceoryx2::config::Config as IoxConfig;
 use zenoh::handlers::{FifoChannelHandler, RingChannel, RingChannelHandler};
-use zenoh::query::{Query, QueryTarget, Reply};
+use zenoh::query::{QueryTarget, Reply};
 use zenoh::sample::Sample;
 use zenoh::{Session, Wait};
 
 use crate::BridgeError;
-use crate::client::BridgeClient;
 
 /// The liveliness token of a serving gateway: `decoy/NAME/alive`.
 pub const ALIVE: &str = "alive";
 /// How long a remote client waits for the bridge's session and readiness mark.
 pub const REMOTE_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
-/// How often the gateway's threads look at the stop flag while idle.
-const IDLE: Duration = Duration::from_millis(100);
 /// Answers a remote client keeps from the `outputs` publication until it
 /// takes them (the oldest go first: bounded memory).
 pub const REMOTE_OUTPUTS_BUFFER: usize = crate::services::OUTPUTS_BUFFER;
@@ -89,7 +84,7 @@ pub struct ZenohOptions {
     pub unauthenticated: bool,
 }
 
-fn zenoh_error(what: &str, e: impl std::fmt::Display) -> BridgeError {
+pub(crate) fn zenoh_error(what: &str, e: impl std::fmt::Display) -> BridgeError {
     BridgeError::Ipc(format!("Zenoh: {what}: {e}"))
 }
 
@@ -175,7 +170,7 @@ fn check_users_file(path: &PathBuf) -> Result<(), BridgeError> {
 
 /// Which end a configuration is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Role {
+pub(crate) enum Role {
     /// The bridge: a peer that listens (and may connect).
     Bridge,
     /// A client: connects, never listens.
@@ -260,19 +255,19 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
     Ok(c)
 }
 
-/// Checks a bridge's Zenoh options as [`ZenohGateway::start`] will (files
+/// Checks a bridge's Zenoh options as `gateway::ZenohGateway::start` will (files
 /// read, endpoints beyond loopback) without opening a session, so that bad
 /// options are a usage error before the bridge starts.
 pub fn check_bridge_options(options: &ZenohOptions) -> Result<(), BridgeError> {
     config(options, Role::Bridge).map(|_| ())
 }
 
-/// Checks a client's Zenoh options as [`BridgeClient::connect_zenoh`] will.
+/// Checks a client's Zenoh options as `BridgeClient::connect_zenoh` will.
 pub fn check_client_options(options: &ZenohOptions) -> Result<(), BridgeError> {
     config(options, Role::Client).map(|_| ())
 }
 
-fn open_session(options: &ZenohOptions, role: Role) -> Result<Session, BridgeError> {
+pub(crate) fn open_session(options: &ZenohOptions, role: Role) -> Result<Session, BridgeError> {
     let c = config(options, role)?;
     zenoh::open(c).wait().map_err(|e| match role {
         Role::Bridge => BridgeError::Ipc(format!(
@@ -288,6 +283,10 @@ fn open_session(options: &ZenohOptions, role: Role) -> Result<Session, BridgeErr
     })
 }
 
+/// The start of every error reply the gateway sends (Zenoh's own, such as a
+/// query's timeout, do not have it).
+pub const ERROR_PREFIX: &str = "decoy bridge: ";
+
 /// The tag carried beside a payload, as text.
 fn tag_of(attachment: Option<&zenoh::bytes::ZBytes>) -> String {
     attachment
@@ -296,7 +295,7 @@ fn tag_of(attachment: Option<&zenoh::bytes::ZBytes>) -> String {
 }
 
 /// A payload of type `T` with its tag checked.
-fn decode<T: Wire>(
+pub(crate) fn decode<T: Wire>(
     payload: Option<&zenoh::bytes::ZBytes>,
     attachment: Option<&zenoh::bytes::ZBytes>,
     what: &str,
@@ -319,382 +318,7 @@ fn decode<T: Wire>(
     })
 }
 
-/// What the gateway counted (printed in the bridge's summary).
-#[derive(Debug, Default)]
-pub struct GatewayCounters {
-    /// Lockstep queries answered.
-    pub lockstep: AtomicU64,
-    /// Command queries answered.
-    pub commands: AtomicU64,
-    /// Free-running samples forwarded.
-    pub states: AtomicU64,
-    /// Queries and samples refused: wrong tag or size (answered by an error).
-    pub refused: AtomicU64,
-    /// Answers and statuses published.
-    pub published: AtomicU64,
-}
-
-/// What came in over Zenoh, in arrival order.
-enum Incoming {
-    Lockstep(Query),
-    Command(Query),
-    State(Sample),
-}
-
-/// The bridge's Zenoh side: running from [`ZenohGateway::start`] until
-/// [`ZenohGateway::stop`].
-pub struct ZenohGateway {
-    stop: Arc<AtomicBool>,
-    threads: Vec<JoinHandle<Result<(), BridgeError>>>,
-    counters: Arc<GatewayCounters>,
-    // Dropped last: the token, then the session.
-    _token: zenoh::liveliness::LivelinessToken,
-    session: Session,
-    endpoints: String,
-}
-
-impl ZenohGateway {
-    /// Starts serving bridge `instance` (running, ready, in the iceoryx2 setup
-    /// `iox`) over Zenoh; returns once the readiness token is declared.
-    pub fn start(
-        instance: &str,
-        iox: &IoxConfig,
-        options: &ZenohOptions,
-    ) -> Result<Self, BridgeError> {
-        crate::services::check_instance(instance)?;
-        let session = open_session(options, Role::Bridge)?;
-        let stop = Arc::new(AtomicBool::new(false));
-        let counters = Arc::new(GatewayCounters::default());
-        let (tx, rx) = mpsc::channel::<Incoming>();
-        let lockstep_tx = tx.clone();
-        let lockstep = session
-            .declare_queryable(key(instance, service::LOCKSTEP))
-            .callback(move |q| {
-                let _ = lockstep_tx.send(Incoming::Lockstep(q));
-            })
-            .wait()
-            .map_err(|e| zenoh_error("the lockstep queryable", e))?;
-        let commands_tx = tx.clone();
-        let commands = session
-            .declare_queryable(key(instance, service::COMMANDS))
-            .callback(move |q| {
-                let _ = commands_tx.send(Incoming::Command(q));
-            })
-            .wait()
-            .map_err(|e| zenoh_error("the commands queryable", e))?;
-        let state = session
-            .declare_subscriber(key(instance, service::STATE))
-            .callback(move |s| {
-                let _ = tx.send(Incoming::State(s));
-            })
-            .wait()
-            .map_err(|e| zenoh_error("the state subscriber", e))?;
-        let outputs = session
-            .declare_publisher(key(instance, service::OUTPUTS))
-            .wait()
-            .map_err(|e| zenoh_error("the outputs publisher", e))?;
-        let status = session
-            .declare_publisher(key(instance, service::STATUS))
-            .wait()
-            .map_err(|e| zenoh_error("the status publisher", e))?;
-
-        let (ready_tx, ready_rx) = mpsc::channel::<Result<(), BridgeError>>();
-        let mut threads = Vec::new();
-        {
-            let (instance, iox, stop, counters, ready) = (
-                instance.to_owned(),
-                iox.clone(),
-                Arc::clone(&stop),
-                Arc::clone(&counters),
-                ready_tx.clone(),
-            );
-            threads.push(
-                std::thread::Builder::new()
-                    .name("zenoh-requests".to_owned())
-                    .spawn(move || {
-                        // The queryables and the subscriber live as long as
-                        // the thread that answers them.
-                        let _ports = (lockstep, commands, state);
-                        serve_requests(&instance, &iox, &rx, &stop, &counters, &ready)
-                    })
-                    .map_err(|e| BridgeError::Ipc(format!("cannot start a thread: {e}")))?,
-            );
-        }
-        {
-            let (instance, iox, stop, counters, ready) = (
-                instance.to_owned(),
-                iox.clone(),
-                Arc::clone(&stop),
-                Arc::clone(&counters),
-                ready_tx,
-            );
-            threads.push(
-                std::thread::Builder::new()
-                    .name("zenoh-outputs".to_owned())
-                    .spawn(move || {
-                        forward_outputs(
-                            &instance, &iox, &outputs, &status, &stop, &counters, &ready,
-                        )
-                    })
-                    .map_err(|e| BridgeError::Ipc(format!("cannot start a thread: {e}")))?,
-            );
-        }
-        let mut gateway_failed = None;
-        for _ in 0..2 {
-            match ready_rx.recv() {
-                Ok(Ok(())) => {}
-                Ok(Err(e)) => gateway_failed = Some(e),
-                Err(_) => {
-                    gateway_failed = Some(BridgeError::Ipc(
-                        "the Zenoh gateway's thread ended while starting".to_owned(),
-                    ))
-                }
-            }
-        }
-        if let Some(e) = gateway_failed {
-            stop.store(true, Ordering::Relaxed);
-            for t in threads {
-                let _ = t.join();
-            }
-            return Err(e);
-        }
-        let token = session
-            .liveliness()
-            .declare_token(key(instance, ALIVE))
-            .wait()
-            .map_err(|e| zenoh_error("the readiness token", e))?;
-        let mut endpoints: Vec<String> = options
-            .listen
-            .iter()
-            .map(|e| format!("listen {e}"))
-            .collect();
-        endpoints.extend(options.connect.iter().map(|e| format!("connect {e}")));
-        if let Some(f) = &options.config_file {
-            endpoints.push(format!("config {}", f.display()));
-        }
-        if options.users_file.is_some() {
-            endpoints.push("user/password authentication".to_owned());
-        }
-        Ok(ZenohGateway {
-            stop,
-            threads,
-            counters,
-            _token: token,
-            session,
-            endpoints: endpoints.join(", "),
-        })
-    }
-
-    /// What the gateway serves on, for the bridge's messages.
-    pub fn describe(&self) -> &str {
-        &self.endpoints
-    }
-
-    /// The counters so far.
-    pub fn counters(&self) -> &GatewayCounters {
-        &self.counters
-    }
-
-    /// Stops the threads, closes the session; the first thread's failure, if any.
-    pub fn stop(self) -> Result<GatewaySummary, BridgeError> {
-        self.stop.store(true, Ordering::Relaxed);
-        let mut failure = None;
-        for t in self.threads {
-            match t.join() {
-                Ok(Ok(())) => {}
-                Ok(Err(e)) => failure = failure.or(Some(e)),
-                Err(_) => {
-                    failure = failure.or(Some(BridgeError::Ipc(
-                        "a Zenoh gateway thread panicked".to_owned(),
-                    )))
-                }
-            }
-        }
-        drop(self._token);
-        let _ = self.session.close().wait();
-        if let Some(e) = failure {
-            return Err(e);
-        }
-        let c = &self.counters;
-        Ok(GatewaySummary {
-            endpoints: self.endpoints,
-            lockstep: c.lockstep.load(Ordering::Relaxed),
-            commands: c.commands.load(Ordering::Relaxed),
-            states: c.states.load(Ordering::Relaxed),
-            refused: c.refused.load(Ordering::Relaxed),
-            published: c.published.load(Ordering::Relaxed),
-        })
-    }
-}
-
-/// What a gateway did, at its end.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct GatewaySummary {
-    /// Where it served.
-    pub endpoints: String,
-    /// Lockstep queries answered.
-    pub lockstep: u64,
-    /// Command queries answered.
-    pub commands: u64,
-    /// Free-running samples forwarded.
-    pub states: u64,
-    /// Queries and samples refused (wrong type tag or size).
-    pub refused: u64,
-    /// Answers and statuses published.
-    pub published: u64,
-}
-
-impl GatewaySummary {
-    /// One line for the bridge's summary.
-    pub fn text(&self) -> String {
-        format!(
-            "  zenoh ({}): {} lockstep, {} commands, {} free-running states, {} refused; {} publications\n",
-            self.endpoints, self.lockstep, self.commands, self.states, self.refused, self.published
-        )
-    }
-}
-
-fn connect_local(instance: &str, iox: &IoxConfig, role: &str) -> Result<BridgeClient, BridgeError> {
-    let node = format!("zenoh-{role}-{instance}-{}", std::process::id());
-    let mut client = BridgeClient::connect(instance, &node, iox)?;
-    // The bridge's own clients wait as long as a remote client would.
-    client.set_timeout(crate::client::ANSWER_TIMEOUT);
-    Ok(client)
-}
-
-fn reply<T: Wire>(query: &Query, value: &T) -> Result<(), BridgeError> {
-    query
-        .reply(query.key_expr().clone(), value.as_wire_bytes().to_vec())
-        .attachment(T::tag())
-        .wait()
-        .map_err(|e| zenoh_error("replying", e))
-}
-
-fn reply_error(query: &Query, e: &BridgeError) {
-    let _ = query.reply_err(e.to_string()).wait();
-}
-
-/// The requests thread: every lockstep query, command query and free-running
-/// sample, in arrival order, through one shared-memory client of the bridge.
-fn serve_requests(
-    instance: &str,
-    iox: &IoxConfig,
-    rx: &mpsc::Receiver<Incoming>,
-    stop: &AtomicBool,
-    counters: &GatewayCounters,
-    ready: &mpsc::Sender<Result<(), BridgeError>>,
-) -> Result<(), BridgeError> {
-    let mut client = match connect_local(instance, iox, "req") {
-        Ok(c) => {
-            let _ = ready.send(Ok(()));
-            c
-        }
-        Err(e) => {
-            let _ = ready.send(Err(e));
-            return Ok(());
-        }
-    };
-    while !stop.load(Ordering::Relaxed) {
-        let incoming = match rx.recv_timeout(IDLE) {
-            Ok(i) => i,
-            Err(mpsc::RecvTimeoutError::Timeout) => continue,
-            Err(mpsc::RecvTimeoutError::Disconnected) => break,
-        };
-        match incoming {
-            Incoming::Lockstep(q) => {
-                match decode::<AircraftState>(q.payload(), q.attachment(), "a lockstep query") {
-                    Ok(state) => match client.step(&state) {
-                        Ok(answer) => {
-                            counters.lockstep.fetch_add(1, Ordering::Relaxed);
-                            reply(&q, &answer)?;
-                        }
-                        Err(e) => reply_error(&q, &e),
-                    },
-                    Err(e) => {
-                        counters.refused.fetch_add(1, Ordering::Relaxed);
-                        reply_error(&q, &e);
-                    }
-                }
-            }
-            Incoming::Command(q) => {
-                match decode::<Command>(q.payload(), q.attachment(), "a command query") {
-                    Ok(command) => match client.command_as_sent(command) {
-                        Ok(r) => {
-                            counters.commands.fetch_add(1, Ordering::Relaxed);
-                            reply(&q, &r)?;
-                        }
-                        Err(e) => reply_error(&q, &e),
-                    },
-                    Err(e) => {
-                        counters.refused.fetch_add(1, Ordering::Relaxed);
-                        reply_error(&q, &e);
-                    }
-                }
-            }
-            Incoming::State(s) => {
-                match decode::<AircraftState>(Some(s.payload()), s.attachment(), "a state sample") {
-                    Ok(state) => {
-                        counters.states.fetch_add(1, Ordering::Relaxed);
-                        client.publish(&state)?;
-                    }
-                    // A sample has no reply: counted, and the bridge's summary shows it.
-                    Err(_) => {
-                        counters.refused.fetch_add(1, Ordering::Relaxed);
-                    }
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The outputs thread: every answer and status the bridge publishes, published
-/// again over Zenoh.
-fn forward_outputs(
-    instance: &str,
-    iox: &IoxConfig,
-    outputs: &zenoh::pubsub::Publisher<'_>,
-    status: &zenoh::pubsub::Publisher<'_>,
-    stop: &AtomicBool,
-    counters: &GatewayCounters,
-    ready: &mpsc::Sender<Result<(), BridgeError>>,
-) -> Result<(), BridgeError> {
-    let mut client = match connect_local(instance, iox, "out") {
-        Ok(c) => {
-            let _ = ready.send(Ok(()));
-            c
-        }
-        Err(e) => {
-            let _ = ready.send(Err(e));
-            return Ok(());
-        }
-    };
-    // Answers from before this client existed (the service's history) are
-    // not forwarded: a remote subscriber sees answers from its own start on.
-    let _ = client.take_outputs()?;
-    while !stop.load(Ordering::Relaxed) {
-        client.wait_event(IDLE)?;
-        for answer in client.take_outputs()? {
-            outputs
-                .put(answer.as_wire_bytes().to_vec())
-                .attachment(Answer::tag())
-                .wait()
-                .map_err(|e| zenoh_error("publishing an answer", e))?;
-            counters.published.fetch_add(1, Ordering::Relaxed);
-        }
-        if let Some(s) = client.latest_status()? {
-            status
-                .put(s.as_wire_bytes().to_vec())
-                .attachment(Status::tag())
-                .wait()
-                .map_err(|e| zenoh_error("publishing a status", e))?;
-            counters.published.fetch_add(1, Ordering::Relaxed);
-        }
-    }
-    Ok(())
-}
-
-/// A client's end of the Zenoh transport (inside [`BridgeClient`]).
+/// A client's end of the Zenoh transport (inside `client::BridgeClient`).
 pub(crate) struct ZenohClient {
     session: Session,
     lockstep_key: String,
@@ -803,24 +427,33 @@ impl ZenohClient {
         let first = replies
             .recv_deadline(deadline + Duration::from_millis(50))
             .map_err(|e| zenoh_error("receiving a reply", e))?;
-        let Some(reply) = first else {
-            return Err(BridgeError::NoAnswer(format!(
-                "no {what} from bridge {:?} over Zenoh within {timeout:?}: is the link up and `decoy bridge --instance {} --zenoh-listen ...` running?",
+        let no_answer = |why: &str| {
+            BridgeError::NoAnswer(format!(
+                "no {what} from bridge {:?} over Zenoh within {timeout:?}{why}: is the link up and `decoy bridge --instance {} --zenoh-listen ...` running?",
                 self.instance, self.instance
-            )));
+            ))
+        };
+        let Some(reply) = first else {
+            return Err(no_answer(""));
         };
         match reply.result() {
             Ok(sample) => decode::<R>(Some(sample.payload()), sample.attachment(), what),
             Err(e) => {
                 let text = String::from_utf8_lossy(&e.payload().to_bytes()).into_owned();
-                Err(if text.contains("expected decoy.bridge") {
-                    BridgeError::Protocol(format!("bridge {:?}: {text}", self.instance))
-                } else {
-                    BridgeError::NoAnswer(format!(
-                        "bridge {:?} could not answer: {text}",
+                match text.strip_prefix(ERROR_PREFIX) {
+                    Some(m) if m.contains("expected decoy.bridge") => {
+                        Err(BridgeError::Protocol(format!(
+                            "bridge {:?} refused the {what}'s request: {m}",
+                            self.instance
+                        )))
+                    }
+                    Some(m) => Err(BridgeError::NoAnswer(format!(
+                        "bridge {:?} could not answer: {m}",
                         self.instance
-                    ))
-                })
+                    ))),
+                    // Zenoh's own (the query's timeout): no answer in time.
+                    None => Err(no_answer(&format!(" (Zenoh: {text})"))),
+                }
             }
         }
     }
@@ -896,6 +529,19 @@ impl ZenohClient {
             self.stash.push(a);
         }
         Ok(())
+    }
+}
+
+impl Drop for ZenohClient {
+    /// Closes the session on a thread of its own: Zenoh's close says goodbye
+    /// to the peer and waits up to 10 s for it when the link is cut, which a
+    /// client that has lost its bridge must not spend (a process that ends
+    /// meanwhile ends the session with it).
+    fn drop(&mut self) {
+        let session = self.session.clone();
+        let _ = std::thread::Builder::new()
+            .name("zenoh-close".to_owned())
+            .spawn(move || drop(session));
     }
 }
 
