@@ -119,6 +119,11 @@ impl Bridge {
         }
     }
 
+    /// What the bridge wrote on stderr since its ready line (so far).
+    fn stderr(&self) -> Vec<String> {
+        self.lines.try_iter().collect()
+    }
+
     fn alive(&mut self) -> bool {
         self.child
             .as_mut()
@@ -625,4 +630,205 @@ fn raw_query_helper() {
         }
     }
     assert_eq!(n, 1, "exactly one reply per query");
+}
+
+/// `openssl ARGS` in `dir`.
+fn openssl(dir: &Path, args: &[&str]) {
+    let out = Command::new("openssl")
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "openssl {args:?}: {}", text(&out));
+}
+
+/// A certificate authority, the bridge's certificate (for its address) and
+/// a client's, P-256, in `dir`: `ca.pem`, `bridge.{pem,key}`, `client.{pem,key}`.
+fn certificates(dir: &Path, bridge_address: &str) {
+    let ec = [
+        "-newkey",
+        "ec",
+        "-pkeyopt",
+        "ec_paramgen_curve:prime256v1",
+        "-nodes",
+    ];
+    openssl(
+        dir,
+        &[
+            &["req", "-x509"][..],
+            &ec,
+            &[
+                "-keyout",
+                "ca.key",
+                "-out",
+                "ca.pem",
+                "-days",
+                "2",
+                "-subj",
+                "/CN=decoy test CA",
+            ],
+        ]
+        .concat(),
+    );
+    for (name, ext) in [
+        (
+            "bridge",
+            format!("subjectAltName=IP:{bridge_address}\nextendedKeyUsage=serverAuth\n"),
+        ),
+        (
+            "client",
+            "subjectAltName=DNS:sim-host-1\nextendedKeyUsage=clientAuth\n".to_owned(),
+        ),
+    ] {
+        std::fs::write(dir.join(format!("{name}.ext")), ext).unwrap();
+        openssl(
+            dir,
+            &[
+                &["req"][..],
+                &ec,
+                &[
+                    "-keyout",
+                    &format!("{name}.key"),
+                    "-out",
+                    &format!("{name}.csr"),
+                    "-subj",
+                    &format!("/CN={name}"),
+                ],
+            ]
+            .concat(),
+        );
+        openssl(
+            dir,
+            &[
+                "x509",
+                "-req",
+                "-in",
+                &format!("{name}.csr"),
+                "-CA",
+                "ca.pem",
+                "-CAkey",
+                "ca.key",
+                "-CAcreateserial",
+                "-days",
+                "2",
+                "-out",
+                &format!("{name}.pem"),
+                "-extfile",
+                &format!("{name}.ext"),
+            ],
+        );
+    }
+}
+
+/// TLS with client certificates (docs/bridge.md §7): a client with a
+/// certificate of the bridge's authority flies; one without gets nothing; a
+/// TLS endpoint beyond loopback without client certificates or users is
+/// refused.
+#[test]
+fn tls_with_client_certificates_admits_only_certified_clients() {
+    let hosts = hosts();
+    let files = Files::new("tls");
+    let iso = Isolated::new().unwrap();
+    let dir = &files.0;
+    certificates(dir, &hosts.addr_a);
+    let path = |n: &str| dir.join(n).display().to_string();
+    let bridge_config = dir.join("bridge.json5");
+    std::fs::write(
+        &bridge_config,
+        format!(
+            "{{ transport: {{ link: {{ tls: {{ root_ca_certificate: {:?}, listen_certificate: {:?}, listen_private_key: {:?}, enable_mtls: true }} }} }} }}",
+            path("ca.pem"),
+            path("bridge.pem"),
+            path("bridge.key")
+        ),
+    )
+    .unwrap();
+    let client_config = dir.join("client.json5");
+    std::fs::write(
+        &client_config,
+        format!(
+            "{{ transport: {{ link: {{ tls: {{ root_ca_certificate: {:?}, connect_certificate: {:?}, connect_private_key: {:?}, enable_mtls: true }} }} }} }}",
+            path("ca.pem"),
+            path("client.pem"),
+            path("client.key")
+        ),
+    )
+    .unwrap();
+    let anonymous_config = dir.join("anonymous.json5");
+    std::fs::write(
+        &anonymous_config,
+        format!(
+            "{{ transport: {{ link: {{ tls: {{ root_ca_certificate: {:?} }} }} }} }}",
+            path("ca.pem")
+        ),
+    )
+    .unwrap();
+    let endpoint = format!("tls/{}:{PORT}", hosts.addr_a);
+    // TLS without client certificates, beyond loopback: refused.
+    let out = decoy(
+        Some(&hosts.a),
+        &iso,
+        &[
+            "bridge",
+            "--instance",
+            "ztls",
+            "--zenoh-listen",
+            &endpoint,
+            "--zenoh-config",
+            anonymous_config.to_str().unwrap(),
+        ],
+    )
+    .output()
+    .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    let bridge = Bridge::start(
+        &hosts.a,
+        &iso,
+        "ztls",
+        &[
+            "--zenoh-listen",
+            &endpoint,
+            "--zenoh-config",
+            bridge_config.to_str().unwrap(),
+        ],
+    );
+    let feed = |config: &Path, out_dir: &Path| {
+        decoy(
+            Some(&hosts.b),
+            &iso,
+            &[
+                "feed",
+                "--instance",
+                "ztls",
+                "--scenario",
+                "pull-up",
+                "--t-end",
+                "4",
+                "--no-plots",
+                "--zenoh-connect",
+                &endpoint,
+                "--zenoh-config",
+                config.to_str().unwrap(),
+                "--out",
+                out_dir.to_str().unwrap(),
+            ],
+        )
+        .output()
+        .unwrap()
+    };
+    let denied = feed(&anonymous_config, &files.path("denied"));
+    assert_eq!(denied.status.code(), Some(1), "{}", text(&denied));
+    assert!(
+        String::from_utf8_lossy(&denied.stderr).contains("no bridge"),
+        "{}",
+        text(&denied)
+    );
+    let admitted = files.path("admitted");
+    let out = feed(&client_config, &admitted);
+    assert!(out.status.success(), "{}\nthe bridge: {:?}", text(&out), bridge.stderr());
+    let s = summary(&admitted);
+    assert_eq!(s["frames_answered"], 401);
+    assert_eq!(s["frames_identical_to_host_same_precision"], 401);
+    let s = bridge.stop();
+    assert_eq!(s["zenoh"]["lockstep"], 401, "{s}");
 }

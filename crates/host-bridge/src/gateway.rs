@@ -39,6 +39,18 @@ pub struct GatewayCounters {
     pub refused: AtomicU64,
     /// Answers and statuses published.
     pub published: AtomicU64,
+    /// Replies, forwarded samples and publications that failed (each
+    /// reported on stderr; the gateway serves on).
+    pub failed: AtomicU64,
+}
+
+impl GatewayCounters {
+    /// Counts and reports one failure; the gateway serves on (one lost
+    /// reply must not end the service of every other client).
+    fn failure(&self, instance: &str, e: &BridgeError) {
+        self.failed.fetch_add(1, Ordering::Relaxed);
+        eprintln!("bridge {instance}: {e}");
+    }
 }
 
 /// What came in over Zenoh, in arrival order.
@@ -230,6 +242,7 @@ impl ZenohGateway {
             states: c.states.load(Ordering::Relaxed),
             refused: c.refused.load(Ordering::Relaxed),
             published: c.published.load(Ordering::Relaxed),
+            failed: c.failed.load(Ordering::Relaxed),
         })
     }
 }
@@ -249,14 +262,22 @@ pub struct GatewaySummary {
     pub refused: u64,
     /// Answers and statuses published.
     pub published: u64,
+    /// Replies, forwarded samples and publications that failed.
+    pub failed: u64,
 }
 
 impl GatewaySummary {
     /// One line for the bridge's summary.
     pub fn text(&self) -> String {
         format!(
-            "  zenoh ({}): {} lockstep, {} commands, {} free-running states, {} refused; {} publications\n",
-            self.endpoints, self.lockstep, self.commands, self.states, self.refused, self.published
+            "  zenoh ({}): {} lockstep, {} commands, {} free-running states, {} refused; {} publications; {} failed\n",
+            self.endpoints,
+            self.lockstep,
+            self.commands,
+            self.states,
+            self.refused,
+            self.published,
+            self.failed
         )
     }
 }
@@ -313,7 +334,9 @@ fn serve_requests(
                     Ok(state) => match client.step(&state) {
                         Ok(answer) => {
                             counters.lockstep.fetch_add(1, Ordering::Relaxed);
-                            reply(&q, &answer)?;
+                            if let Err(e) = reply(&q, &answer) {
+                                counters.failure(instance, &e);
+                            }
                         }
                         Err(e) => reply_error(&q, &e),
                     },
@@ -328,7 +351,9 @@ fn serve_requests(
                     Ok(command) => match client.command_as_sent(command) {
                         Ok(r) => {
                             counters.commands.fetch_add(1, Ordering::Relaxed);
-                            reply(&q, &r)?;
+                            if let Err(e) = reply(&q, &r) {
+                                counters.failure(instance, &e);
+                            }
                         }
                         Err(e) => reply_error(&q, &e),
                     },
@@ -342,7 +367,9 @@ fn serve_requests(
                 match decode::<AircraftState>(Some(s.payload()), s.attachment(), "a state sample") {
                     Ok(state) => {
                         counters.states.fetch_add(1, Ordering::Relaxed);
-                        client.publish(&state)?;
+                        if let Err(e) = client.publish(&state) {
+                            counters.failure(instance, &e);
+                        }
                     }
                     // A sample has no reply: counted, and the bridge's summary shows it.
                     Err(_) => {
@@ -382,20 +409,30 @@ fn forward_outputs(
     while !stop.load(Ordering::Relaxed) {
         client.wait_event(IDLE)?;
         for answer in client.take_outputs()? {
-            outputs
+            match outputs
                 .put(answer.as_wire_bytes().to_vec())
                 .attachment(Answer::tag())
                 .wait()
-                .map_err(|e| zenoh_error("publishing an answer", e))?;
-            counters.published.fetch_add(1, Ordering::Relaxed);
+            {
+                Ok(()) => counters.published.fetch_add(1, Ordering::Relaxed),
+                Err(e) => {
+                    counters.failure(instance, &zenoh_error("publishing an answer", e));
+                    0
+                }
+            };
         }
         if let Some(s) = client.latest_status()? {
-            status
+            match status
                 .put(s.as_wire_bytes().to_vec())
                 .attachment(Status::tag())
                 .wait()
-                .map_err(|e| zenoh_error("publishing a status", e))?;
-            counters.published.fetch_add(1, Ordering::Relaxed);
+            {
+                Ok(()) => counters.published.fetch_add(1, Ordering::Relaxed),
+                Err(e) => {
+                    counters.failure(instance, &zenoh_error("publishing a status", e));
+                    0
+                }
+            };
         }
     }
     Ok(())

@@ -199,13 +199,6 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
                         .to_owned(),
                 ));
             }
-            let open: Vec<&String> = options.listen.iter().filter(|e| !is_loopback(e)).collect();
-            if !open.is_empty() && options.users_file.is_none() && !options.unauthenticated {
-                return Err(BridgeError::Usage(format!(
-                    "--zenoh-listen {} is beyond loopback: give --zenoh-users FILE (only those users connect) or say --zenoh-unauthenticated",
-                    open[0]
-                )));
-            }
             insert(&mut c, "mode", "\"peer\"")?;
             if !options.listen.is_empty() || !from_file {
                 insert(&mut c, "listen/endpoints", &json_list(&options.listen))?;
@@ -239,6 +232,9 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
             &serde_json::to_string(&path).unwrap_or_default(),
         )?;
     }
+    if role == Role::Bridge {
+        check_listeners(&c, options)?;
+    }
     if let Some(file) = &options.credentials_file {
         let (user, password) = read_credentials(file)?;
         insert(
@@ -253,6 +249,55 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
         )?;
     }
     Ok(c)
+}
+
+/// The endpoints configuration `c` listens on (its `listen/endpoints`: a
+/// list, or a list per mode, of which the peer's).
+fn listen_endpoints(c: &zenoh::Config) -> Vec<String> {
+    let value: serde_json::Value = c
+        .get_json("listen/endpoints")
+        .ok()
+        .and_then(|j| serde_json::from_str(&j).ok())
+        .unwrap_or_default();
+    let list = match &value {
+        serde_json::Value::Object(per_mode) => per_mode.get("peer").cloned().unwrap_or_default(),
+        other => other.clone(),
+    };
+    list.as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|e| e.as_str().map(str::to_owned))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Whether configuration `c` says `key` is set (not null, not false).
+fn is_set(c: &zenoh::Config, key: &str) -> bool {
+    c.get_json(key).is_ok_and(|j| {
+        let v: serde_json::Value = serde_json::from_str(&j).unwrap_or_default();
+        !(v.is_null() || v == serde_json::Value::Bool(false))
+    })
+}
+
+/// The bridge's rule: an endpoint beyond loopback only with its peers
+/// authenticated (a user/password dictionary, or TLS with client
+/// certificates on a `tls/` endpoint) or with `--zenoh-unauthenticated`.
+fn check_listeners(c: &zenoh::Config, options: &ZenohOptions) -> Result<(), BridgeError> {
+    if options.unauthenticated {
+        return Ok(());
+    }
+    let users = is_set(c, "transport/auth/usrpwd/dictionary_file");
+    let mtls = is_set(c, "transport/link/tls/enable_mtls");
+    for endpoint in listen_endpoints(c) {
+        if is_loopback(&endpoint) || users || (mtls && endpoint.starts_with("tls/")) {
+            continue;
+        }
+        return Err(BridgeError::Usage(format!(
+            "the Zenoh endpoint {endpoint} is beyond loopback: authenticate the peers (--zenoh-users FILE, or TLS with client certificates in --zenoh-config: enable_mtls on a tls/ endpoint) or say --zenoh-unauthenticated"
+        )));
+    }
+    Ok(())
 }
 
 /// Checks a bridge's Zenoh options as `gateway::ZenohGateway::start` will (files
@@ -424,17 +469,23 @@ impl ZenohClient {
             .map_err(|e| zenoh_error("sending a query", e))?;
         let deadline = Instant::now() + timeout;
         // The one reply; the channel closes when the query is finalised.
-        let first = replies
-            .recv_deadline(deadline + Duration::from_millis(50))
-            .map_err(|e| zenoh_error("receiving a reply", e))?;
+        let first = replies.recv_deadline(deadline + Duration::from_millis(50));
         let no_answer = |why: &str| {
             BridgeError::NoAnswer(format!(
                 "no {what} from bridge {:?} over Zenoh within {timeout:?}{why}: is the link up and `decoy bridge --instance {} --zenoh-listen ...` running?",
                 self.instance, self.instance
             ))
         };
-        let Some(reply) = first else {
-            return Err(no_answer(""));
+        let reply = match first {
+            Ok(Some(reply)) => reply,
+            Ok(None) => return Err(no_answer("")),
+            // Finalised with no reply: no queryable took the query (the
+            // bridge went away, or the routes to it are being rebuilt).
+            Err(_) => {
+                return Err(no_answer(
+                    " (the query ended without a reply: no bridge took it)",
+                ));
+            }
         };
         match reply.result() {
             Ok(sample) => decode::<R>(Some(sample.payload()), sample.attachment(), what),
@@ -590,6 +641,34 @@ mod tests {
         let none = ZenohOptions::default();
         assert!(config(&none, Role::Bridge).unwrap_err().is_usage());
         assert!(config(&none, Role::Client).unwrap_err().is_usage());
+    }
+
+    /// TLS with client certificates authenticates a `tls/` endpoint; plain
+    /// TLS does not; an endpoint a configuration file lists is held to the
+    /// rule as one given on the command line.
+    #[test]
+    fn tls_with_client_certificates_counts_as_authentication() {
+        let dir = std::env::temp_dir().join(format!("decoy-zenoh-tls-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mtls = dir.join("mtls.json5");
+        std::fs::write(&mtls, "{ transport: { link: { tls: { enable_mtls: true } } } }").unwrap();
+        let plain = dir.join("plain.json5");
+        std::fs::write(&plain, "{ transport: { link: { tls: { enable_mtls: false } } } }").unwrap();
+        let listed = dir.join("listed.json5");
+        std::fs::write(&listed, "{ listen: { endpoints: [\"tcp/10.9.9.9:7447\"] } }").unwrap();
+        let with = |file: &PathBuf, listen: &[&str]| ZenohOptions {
+            listen: listen.iter().map(|e| (*e).to_owned()).collect(),
+            config_file: Some(file.clone()),
+            ..Default::default()
+        };
+        assert!(config(&with(&mtls, &["tls/10.1.2.3:7447"]), Role::Bridge).is_ok());
+        let e = config(&with(&mtls, &["tcp/10.1.2.3:7447"]), Role::Bridge).unwrap_err();
+        assert!(e.is_usage(), "{e}");
+        assert!(config(&with(&plain, &["tls/10.1.2.3:7447"]), Role::Bridge).is_err());
+        let e = config(&with(&listed, &[]), Role::Bridge).unwrap_err();
+        assert!(e.to_string().contains("tcp/10.9.9.9:7447"), "{e}");
+        assert!(config(&with(&listed, &["tcp/127.0.0.1:7447"]), Role::Bridge).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
