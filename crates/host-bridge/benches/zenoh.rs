@@ -56,6 +56,8 @@ struct Measured {
     over_period: usize,
     /// Frames not answered by an output (bridge runs).
     not_output: usize,
+    /// Queries sent again after Zenoh ended them without a reply.
+    resent: u64,
 }
 
 fn main() {
@@ -104,13 +106,21 @@ fn main() {
         .unwrap();
     let label = format!("{} graded {}", embedded.0, embedded.1);
     println!(
-        "| run | frames | p50 us | p99 us | p99.9 us | max us | frames/s | over 10 ms | not answered by an output |"
+        "| run | frames | p50 us | p99 us | p99.9 us | max us | frames/s | over 10 ms | not answered by an output | queries sent again |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let row = |name: &str, m: &Measured| {
         println!(
-            "| {name} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} | {} | {} |",
-            m.frames, m.p50, m.p99, m.p999, m.max, m.frames_per_s, m.over_period, m.not_output
+            "| {name} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} | {} | {} | {} |",
+            m.frames,
+            m.p50,
+            m.p99,
+            m.p999,
+            m.max,
+            m.frames_per_s,
+            m.over_period,
+            m.not_output,
+            m.resent
         );
     };
 
@@ -231,6 +241,7 @@ fn measure(client: &mut BridgeClient, n: usize, paced: bool, bridge: bool) -> Me
         frames_per_s: n as f64 / wall,
         over_period,
         not_output,
+        resent: client.queries_resent(),
     }
 }
 

@@ -164,6 +164,15 @@ impl BridgeClient {
         }
     }
 
+    /// Queries sent again after Zenoh ended them without a reply (0 over
+    /// shared memory; crate::remote): each answered once by the bridge.
+    pub fn queries_resent(&self) -> u64 {
+        match &self.transport {
+            Transport::Shm(_) => 0,
+            Transport::Zenoh(z) => z.resent(),
+        }
+    }
+
     /// Sets the deadline of each answer.
     pub fn set_timeout(&mut self, timeout: Duration) {
         self.timeout = timeout;

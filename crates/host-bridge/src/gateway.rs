@@ -20,7 +20,7 @@ use zenoh::{Session, Wait};
 use crate::BridgeError;
 use crate::client::BridgeClient;
 use crate::remote::{
-    ALIVE, ERROR_PREFIX, Role, ZenohOptions, decode, key, open_session, zenoh_error,
+    ALIVE, ERROR_PREFIX, Role, ZenohOptions, decode, key, open_session, query_id, zenoh_error,
 };
 
 /// How often the gateway's threads look at the stop flag while idle.
@@ -39,6 +39,9 @@ pub struct GatewayCounters {
     pub refused: AtomicU64,
     /// Answers and statuses published.
     pub published: AtomicU64,
+    /// Requests sent again by their client and answered from the record
+    /// (the controller did not see them twice).
+    pub repeated: AtomicU64,
     /// Replies, forwarded samples and publications that failed (each
     /// reported on stderr; the gateway serves on).
     pub failed: AtomicU64,
@@ -242,6 +245,7 @@ impl ZenohGateway {
             states: c.states.load(Ordering::Relaxed),
             refused: c.refused.load(Ordering::Relaxed),
             published: c.published.load(Ordering::Relaxed),
+            repeated: c.repeated.load(Ordering::Relaxed),
             failed: c.failed.load(Ordering::Relaxed),
         })
     }
@@ -262,6 +266,8 @@ pub struct GatewaySummary {
     pub refused: u64,
     /// Answers and statuses published.
     pub published: u64,
+    /// Requests sent again by their client and answered from the record.
+    pub repeated: u64,
     /// Replies, forwarded samples and publications that failed.
     pub failed: u64,
 }
@@ -270,12 +276,13 @@ impl GatewaySummary {
     /// One line for the bridge's summary.
     pub fn text(&self) -> String {
         format!(
-            "  zenoh ({}): {} lockstep, {} commands, {} free-running states, {} refused; {} publications; {} failed\n",
+            "  zenoh ({}): {} lockstep, {} commands, {} free-running states, {} refused, {} answered again; {} publications; {} failed\n",
             self.endpoints,
             self.lockstep,
             self.commands,
             self.states,
             self.refused,
+            self.repeated,
             self.published,
             self.failed
         )
@@ -302,6 +309,54 @@ fn reply_error(query: &Query, e: &BridgeError) {
     let _ = query.reply_err(format!("{ERROR_PREFIX}{e}")).wait();
 }
 
+/// Requests answered lately, with their answers, per service: how many.
+pub const ANSWERED_RECORD: usize = 16;
+
+/// The ids of the last [`ANSWERED_RECORD`] queries of a service and their
+/// answers. A query with one of these ids is its client sending again a query
+/// Zenoh ended without its reply (crate::remote): it gets the recorded
+/// answer, and the controller does not see the frame a second time (exactly
+/// once). A query without an id is always served.
+struct Record<A> {
+    entries: std::collections::VecDeque<(String, A)>,
+}
+
+impl<A> Default for Record<A> {
+    fn default() -> Self {
+        Record {
+            entries: std::collections::VecDeque::with_capacity(ANSWERED_RECORD),
+        }
+    }
+}
+
+impl<A: Copy> Record<A> {
+    fn find(&self, id: Option<&str>) -> Option<A> {
+        let id = id?;
+        self.entries
+            .iter()
+            .rev()
+            .find(|(r, _)| r == id)
+            .map(|(_, a)| *a)
+    }
+
+    fn record(&mut self, id: Option<String>, answer: A) {
+        let Some(id) = id else {
+            return;
+        };
+        if self.entries.len() == ANSWERED_RECORD {
+            self.entries.pop_front();
+        }
+        self.entries.push_back((id, answer));
+    }
+}
+
+/// The records of the two request-response services.
+#[derive(Default)]
+struct Answered {
+    lockstep: Record<Answer>,
+    commands: Record<bridge_types::CommandReply>,
+}
+
 /// The requests thread: every lockstep query, command query and free-running
 /// sample, in arrival order, through one shared-memory client of the bridge.
 fn serve_requests(
@@ -322,6 +377,7 @@ fn serve_requests(
             return Ok(());
         }
     };
+    let mut answered = Answered::default();
     while !stop.load(Ordering::Relaxed) {
         let incoming = match rx.recv_timeout(IDLE) {
             Ok(i) => i,
@@ -331,15 +387,26 @@ fn serve_requests(
         match incoming {
             Incoming::Lockstep(q) => {
                 match decode::<AircraftState>(q.payload(), q.attachment(), "a lockstep query") {
-                    Ok(state) => match client.step(&state) {
-                        Ok(answer) => {
-                            counters.lockstep.fetch_add(1, Ordering::Relaxed);
+                    Ok(state) => {
+                        let id = query_id(q.attachment());
+                        if let Some(answer) = answered.lockstep.find(id.as_deref()) {
+                            counters.repeated.fetch_add(1, Ordering::Relaxed);
                             if let Err(e) = reply(&q, &answer) {
                                 counters.failure(instance, &e);
                             }
+                            continue;
                         }
-                        Err(e) => reply_error(&q, &e),
-                    },
+                        match client.step(&state) {
+                            Ok(answer) => {
+                                counters.lockstep.fetch_add(1, Ordering::Relaxed);
+                                answered.lockstep.record(id, answer);
+                                if let Err(e) = reply(&q, &answer) {
+                                    counters.failure(instance, &e);
+                                }
+                            }
+                            Err(e) => reply_error(&q, &e),
+                        }
+                    }
                     Err(e) => {
                         counters.refused.fetch_add(1, Ordering::Relaxed);
                         reply_error(&q, &e);
@@ -348,15 +415,26 @@ fn serve_requests(
             }
             Incoming::Command(q) => {
                 match decode::<Command>(q.payload(), q.attachment(), "a command query") {
-                    Ok(command) => match client.command_as_sent(command) {
-                        Ok(r) => {
-                            counters.commands.fetch_add(1, Ordering::Relaxed);
+                    Ok(command) => {
+                        let id = query_id(q.attachment());
+                        if let Some(r) = answered.commands.find(id.as_deref()) {
+                            counters.repeated.fetch_add(1, Ordering::Relaxed);
                             if let Err(e) = reply(&q, &r) {
                                 counters.failure(instance, &e);
                             }
+                            continue;
                         }
-                        Err(e) => reply_error(&q, &e),
-                    },
+                        match client.command_as_sent(command) {
+                            Ok(r) => {
+                                counters.commands.fetch_add(1, Ordering::Relaxed);
+                                answered.commands.record(id, r);
+                                if let Err(e) = reply(&q, &r) {
+                                    counters.failure(instance, &e);
+                                }
+                            }
+                            Err(e) => reply_error(&q, &e),
+                        }
+                    }
                     Err(e) => {
                         counters.refused.fetch_add(1, Ordering::Relaxed);
                         reply_error(&q, &e);
@@ -436,4 +514,26 @@ fn forward_outputs(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The record answers the ids it holds, the newest [`ANSWERED_RECORD`],
+    /// and never a query without an id.
+    #[test]
+    fn the_record_holds_the_last_ids() {
+        let mut r = Record::<u32>::default();
+        r.record(None, 1);
+        assert_eq!(r.find(None), None);
+        for n in 0..(ANSWERED_RECORD as u32 + 4) {
+            r.record(Some(format!("s:{n}")), n);
+        }
+        assert_eq!(r.find(Some("s:3")), None, "evicted");
+        assert_eq!(r.find(Some("s:4")), Some(4));
+        let last = ANSWERED_RECORD as u32 + 3;
+        assert_eq!(r.find(Some(&format!("s:{last}"))), Some(last));
+        assert_eq!(r.find(Some("t:4")), None);
+    }
 }

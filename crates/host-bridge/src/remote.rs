@@ -54,6 +54,9 @@ use crate::BridgeError;
 pub const ALIVE: &str = "alive";
 /// How long a remote client waits for the bridge's session and readiness mark.
 pub const REMOTE_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
+/// How long a client waits before it sends again a query Zenoh ended
+/// without a reply.
+pub const RESEND_PAUSE: Duration = Duration::from_millis(2);
 /// Answers a remote client keeps from the `outputs` publication until it
 /// takes them (the oldest go first: bounded memory).
 pub const REMOTE_OUTPUTS_BUFFER: usize = crate::services::OUTPUTS_BUFFER;
@@ -333,10 +336,23 @@ pub(crate) fn open_session(options: &ZenohOptions, role: Role) -> Result<Session
 pub const ERROR_PREFIX: &str = "decoy bridge: ";
 
 /// The tag carried beside a payload, as text.
+/// The attachment is the tag, then, on a query, a space and the query's id
+/// (`<session id>:<number>`: the client's Zenoh session id and its count of
+/// queries), the same when the client sends the query again.
 fn tag_of(attachment: Option<&zenoh::bytes::ZBytes>) -> String {
-    attachment
+    let text = attachment
         .map(|a| String::from_utf8_lossy(&a.to_bytes()).into_owned())
-        .unwrap_or_default()
+        .unwrap_or_default();
+    text.split(' ').next().unwrap_or("").to_owned()
+}
+
+/// The id of a query (its attachment's second word), if it carries one.
+pub(crate) fn query_id(attachment: Option<&zenoh::bytes::ZBytes>) -> Option<String> {
+    let text = String::from_utf8_lossy(&attachment?.to_bytes()).into_owned();
+    text.split(' ')
+        .nth(1)
+        .filter(|id| !id.is_empty())
+        .map(str::to_owned)
 }
 
 /// A payload of type `T` with its tag checked.
@@ -365,18 +381,37 @@ pub(crate) fn decode<T: Wire>(
 
 /// A client's end of the Zenoh transport (inside `client::BridgeClient`).
 pub(crate) struct ZenohClient {
-    session: Session,
+    /// Present until dropped ([`ZenohClient`]'s `Drop`).
+    ports: Option<ClientPorts>,
     lockstep_key: String,
     commands_key: String,
-    state: zenoh::pubsub::Publisher<'static>,
-    outputs: zenoh::pubsub::Subscriber<RingChannelHandler<Sample>>,
-    status: zenoh::pubsub::Subscriber<RingChannelHandler<Sample>>,
+    /// Queries sent again after Zenoh ended them without a reply.
+    resent: std::cell::Cell<u64>,
+    /// Queries sent (each numbered in its id).
+    queries: std::cell::Cell<u64>,
+    /// This client's Zenoh session id (the first part of its queries' ids).
+    session_id: String,
     /// An answer received while waiting ([`ZenohClient::wait_event`]), not yet taken.
     stash: Vec<Answer>,
     instance: String,
 }
 
+/// A client's Zenoh session and what it declared (fields drop in order: the
+/// declarations, then the session).
+struct ClientPorts {
+    state: zenoh::pubsub::Publisher<'static>,
+    outputs: zenoh::pubsub::Subscriber<RingChannelHandler<Sample>>,
+    status: zenoh::pubsub::Subscriber<RingChannelHandler<Sample>>,
+    session: Session,
+}
+
 impl ZenohClient {
+    fn ports(&self) -> &ClientPorts {
+        self.ports
+            .as_ref()
+            .expect("a client's ports exist until it is dropped")
+    }
+
     /// Connects to bridge `instance` over Zenoh and waits (up to `timeout`)
     /// for its readiness token.
     pub(crate) fn connect(
@@ -400,14 +435,20 @@ impl ZenohClient {
             .declare_publisher(key(instance, service::STATE))
             .wait()
             .map_err(|e| zenoh_error("the state publisher", e))?;
+        let session_id = session.zid().to_string();
         let client = ZenohClient {
+            session_id,
             lockstep_key: key(instance, service::LOCKSTEP),
             commands_key: key(instance, service::COMMANDS),
-            session,
-            state,
-            outputs,
-            status,
+            ports: Some(ClientPorts {
+                state,
+                outputs,
+                status,
+                session,
+            }),
             stash: Vec::new(),
+            resent: std::cell::Cell::new(0),
+            queries: std::cell::Cell::new(0),
             instance: instance.to_owned(),
         };
         client.wait_until_ready(timeout, options)?;
@@ -424,6 +465,7 @@ impl ZenohClient {
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
             let replies = self
+                .ports()
                 .session
                 .liveliness()
                 .get(&token)
@@ -458,35 +500,55 @@ impl ZenohClient {
         timeout: Duration,
         what: &str,
     ) -> Result<R, BridgeError> {
-        let replies: FifoChannelHandler<Reply> = self
-            .session
-            .get(key)
-            .payload(request.as_wire_bytes().to_vec())
-            .attachment(Q::tag())
-            .target(QueryTarget::BestMatching)
-            .timeout(timeout)
-            .wait()
-            .map_err(|e| zenoh_error("sending a query", e))?;
         let deadline = Instant::now() + timeout;
-        // The one reply; the channel closes when the query is finalised.
-        let first = replies.recv_deadline(deadline + Duration::from_millis(50));
         let no_answer = |why: &str| {
             BridgeError::NoAnswer(format!(
                 "no {what} from bridge {:?} over Zenoh within {timeout:?}{why}: is the link up and `decoy bridge --instance {} --zenoh-listen ...` running?",
                 self.instance, self.instance
             ))
         };
-        let reply = match first {
-            Ok(Some(reply)) => reply,
-            Ok(None) => return Err(no_answer("")),
-            // Finalised with no reply: no queryable took the query (the
-            // bridge went away, or the routes to it are being rebuilt).
-            Err(_) => {
-                return Err(no_answer(
-                    " (the query ended without a reply: no bridge took it)",
-                ));
+        let mut resent = 0u32;
+        let number = self.queries.get();
+        self.queries.set(number + 1);
+        let attachment = format!("{} {}:{number}", Q::tag(), self.session_id);
+        let reply = loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let replies: FifoChannelHandler<Reply> = self
+                .ports()
+                .session
+                .get(key)
+                .payload(request.as_wire_bytes().to_vec())
+                .attachment(attachment.clone())
+                .target(QueryTarget::BestMatching)
+                .timeout(left.max(Duration::from_millis(1)))
+                .wait()
+                .map_err(|e| zenoh_error("sending a query", e))?;
+            // The one reply; the channel closes when the query is finalised.
+            match replies.recv_deadline(deadline + Duration::from_millis(50)) {
+                Ok(Some(reply)) => break reply,
+                Ok(None) => return Err(no_answer("")),
+                // Finalised with no reply, before the deadline: Zenoh routed
+                // the query to no queryable (its routes are rebuilt while a
+                // peer's session goes away, Zenoh issues 2516 and 2767) or
+                // lost the reply. Sent again, the same bytes: the gateway
+                // answers a request it already answered from its record
+                // (crate::gateway, "exactly once"), so the controller never
+                // sees a frame twice.
+                Err(_) if Instant::now() + RESEND_PAUSE < deadline => {
+                    resent += 1;
+                    std::thread::sleep(RESEND_PAUSE);
+                }
+                Err(_) => {
+                    return Err(no_answer(&format!(
+                        " (every query ended without a reply; sent {} times)",
+                        resent + 1
+                    )));
+                }
             }
         };
+        if resent > 0 {
+            self.resent.set(self.resent.get() + u64::from(resent));
+        }
         match reply.result() {
             Ok(sample) => decode::<R>(Some(sample.payload()), sample.attachment(), what),
             Err(e) => {
@@ -509,6 +571,11 @@ impl ZenohClient {
         }
     }
 
+    /// Queries this client sent again after Zenoh ended them without a reply.
+    pub(crate) fn resent(&self) -> u64 {
+        self.resent.get()
+    }
+
     pub(crate) fn step(
         &self,
         state: &AircraftState,
@@ -526,7 +593,8 @@ impl ZenohClient {
     }
 
     pub(crate) fn publish(&self, state: &AircraftState) -> Result<(), BridgeError> {
-        self.state
+        self.ports()
+            .state
             .put(state.as_wire_bytes().to_vec())
             .attachment(AircraftState::tag())
             .wait()
@@ -544,6 +612,7 @@ impl ZenohClient {
     pub(crate) fn take_outputs(&mut self) -> Result<Vec<Answer>, BridgeError> {
         let mut out = std::mem::take(&mut self.stash);
         while let Some(s) = self
+            .ports()
             .outputs
             .try_recv()
             .map_err(|e| zenoh_error("receiving outputs", e))?
@@ -556,6 +625,7 @@ impl ZenohClient {
     pub(crate) fn latest_status(&mut self) -> Result<Option<Status>, BridgeError> {
         let mut last = None;
         while let Some(s) = self
+            .ports()
             .status
             .try_recv()
             .map_err(|e| zenoh_error("receiving status", e))?
@@ -572,6 +642,7 @@ impl ZenohClient {
     /// Blocks until an answer is published or `timeout` passes.
     pub(crate) fn wait_event(&mut self, timeout: Duration) -> Result<(), BridgeError> {
         if let Some(s) = self
+            .ports()
             .outputs
             .recv_timeout(timeout)
             .map_err(|e| zenoh_error("waiting for outputs", e))?
@@ -584,15 +655,17 @@ impl ZenohClient {
 }
 
 impl Drop for ZenohClient {
-    /// Closes the session on a thread of its own: Zenoh's close says goodbye
-    /// to the peer and waits up to 10 s for it when the link is cut, which a
-    /// client that has lost its bridge must not spend (a process that ends
-    /// meanwhile ends the session with it).
+    /// Undeclares and closes on a thread of its own: Zenoh's close says
+    /// goodbye to the peer and waits up to 10 s for it when the link is cut
+    /// (and an undeclaration meanwhile waits for the close), which a client
+    /// that has lost its bridge must not spend; a process that ends meanwhile
+    /// ends the session with it.
     fn drop(&mut self) {
-        let session = self.session.clone();
-        let _ = std::thread::Builder::new()
-            .name("zenoh-close".to_owned())
-            .spawn(move || drop(session));
+        if let Some(ports) = self.ports.take() {
+            let _ = std::thread::Builder::new()
+                .name("zenoh-close".to_owned())
+                .spawn(move || drop(ports));
+        }
     }
 }
 
@@ -651,11 +724,23 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("decoy-zenoh-tls-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mtls = dir.join("mtls.json5");
-        std::fs::write(&mtls, "{ transport: { link: { tls: { enable_mtls: true } } } }").unwrap();
+        std::fs::write(
+            &mtls,
+            "{ transport: { link: { tls: { enable_mtls: true } } } }",
+        )
+        .unwrap();
         let plain = dir.join("plain.json5");
-        std::fs::write(&plain, "{ transport: { link: { tls: { enable_mtls: false } } } }").unwrap();
+        std::fs::write(
+            &plain,
+            "{ transport: { link: { tls: { enable_mtls: false } } } }",
+        )
+        .unwrap();
         let listed = dir.join("listed.json5");
-        std::fs::write(&listed, "{ listen: { endpoints: [\"tcp/10.9.9.9:7447\"] } }").unwrap();
+        std::fs::write(
+            &listed,
+            "{ listen: { endpoints: [\"tcp/10.9.9.9:7447\"] } }",
+        )
+        .unwrap();
         let with = |file: &PathBuf, listen: &[&str]| ZenohOptions {
             listen: listen.iter().map(|e| (*e).to_owned()).collect(),
             config_file: Some(file.clone()),

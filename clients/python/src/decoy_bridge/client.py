@@ -115,6 +115,9 @@ def _kind(name: str) -> int:
 ZENOH_READY_POLL_S = 0.02
 """How often :class:`Bridge` asks for the readiness token while a bridge starts
 (over Zenoh), s."""
+ZENOH_RESEND_PAUSE_S = 0.002
+"""How long the client waits before it sends again a query Zenoh ended without a
+reply, s (the Rust client's ``RESEND_PAUSE``)."""
 ZENOH_OUTPUTS_BUFFER = 1024
 """Answers a client over Zenoh keeps from the ``outputs`` publication until
 :meth:`Bridge.outputs` takes them (the oldest go first), as the Rust client's
@@ -208,7 +211,9 @@ def make_zenoh_config(
 
 def _decode(cls: type, payload: bytes, attachment: Any, what: str, instance: str) -> Any:
     """A payload of wire type ``cls`` with its tag and size checked."""
-    tag = "" if attachment is None else attachment.to_bytes().decode("utf-8", "replace")
+    # The tag, then (on a query) a space and the query's id.
+    text = "" if attachment is None else attachment.to_bytes().decode("utf-8", "replace")
+    tag = text.split(" ")[0]
     expected = wire_tag(cls)
     if tag != expected:
         raise VersionMismatch(
@@ -292,6 +297,12 @@ class Bridge:
         """``"shm"`` (iceoryx2 shared memory) or ``"zenoh"`` (across hosts), as
         ``decoy feed``'s summary says."""
         return self._transport_name
+
+    @property
+    def queries_resent(self) -> int:
+        """Queries sent again after Zenoh ended them without a reply (0 over shared
+        memory); the bridge answers each once (docs/bridge.md §7, "Exactly once")."""
+        return int(getattr(self._transport, "resent", 0))
 
     def _limit(self, timeout_s: float | None) -> float:
         return self.timeout_s if timeout_s is None else timeout_s
@@ -681,6 +692,9 @@ class _Zenoh:
         self._outputs_sub: Any = None
         self._status_sub: Any = None
         self._ready = threading.Condition()
+        self._queries = 0
+        self.resent = 0
+        """Queries sent again after Zenoh ended them without a reply."""
         self._outputs: collections.deque = collections.deque(maxlen=ZENOH_OUTPUTS_BUFFER)
         self._statuses: collections.deque = collections.deque(maxlen=ZENOH_STATUS_BUFFER)
         config = make_zenoh_config(endpoints, config_file, credentials, connect_timeout_s)
@@ -693,6 +707,7 @@ class _Zenoh:
                 f"`decoy bridge --instance {instance} --zenoh-listen ...` running there, and are this client's "
                 f"credentials the bridge's?"
             ) from e
+        self._session_id = str(self._session.zid())
         try:
             # Subscribed before the readiness token is seen: the bridge knows of
             # the subscription by then (same link, in order).
@@ -729,34 +744,48 @@ class _Zenoh:
             time.sleep(ZENOH_READY_POLL_S)  # startup only: the token does not exist yet
 
     def _query(self, service: str, msg: Any, reply_cls: type, what: str, timeout_s: float) -> Any:
-        """One query: ``msg`` to ``decoy/NAME/service``, its one reply within ``timeout_s``."""
+        """One query: ``msg`` to ``decoy/NAME/service``, its one reply within ``timeout_s``.
+
+        The attachment carries the tag and the query's id (``<session id>:<n>``). A
+        query Zenoh ends without a reply before the time limit (it routed it to no
+        queryable while its routes were rebuilt, or lost the reply) is sent again
+        with the same id after :data:`ZENOH_RESEND_PAUSE_S`; the bridge answers an id
+        it already answered from its record, so the controller sees each state once
+        (the Rust client's rule, docs/bridge.md §7)."""
         zenoh = self._zenoh
         deadline = time.monotonic() + timeout_s
-        try:
-            replies = self._session.get(
-                self._key(service),
-                payload=bytes(msg),
-                attachment=wire_tag(type(msg)),
-                target=zenoh.QueryTarget.BEST_MATCHING,
-                # The one reply as soon as it comes.
-                consolidation=zenoh.ConsolidationMode.NONE,
-                timeout=timeout_s,
-            )
-        except zenoh.ZError as e:
-            raise BridgeError(f"Zenoh: sending {what} to bridge `{self.instance}`: {e}") from e
-        try:
-            reply = replies.recv()
-        except zenoh.ZError:  # the query ended without a reply
-            # The query's own timer ends it at its time limit; before, it ended
-            # because nothing serves the key expression (or dropped the query).
-            if time.monotonic() >= deadline - 0.001:
+        self._queries += 1
+        attachment = f"{wire_tag(type(msg))} {self._session_id}:{self._queries}"
+        while True:
+            left = max(deadline - time.monotonic(), 0.001)
+            try:
+                replies = self._session.get(
+                    self._key(service),
+                    payload=bytes(msg),
+                    attachment=attachment,
+                    target=zenoh.QueryTarget.BEST_MATCHING,
+                    # The one reply as soon as it comes.
+                    consolidation=zenoh.ConsolidationMode.NONE,
+                    timeout=left,
+                )
+            except zenoh.ZError as e:
+                raise BridgeError(f"Zenoh: sending {what} to bridge `{self.instance}`: {e}") from e
+            try:
+                reply = replies.recv()
+                break
+            except zenoh.ZError:  # the query ended without a reply
+                if time.monotonic() + ZENOH_RESEND_PAUSE_S < deadline:
+                    self.resent += 1
+                    time.sleep(ZENOH_RESEND_PAUSE_S)
+                    continue
+                if not self._alive(0.5):
+                    raise NoBridge(
+                        f"bridge `{self.instance}` went away while waiting for {what} (nothing serves "
+                        f"{self._key(service)} over Zenoh at {self._where})"
+                    ) from None
                 raise BridgeTimeout(
                     f"bridge `{self.instance}` did not answer {what} within {timeout_s:.3f} s (over Zenoh at {self._where})"
                 ) from None
-            raise NoBridge(
-                f"bridge `{self.instance}` went away while waiting for {what} (nothing serves "
-                f"{self._key(service)} over Zenoh at {self._where})"
-            ) from None
         sample = reply.ok
         if sample is None:
             text = reply.err.payload.to_bytes().decode("utf-8", "replace")
