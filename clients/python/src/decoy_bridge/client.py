@@ -301,7 +301,7 @@ class Bridge:
     @property
     def queries_resent(self) -> int:
         """Queries sent again after Zenoh ended them without a reply (0 over shared
-        memory); the bridge answers each once (docs/bridge.md §7, "Exactly once")."""
+        memory); the bridge answers each once (docs/bridge.md §7, exactly once)."""
         return int(getattr(self._transport, "resent", 0))
 
     def _limit(self, timeout_s: float | None) -> float:
