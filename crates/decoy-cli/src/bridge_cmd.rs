@@ -62,7 +62,7 @@ struct BridgeZenohArgs {
     /// Serve across hosts over Zenoh as well, listening on ENDPOINT (tcp/127.0.0.1:7447; repeatable). Beyond loopback needs --zenoh-users or --zenoh-unauthenticated.
     #[arg(long, value_name = "ENDPOINT")]
     zenoh_listen: Vec<String>,
-    /// Serve over Zenoh by connecting to ENDPOINT (a router, or a client that listens; repeatable).
+    /// Serve over Zenoh by connecting to ENDPOINT (a Zenoh router; repeatable). Beyond loopback needs authentication or --zenoh-unauthenticated, as --zenoh-listen.
     #[arg(long, value_name = "ENDPOINT")]
     zenoh_connect: Vec<String>,
     /// A Zenoh configuration file (JSON5: TLS, certificates, ...), read first.
@@ -71,7 +71,7 @@ struct BridgeZenohArgs {
     /// Only these users connect over Zenoh (a `user:password` per line; Zenoh's user/password authentication).
     #[arg(long, value_name = "FILE")]
     zenoh_users: Option<PathBuf>,
-    /// Allow listening beyond loopback without authentication.
+    /// Allow an endpoint beyond loopback (listened on or connected to) without authentication.
     #[arg(long)]
     zenoh_unauthenticated: bool,
 }

@@ -20,11 +20,16 @@ use zenoh::{Session, Wait};
 use crate::BridgeError;
 use crate::client::BridgeClient;
 use crate::remote::{
-    ALIVE, ERROR_PREFIX, Role, ZenohOptions, decode, key, open_session, query_id, zenoh_error,
+    ALIVE, ERROR_PREFIX, PROTOCOL_PREFIX, Role, ZenohOptions, connect_endpoints, decode, key,
+    listen_endpoints, open_session, query_id, zenoh_error,
 };
 
 /// How often the gateway's threads look at the stop flag while idle.
 const IDLE: Duration = Duration::from_millis(100);
+/// Queries and samples waiting for the requests thread at most.
+pub const REQUEST_QUEUE: usize = 1024;
+/// How long the gateway's threads may take to connect to the bridge.
+const READY_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// What the gateway counted (printed in the bridge's summary).
 #[derive(Debug, Default)]
@@ -87,28 +92,33 @@ impl ZenohGateway {
         let session = open_session(options, Role::Bridge)?;
         let stop = Arc::new(AtomicBool::new(false));
         let counters = Arc::new(GatewayCounters::default());
-        let (tx, rx) = mpsc::channel::<Incoming>();
-        let lockstep_tx = tx.clone();
+        // Bounded: a client flooding queries fills it and its further
+        // queries end without a reply (each dropped, counted `failed`);
+        // a callback never blocks Zenoh's threads.
+        let (tx, rx) = mpsc::sync_channel::<Incoming>(REQUEST_QUEUE);
+        let enqueue = {
+            let counters = Arc::clone(&counters);
+            move |tx: &mpsc::SyncSender<Incoming>, item: Incoming| {
+                if tx.try_send(item).is_err() {
+                    counters.failed.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        };
+        let (lockstep_tx, lockstep_enqueue) = (tx.clone(), enqueue.clone());
         let lockstep = session
             .declare_queryable(key(instance, service::LOCKSTEP))
-            .callback(move |q| {
-                let _ = lockstep_tx.send(Incoming::Lockstep(q));
-            })
+            .callback(move |q| lockstep_enqueue(&lockstep_tx, Incoming::Lockstep(q)))
             .wait()
             .map_err(|e| zenoh_error("the lockstep queryable", e))?;
-        let commands_tx = tx.clone();
+        let (commands_tx, commands_enqueue) = (tx.clone(), enqueue.clone());
         let commands = session
             .declare_queryable(key(instance, service::COMMANDS))
-            .callback(move |q| {
-                let _ = commands_tx.send(Incoming::Command(q));
-            })
+            .callback(move |q| commands_enqueue(&commands_tx, Incoming::Command(q)))
             .wait()
             .map_err(|e| zenoh_error("the commands queryable", e))?;
         let state = session
             .declare_subscriber(key(instance, service::STATE))
-            .callback(move |s| {
-                let _ = tx.send(Incoming::State(s));
-            })
+            .callback(move |s| enqueue(&tx, Incoming::State(s)))
             .wait()
             .map_err(|e| zenoh_error("the state subscriber", e))?;
         let outputs = session
@@ -142,6 +152,14 @@ impl ZenohGateway {
                     .map_err(|e| BridgeError::Ipc(format!("cannot start a thread: {e}")))?,
             );
         }
+        // From here on, a failure stops and joins the threads started.
+        let abandon = |threads: Vec<JoinHandle<Result<(), BridgeError>>>, e: BridgeError| {
+            stop.store(true, Ordering::Relaxed);
+            for t in threads {
+                let _ = t.join();
+            }
+            e
+        };
         {
             let (instance, iox, stop, counters, ready) = (
                 instance.to_owned(),
@@ -150,47 +168,56 @@ impl ZenohGateway {
                 Arc::clone(&counters),
                 ready_tx,
             );
-            threads.push(
-                std::thread::Builder::new()
-                    .name("zenoh-outputs".to_owned())
-                    .spawn(move || {
-                        forward_outputs(
-                            &instance, &iox, &outputs, &status, &stop, &counters, &ready,
-                        )
-                    })
-                    .map_err(|e| BridgeError::Ipc(format!("cannot start a thread: {e}")))?,
-            );
+            let spawned = std::thread::Builder::new()
+                .name("zenoh-outputs".to_owned())
+                .spawn(move || {
+                    forward_outputs(&instance, &iox, &outputs, &status, &stop, &counters, &ready)
+                });
+            match spawned {
+                Ok(t) => threads.push(t),
+                Err(e) => {
+                    return Err(abandon(
+                        threads,
+                        BridgeError::Ipc(format!("cannot start a thread: {e}")),
+                    ));
+                }
+            }
         }
         let mut gateway_failed = None;
         for _ in 0..2 {
-            match ready_rx.recv() {
+            match ready_rx.recv_timeout(READY_TIMEOUT) {
                 Ok(Ok(())) => {}
                 Ok(Err(e)) => gateway_failed = Some(e),
                 Err(_) => {
-                    gateway_failed = Some(BridgeError::Ipc(
-                        "the Zenoh gateway's thread ended while starting".to_owned(),
-                    ))
+                    gateway_failed = Some(BridgeError::Ipc(format!(
+                        "the Zenoh gateway's threads did not connect to the bridge within {READY_TIMEOUT:?}"
+                    )));
+                    break;
                 }
             }
         }
         if let Some(e) = gateway_failed {
-            stop.store(true, Ordering::Relaxed);
-            for t in threads {
-                let _ = t.join();
-            }
-            return Err(e);
+            return Err(abandon(threads, e));
         }
-        let token = session
+        let token = match session
             .liveliness()
             .declare_token(key(instance, ALIVE))
             .wait()
-            .map_err(|e| zenoh_error("the readiness token", e))?;
-        let mut endpoints: Vec<String> = options
-            .listen
+        {
+            Ok(t) => t,
+            Err(e) => return Err(abandon(threads, zenoh_error("the readiness token", e))),
+        };
+        // What it serves on: the endpoints of the final configuration.
+        let effective = crate::remote::effective_config(options)?;
+        let mut endpoints: Vec<String> = listen_endpoints(&effective)
             .iter()
             .map(|e| format!("listen {e}"))
             .collect();
-        endpoints.extend(options.connect.iter().map(|e| format!("connect {e}")));
+        endpoints.extend(
+            connect_endpoints(&effective)
+                .iter()
+                .map(|e| format!("connect {e}")),
+        );
         if let Some(f) = &options.config_file {
             endpoints.push(format!("config {}", f.display()));
         }
@@ -217,8 +244,12 @@ impl ZenohGateway {
         &self.counters
     }
 
-    /// Stops the threads, closes the session; the first thread's failure, if any.
+    /// Withdraws the readiness token (remote clients see no bridge from
+    /// then on), stops the threads, and closes the session on a thread of
+    /// its own (Zenoh's goodbye to a peer whose link is cut waits 10 s); the
+    /// first thread's failure, if any.
     pub fn stop(self) -> Result<GatewaySummary, BridgeError> {
+        drop(self._token);
         self.stop.store(true, Ordering::Relaxed);
         let mut failure = None;
         for t in self.threads {
@@ -232,8 +263,12 @@ impl ZenohGateway {
                 }
             }
         }
-        drop(self._token);
-        let _ = self.session.close().wait();
+        let session = self.session;
+        let _ = std::thread::Builder::new()
+            .name("zenoh-close".to_owned())
+            .spawn(move || {
+                let _ = session.close().wait();
+            });
         if let Some(e) = failure {
             return Err(e);
         }
@@ -305,12 +340,21 @@ fn reply<T: Wire>(query: &Query, value: &T) -> Result<(), BridgeError> {
         .map_err(|e| zenoh_error("replying", e))
 }
 
+/// One error reply: [`ERROR_PREFIX`], then `protocol: ` for a payload of
+/// another type or size (the client's `BridgeError::Protocol`), then the
+/// message.
 fn reply_error(query: &Query, e: &BridgeError) {
-    let _ = query.reply_err(format!("{ERROR_PREFIX}{e}")).wait();
+    let kind = if matches!(e, BridgeError::Protocol(_)) {
+        PROTOCOL_PREFIX
+    } else {
+        ""
+    };
+    let _ = query.reply_err(format!("{ERROR_PREFIX}{kind}{e}")).wait();
 }
 
-/// Requests answered lately, with their answers, per service: how many.
-pub const ANSWERED_RECORD: usize = 16;
+/// Requests answered lately, with their answers, per service: how many (16
+/// for each of the clients a bridge serves).
+pub const ANSWERED_RECORD: usize = 16 * crate::services::MAX_CLIENTS;
 
 /// The ids of the last [`ANSWERED_RECORD`] queries of a service and their
 /// answers. A query with one of these ids is its client sending again a query
@@ -483,10 +527,21 @@ fn forward_outputs(
     };
     // Answers from before this client existed (the service's history) are
     // not forwarded: a remote subscriber sees answers from its own start on.
-    let _ = client.take_outputs()?;
+    let _ = client.take_outputs();
     while !stop.load(Ordering::Relaxed) {
-        client.wait_event(IDLE)?;
-        for answer in client.take_outputs()? {
+        // A failure of the shared-memory side is counted and reported, and
+        // the thread serves on after a pause (it never ends unseen while the
+        // queries are still answered).
+        let answers = client.wait_event(IDLE).and_then(|()| client.take_outputs());
+        let answers = match answers {
+            Ok(a) => a,
+            Err(e) => {
+                counters.failure(instance, &e);
+                std::thread::sleep(IDLE);
+                continue;
+            }
+        };
+        for answer in answers {
             match outputs
                 .put(answer.as_wire_bytes().to_vec())
                 .attachment(Answer::tag())
@@ -499,18 +554,22 @@ fn forward_outputs(
                 }
             };
         }
-        if let Some(s) = client.latest_status()? {
-            match status
-                .put(s.as_wire_bytes().to_vec())
-                .attachment(Status::tag())
-                .wait()
-            {
-                Ok(()) => counters.published.fetch_add(1, Ordering::Relaxed),
-                Err(e) => {
-                    counters.failure(instance, &zenoh_error("publishing a status", e));
-                    0
-                }
-            };
+        match client.latest_status() {
+            Ok(Some(s)) => {
+                match status
+                    .put(s.as_wire_bytes().to_vec())
+                    .attachment(Status::tag())
+                    .wait()
+                {
+                    Ok(()) => counters.published.fetch_add(1, Ordering::Relaxed),
+                    Err(e) => {
+                        counters.failure(instance, &zenoh_error("publishing a status", e));
+                        0
+                    }
+                };
+            }
+            Ok(None) => {}
+            Err(e) => counters.failure(instance, &e),
         }
     }
     Ok(())

@@ -44,7 +44,7 @@ use bridge_types::{
     AircraftState, Answer, Command, CommandReply, SERVICE_ROOT, Status, Wire, service,
 };
 use zenoh::handlers::{FifoChannelHandler, RingChannel, RingChannelHandler};
-use zenoh::query::{QueryTarget, Reply};
+use zenoh::query::{ConsolidationMode, QueryTarget, Reply};
 use zenoh::sample::Sample;
 use zenoh::{Session, Wait};
 
@@ -203,7 +203,13 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
                 ));
             }
             insert(&mut c, "mode", "\"peer\"")?;
-            if !options.listen.is_empty() || !from_file {
+            // Zenoh's default for a peer is every interface on a random port
+            // (`tcp/[::]:0`): the bridge listens on what it is given, the
+            // endpoints of --zenoh-listen or those a configuration file names,
+            // and on nothing else.
+            let file_names_its_own =
+                from_file && listen_endpoints(&c) != listen_endpoints(&zenoh::Config::default());
+            if !options.listen.is_empty() || !file_names_its_own {
                 insert(&mut c, "listen/endpoints", &json_list(&options.listen))?;
             }
         }
@@ -256,9 +262,18 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
 
 /// The endpoints configuration `c` listens on (its `listen/endpoints`: a
 /// list, or a list per mode, of which the peer's).
-fn listen_endpoints(c: &zenoh::Config) -> Vec<String> {
+pub(crate) fn listen_endpoints(c: &zenoh::Config) -> Vec<String> {
+    endpoints(c, "listen/endpoints")
+}
+
+/// The endpoints configuration `c` connects to.
+pub(crate) fn connect_endpoints(c: &zenoh::Config) -> Vec<String> {
+    endpoints(c, "connect/endpoints")
+}
+
+fn endpoints(c: &zenoh::Config, key: &str) -> Vec<String> {
     let value: serde_json::Value = c
-        .get_json("listen/endpoints")
+        .get_json(key)
         .ok()
         .and_then(|j| serde_json::from_str(&j).ok())
         .unwrap_or_default();
@@ -283,16 +298,18 @@ fn is_set(c: &zenoh::Config, key: &str) -> bool {
     })
 }
 
-/// The bridge's rule: an endpoint beyond loopback only with its peers
-/// authenticated (a user/password dictionary, or TLS with client
-/// certificates on a `tls/` endpoint) or with `--zenoh-unauthenticated`.
+/// The bridge's rule: an endpoint beyond loopback, listened on or connected
+/// to (a router's peers reach the bridge as well as the router's own), only
+/// with its peers authenticated (a user/password dictionary, or TLS with
+/// client certificates on a `tls/` endpoint) or with
+/// `--zenoh-unauthenticated`.
 fn check_listeners(c: &zenoh::Config, options: &ZenohOptions) -> Result<(), BridgeError> {
     if options.unauthenticated {
         return Ok(());
     }
     let users = is_set(c, "transport/auth/usrpwd/dictionary_file");
     let mtls = is_set(c, "transport/link/tls/enable_mtls");
-    for endpoint in listen_endpoints(c) {
+    for endpoint in listen_endpoints(c).into_iter().chain(connect_endpoints(c)) {
         if is_loopback(&endpoint) || users || (mtls && endpoint.starts_with("tls/")) {
             continue;
         }
@@ -301,6 +318,11 @@ fn check_listeners(c: &zenoh::Config, options: &ZenohOptions) -> Result<(), Brid
         )));
     }
     Ok(())
+}
+
+/// The configuration a bridge with `options` runs with.
+pub(crate) fn effective_config(options: &ZenohOptions) -> Result<zenoh::Config, BridgeError> {
+    config(options, Role::Bridge)
 }
 
 /// Checks a bridge's Zenoh options as `gateway::ZenohGateway::start` will (files
@@ -334,6 +356,9 @@ pub(crate) fn open_session(options: &ZenohOptions, role: Role) -> Result<Session
 /// The start of every error reply the gateway sends (Zenoh's own, such as a
 /// query's timeout, do not have it).
 pub const ERROR_PREFIX: &str = "decoy bridge: ";
+/// After [`ERROR_PREFIX`], the mark of an error reply to a payload of another
+/// type or size.
+pub const PROTOCOL_PREFIX: &str = "protocol: ";
 
 /// The tag carried beside a payload, as text.
 /// The attachment is the tag, then, on a query, a space and the query's id
@@ -520,6 +545,9 @@ impl ZenohClient {
                 .payload(request.as_wire_bytes().to_vec())
                 .attachment(attachment.clone())
                 .target(QueryTarget::BestMatching)
+                // The one reply as soon as it comes (the default holds it
+                // until the query is finalised).
+                .consolidation(ConsolidationMode::None)
                 .timeout(left.max(Duration::from_millis(1)))
                 .wait()
                 .map_err(|e| zenoh_error("sending a query", e))?;
@@ -554,7 +582,8 @@ impl ZenohClient {
             Err(e) => {
                 let text = String::from_utf8_lossy(&e.payload().to_bytes()).into_owned();
                 match text.strip_prefix(ERROR_PREFIX) {
-                    Some(m) if m.contains("expected decoy.bridge") => {
+                    Some(m) if m.starts_with(PROTOCOL_PREFIX) => {
+                        let m = &m[PROTOCOL_PREFIX.len()..];
                         Err(BridgeError::Protocol(format!(
                             "bridge {:?} refused the {what}'s request: {m}",
                             self.instance
@@ -609,17 +638,30 @@ impl ZenohClient {
         )
     }
 
+    /// Every answer published so far; a sample of another type or size is a
+    /// [`BridgeError::Protocol`], the answers before it kept for the next call.
     pub(crate) fn take_outputs(&mut self) -> Result<Vec<Answer>, BridgeError> {
-        let mut out = std::mem::take(&mut self.stash);
-        while let Some(s) = self
-            .ports()
-            .outputs
-            .try_recv()
-            .map_err(|e| zenoh_error("receiving outputs", e))?
-        {
-            out.push(Self::answer_of(&s)?);
+        loop {
+            let next = self
+                .ports()
+                .outputs
+                .try_recv()
+                .map_err(|e| zenoh_error("receiving outputs", e))?;
+            let Some(sample) = next else {
+                return Ok(std::mem::take(&mut self.stash));
+            };
+            let answer = Self::answer_of(&sample)?;
+            self.keep(answer);
         }
-        Ok(out)
+    }
+
+    /// Keeps `answer` until taken, the oldest going first beyond
+    /// [`REMOTE_OUTPUTS_BUFFER`].
+    fn keep(&mut self, answer: Answer) {
+        if self.stash.len() == REMOTE_OUTPUTS_BUFFER {
+            self.stash.remove(0);
+        }
+        self.stash.push(answer);
     }
 
     pub(crate) fn latest_status(&mut self) -> Result<Option<Status>, BridgeError> {
@@ -648,7 +690,7 @@ impl ZenohClient {
             .map_err(|e| zenoh_error("waiting for outputs", e))?
         {
             let a = Self::answer_of(&s)?;
-            self.stash.push(a);
+            self.keep(a);
         }
         Ok(())
     }
@@ -753,6 +795,26 @@ mod tests {
         let e = config(&with(&listed, &[]), Role::Bridge).unwrap_err();
         assert!(e.to_string().contains("tcp/10.9.9.9:7447"), "{e}");
         assert!(config(&with(&listed, &["tcp/127.0.0.1:7447"]), Role::Bridge).is_ok());
+        // A file that names no endpoint: the bridge listens on nothing (not
+        // on Zenoh's default, every interface), whatever else it says.
+        let quiet = ZenohOptions {
+            connect: vec!["tcp/127.0.0.1:7447".to_owned()],
+            ..with(&mtls, &[])
+        };
+        let c = config(&quiet, Role::Bridge).unwrap();
+        assert_eq!(listen_endpoints(&c), Vec::<String>::new());
+        // Connecting beyond loopback is held to the rule too.
+        let out = ZenohOptions {
+            connect: vec!["tcp/10.1.2.3:7447".to_owned()],
+            ..Default::default()
+        };
+        let e = config(&out, Role::Bridge).unwrap_err();
+        assert!(e.to_string().contains("tcp/10.1.2.3:7447"), "{e}");
+        let consent = ZenohOptions {
+            unauthenticated: true,
+            ..out
+        };
+        assert!(config(&consent, Role::Bridge).is_ok());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
