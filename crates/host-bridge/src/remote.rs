@@ -87,14 +87,58 @@ pub struct ZenohOptions {
     pub unauthenticated: bool,
 }
 
+/// A Zenoh error's text without the source location Zenoh appends
+/// (` at /root/.cargo/registry/.../file.rs:62.`): the user's words only.
+pub(crate) fn zenoh_text(e: impl std::fmt::Display) -> String {
+    let text = e.to_string();
+    match text.find(" at /") {
+        Some(i) if text[i..].contains(".rs:") => text[..i].trim_end_matches('.').to_owned(),
+        _ => text,
+    }
+}
+
 pub(crate) fn zenoh_error(what: &str, e: impl std::fmt::Display) -> BridgeError {
-    BridgeError::Ipc(format!("Zenoh: {what}: {e}"))
+    BridgeError::Ipc(format!("Zenoh: {what}: {}", zenoh_text(e)))
+}
+
+/// Checks the form of an endpoint given on the command line:
+/// `<protocol>/<host>:<port>` with a port of 1 to 65535 (Zenoh's own message
+/// for a bad one is long, and a bad port shows only when the session opens).
+fn check_endpoint(option: &str, endpoint: &str) -> Result<(), BridgeError> {
+    let bad = |why: &str| {
+        BridgeError::Usage(format!(
+            "{option} {endpoint:?}: {why}; an endpoint is <protocol>/<host>:<port>, e.g. tcp/127.0.0.1:7447 or tls/10.0.0.1:7447"
+        ))
+    };
+    let address = endpoint.split(['#', '?']).next().unwrap_or("");
+    let Some((protocol, locator)) = address.split_once('/') else {
+        return Err(bad("no protocol"));
+    };
+    if protocol.is_empty() || locator.is_empty() {
+        return Err(bad("no protocol or no address"));
+    }
+    if matches!(protocol, "tcp" | "tls" | "udp" | "quic" | "ws") {
+        let Some((host, port)) = locator.rsplit_once(':') else {
+            return Err(bad("no port"));
+        };
+        if host.is_empty() {
+            return Err(bad("no host"));
+        }
+        match port.parse::<u16>() {
+            Ok(p) if p > 0 => {}
+            _ => return Err(bad("the port must be 1 to 65535")),
+        }
+    }
+    Ok(())
 }
 
 fn insert(config: &mut zenoh::Config, key: &str, value: &str) -> Result<(), BridgeError> {
-    config
-        .insert_json5(key, value)
-        .map_err(|e| BridgeError::Usage(format!("Zenoh configuration {key} = {value}: {e}")))
+    config.insert_json5(key, value).map_err(|e| {
+        BridgeError::Usage(format!(
+            "Zenoh configuration {key} = {value}: {}",
+            zenoh_text(e)
+        ))
+    })
 }
 
 fn json_list(items: &[String]) -> String {
@@ -184,12 +228,19 @@ fn config(options: &ZenohOptions, role: Role) -> Result<zenoh::Config, BridgeErr
     let mut c = match &options.config_file {
         Some(path) => zenoh::Config::from_file(path).map_err(|e| {
             BridgeError::Usage(format!(
-                "cannot read the Zenoh configuration {}: {e}",
-                path.display()
+                "cannot read the Zenoh configuration {}: {}",
+                path.display(),
+                zenoh_text(e)
             ))
         })?,
         None => zenoh::Config::default(),
     };
+    for e in &options.listen {
+        check_endpoint("--zenoh-listen", e)?;
+    }
+    for e in &options.connect {
+        check_endpoint("--zenoh-connect", e)?;
+    }
     insert(&mut c, "scouting/multicast/enabled", "false")?;
     insert(&mut c, "scouting/gossip/enabled", "false")?;
     insert(&mut c, "adminspace/enabled", "false")?;
@@ -341,14 +392,16 @@ pub(crate) fn open_session(options: &ZenohOptions, role: Role) -> Result<Session
     let c = config(options, role)?;
     zenoh::open(c).wait().map_err(|e| match role {
         Role::Bridge => BridgeError::Ipc(format!(
-            "Zenoh: cannot open the bridge's session (listen {}, connect {}): {e}",
+            "Zenoh: cannot open the bridge's session (listen {}, connect {}): {}",
             json_list(&options.listen),
-            json_list(&options.connect)
+            json_list(&options.connect),
+            zenoh_text(e)
         )),
         Role::Client => BridgeError::NoBridge(format!(
-            "Zenoh: no bridge reachable at {} within {:?}: {e}",
+            "Zenoh: no bridge reachable at {} within {:?}: {}",
             json_list(&options.connect),
-            REMOTE_CONNECT_TIMEOUT
+            REMOTE_CONNECT_TIMEOUT,
+            zenoh_text(e)
         )),
     })
 }
@@ -816,6 +869,37 @@ mod tests {
         };
         assert!(config(&consent, Role::Bridge).is_ok());
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn endpoints_are_checked_before_zenoh_sees_them() {
+        for good in [
+            "tcp/127.0.0.1:7447",
+            "tls/[::1]:1",
+            "tcp/example.org:65535",
+            "unixsock-stream//tmp/x",
+        ] {
+            assert!(check_endpoint("--zenoh-listen", good).is_ok(), "{good}");
+        }
+        for bad in [
+            "nonsense",
+            "tcp/127.0.0.1",
+            "tcp/127.0.0.1:99999",
+            "tcp/127.0.0.1:0",
+            "tcp/:7447",
+            "/x",
+        ] {
+            let e = check_endpoint("--zenoh-listen", bad).unwrap_err();
+            assert!(
+                e.is_usage() && e.to_string().contains("<protocol>/<host>:<port>"),
+                "{bad}: {e}"
+            );
+        }
+        assert_eq!(
+            zenoh_text("invalid port value at /root/.cargo/registry/src/x/lib.rs:62."),
+            "invalid port value"
+        );
+        assert_eq!(zenoh_text("plain"), "plain");
     }
 
     #[test]
