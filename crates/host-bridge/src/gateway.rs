@@ -401,6 +401,47 @@ struct Answered {
     commands: Record<bridge_types::CommandReply>,
 }
 
+/// One query of a request-response service: its request decoded and checked
+/// (else one error reply, counted `refused`); a query id among the record's
+/// answered from it (counted `repeated`); else `serve` (the bridge, over
+/// shared memory) answers it, counted in `served` and recorded; a reply
+/// Zenoh cannot send counted `failed`.
+fn answer_query<Req: Wire, Resp: Wire + Copy>(
+    q: &Query,
+    what: &str,
+    record: &mut Record<Resp>,
+    served: &AtomicU64,
+    counters: &GatewayCounters,
+    instance: &str,
+    serve: impl FnOnce(Req) -> Result<Resp, BridgeError>,
+) {
+    let request = match decode::<Req>(q.payload(), q.attachment(), what) {
+        Ok(r) => r,
+        Err(e) => {
+            counters.refused.fetch_add(1, Ordering::Relaxed);
+            return reply_error(q, &e);
+        }
+    };
+    let id = query_id(q.attachment());
+    let answer = match record.find(id.as_deref()) {
+        Some(answer) => {
+            counters.repeated.fetch_add(1, Ordering::Relaxed);
+            answer
+        }
+        None => match serve(request) {
+            Ok(answer) => {
+                served.fetch_add(1, Ordering::Relaxed);
+                record.record(id, answer);
+                answer
+            }
+            Err(e) => return reply_error(q, &e),
+        },
+    };
+    if let Err(e) = reply(q, &answer) {
+        counters.failure(instance, &e);
+    }
+}
+
 /// The requests thread: every lockstep query, command query and free-running
 /// sample, in arrival order, through one shared-memory client of the bridge.
 fn serve_requests(
@@ -429,62 +470,24 @@ fn serve_requests(
             Err(mpsc::RecvTimeoutError::Disconnected) => break,
         };
         match incoming {
-            Incoming::Lockstep(q) => {
-                match decode::<AircraftState>(q.payload(), q.attachment(), "a lockstep query") {
-                    Ok(state) => {
-                        let id = query_id(q.attachment());
-                        if let Some(answer) = answered.lockstep.find(id.as_deref()) {
-                            counters.repeated.fetch_add(1, Ordering::Relaxed);
-                            if let Err(e) = reply(&q, &answer) {
-                                counters.failure(instance, &e);
-                            }
-                            continue;
-                        }
-                        match client.step(&state) {
-                            Ok(answer) => {
-                                counters.lockstep.fetch_add(1, Ordering::Relaxed);
-                                answered.lockstep.record(id, answer);
-                                if let Err(e) = reply(&q, &answer) {
-                                    counters.failure(instance, &e);
-                                }
-                            }
-                            Err(e) => reply_error(&q, &e),
-                        }
-                    }
-                    Err(e) => {
-                        counters.refused.fetch_add(1, Ordering::Relaxed);
-                        reply_error(&q, &e);
-                    }
-                }
-            }
-            Incoming::Command(q) => {
-                match decode::<Command>(q.payload(), q.attachment(), "a command query") {
-                    Ok(command) => {
-                        let id = query_id(q.attachment());
-                        if let Some(r) = answered.commands.find(id.as_deref()) {
-                            counters.repeated.fetch_add(1, Ordering::Relaxed);
-                            if let Err(e) = reply(&q, &r) {
-                                counters.failure(instance, &e);
-                            }
-                            continue;
-                        }
-                        match client.command_as_sent(command) {
-                            Ok(r) => {
-                                counters.commands.fetch_add(1, Ordering::Relaxed);
-                                answered.commands.record(id, r);
-                                if let Err(e) = reply(&q, &r) {
-                                    counters.failure(instance, &e);
-                                }
-                            }
-                            Err(e) => reply_error(&q, &e),
-                        }
-                    }
-                    Err(e) => {
-                        counters.refused.fetch_add(1, Ordering::Relaxed);
-                        reply_error(&q, &e);
-                    }
-                }
-            }
+            Incoming::Lockstep(q) => answer_query(
+                &q,
+                "a lockstep query",
+                &mut answered.lockstep,
+                &counters.lockstep,
+                counters,
+                instance,
+                |state: AircraftState| client.step(&state),
+            ),
+            Incoming::Command(q) => answer_query(
+                &q,
+                "a command query",
+                &mut answered.commands,
+                &counters.commands,
+                counters,
+                instance,
+                |command: Command| client.command_as_sent(command),
+            ),
             Incoming::State(s) => {
                 match decode::<AircraftState>(Some(s.payload()), s.attachment(), "a state sample") {
                     Ok(state) => {
