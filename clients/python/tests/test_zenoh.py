@@ -146,12 +146,12 @@ def test_commands_status_free_running_and_tags_over_zenoh(bridge_factory, monkey
             session.close()
         assert len(replies) == 1 and replies[0].ok is None
         text = replies[0].err.payload.to_bytes().decode()
-        assert "expected decoy.bridge.v3.AircraftState/104" in text, text
+        assert "expected decoy.bridge.v4.AircraftState/104" in text, text
         # ... which the client raises as VersionMismatch.
         real = wire_tag
         monkeypatch.setattr(client_module, "wire_tag",
-                            lambda cls: real(cls).replace(".v3.", ".v2.") if cls is wire.AircraftState else real(cls))
-        with pytest.raises(VersionMismatch, match="expected decoy.bridge.v3.AircraftState/104"):
+                            lambda cls: real(cls).replace(".v4.", ".v2.") if cls is wire.AircraftState else real(cls))
+        with pytest.raises(VersionMismatch, match="expected decoy.bridge.v4.AircraftState/104"):
             z.request(level(0.0))
         monkeypatch.undo()
         assert z.ping(nonce=7).nonce == 7
@@ -172,7 +172,7 @@ def test_a_reply_of_another_tag_is_a_version_mismatch(bridge_factory):
             lambda q: q.reply(q.key_expr, bytes(wire.Answer()), attachment="decoy.bridge.v2.Answer/240"),
         )
         with Bridge(fake, zenoh=endpoint, connect_timeout_s=10.0) as z:
-            with pytest.raises(VersionMismatch, match="decoy.bridge.v2.Answer/240, expected decoy.bridge.v3.Answer"):
+            with pytest.raises(VersionMismatch, match="decoy.bridge.v2.Answer/240, expected decoy.bridge.v4.Answer"):
                 z.request(level(0.0))
         queryable.undeclare()
         token.undeclare()

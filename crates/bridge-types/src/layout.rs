@@ -31,7 +31,7 @@ pub struct FieldLayout {
 pub struct TypeLayout {
     /// The Rust name (`Answer`).
     pub name: &'static str,
-    /// The iceoryx2 type name (`decoy.bridge.v3.Answer`), which a mirror's
+    /// The iceoryx2 type name (`decoy.bridge.v4.Answer`), which a mirror's
     /// `type_name()` must return.
     pub type_name: &'static str,
     /// `size_of`, bytes.
@@ -134,7 +134,8 @@ macro_rules! layout {
 }
 
 /// `Output`'s layout: its fixed fields, then one report per requirement (the
-/// fields `wire.rs` generates from the requirement list).
+/// fields `wire.rs` generates from the requirement list), then the envelope
+/// map's limits (protocol 4).
 fn output_layout() -> TypeLayout {
     macro_rules! output_layout {
         ($(($variant:ident, $field:ident, $($rest:tt)*)),* $(,)?) => {
@@ -161,6 +162,14 @@ fn output_layout() -> TypeLayout {
                     (advisories, "u8", 1),
                     (reserved, "u8", 1),
                     $(($field, "MonitorReport", 1),)*
+                    (limit_pull_up_radps, "f32", 1),
+                    (limit_turn_radps, "f32", 1),
+                    (limit_acceleration_mps2, "f32", 1),
+                    (floor_pull_up_radps, "f32", 1),
+                    (floor_turn_radps, "f32", 1),
+                    (floor_acceleration_mps2, "f32", 1),
+                    (limited_by, "u8", 3),
+                    (reserved_limits, "u8", 5),
                 ]
             )
         };
@@ -449,11 +458,11 @@ mod tests {
             assert_eq!(next, t.size, "{} has bytes no field describes", t.name);
             assert_eq!(t.size % t.align, 0);
             assert!(
-                t.type_name.starts_with("decoy.bridge.v3."),
+                t.type_name.starts_with("decoy.bridge.v4."),
                 "{}",
                 t.type_name
             );
-            assert_eq!(&t.type_name["decoy.bridge.v3.".len()..], t.name);
+            assert_eq!(&t.type_name["decoy.bridge.v4.".len()..], t.name);
         }
     }
 
@@ -465,9 +474,9 @@ mod tests {
         assert_eq!(size("Header"), 8);
         assert_eq!(size("AircraftState"), 104);
         assert_eq!(size("MonitorReport"), 32);
-        assert_eq!(size("Output"), 216);
+        assert_eq!(size("Output"), 248);
         assert_eq!(size("Rejection"), 16);
-        assert_eq!(size("Answer"), 240);
+        assert_eq!(size("Answer"), 272);
         assert_eq!(size("Counters"), 144);
         assert_eq!(size("Status"), 256);
         assert_eq!(size("Command"), 24);
@@ -519,6 +528,6 @@ mod tests {
         assert_eq!(codes("flag"), flag::ALL.len());
         assert!(d.codes.iter().all(|c| c.1 != "?"));
         let json = serde_json::to_string(&d).unwrap();
-        assert!(json.contains("\"type_name\":\"decoy.bridge.v3.AircraftState\""));
+        assert!(json.contains("\"type_name\":\"decoy.bridge.v4.AircraftState\""));
     }
 }

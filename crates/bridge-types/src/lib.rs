@@ -4,7 +4,7 @@
 //! one description of the services). Every type is `#[repr(C)]`, plain numbers
 //! with no pointers and **no implicit padding** (every gap is an explicit
 //! `reserved` field, zero on send), `ZeroCopySend`, and carries a fixed iceoryx2
-//! type name with the bridge protocol version in it (`decoy.bridge.v3.Answer`):
+//! type name with the bridge protocol version in it (`decoy.bridge.v4.Answer`):
 //! iceoryx2 refuses to connect a port whose type name, size or alignment differ.
 //! Every sample starts with a [`Header`] (protocol version, kind, sequence number).
 //!
@@ -21,7 +21,7 @@
 //!
 //! [`PROTOCOL_VERSION`] is in every header and in every type name. Any change of a
 //! field, its order or meaning increments it and renames every type (`v1` to
-//! `v2`; `v3` added the answer kind [`kind::INITIALISING`]), so an old client
+//! `v2`; `v3` added the answer kind [`kind::INITIALISING`], `v4` the envelope map's limits in [`Output`]), so an old client
 //! cannot open a new bridge's services by accident. Fields
 //! are only ever appended at the end of [`Output`] (and so of [`Answer`]) or
 //! [`Status`]; a client built from the layout JSON picks them up.
@@ -34,7 +34,7 @@ pub use layout::{FieldLayout, LayoutDescription, RequirementLayout, TypeLayout, 
 pub use wire::*;
 
 /// The bridge protocol version: in every [`Header`] and every type name.
-pub const PROTOCOL_VERSION: u16 = 3;
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// The prefix of every service name: `decoy/<instance>/<service>`.
 pub const SERVICE_ROOT: &str = "decoy";

@@ -82,7 +82,7 @@ pub mod flag {
 /// The head of every sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.Header")]
+#[type_name("decoy.bridge.v4.Header")]
 pub struct Header {
     /// [`PROTOCOL_VERSION`] of the sender.
     pub protocol_version: u16,
@@ -112,7 +112,7 @@ impl Header {
 /// these bits. Validation is the controller's (docs/protocol.md §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.AircraftState")]
+#[type_name("decoy.bridge.v4.AircraftState")]
 pub struct AircraftState {
     /// `kind` = [`kind::AIRCRAFT_STATE`]; `seq` = the frame's sequence number.
     pub header: Header,
@@ -146,7 +146,7 @@ macro_rules! output {
         /// protocol version), never moved.
         #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
         #[repr(C)]
-        #[type_name("decoy.bridge.v3.Output")]
+        #[type_name("decoy.bridge.v4.Output")]
         pub struct Output {
             /// Time of the outputs, s (the state's `time_s`).
             pub time_s: f64,
@@ -202,6 +202,31 @@ macro_rules! output {
                 #[doc = concat!($title, ": the monitor's report, margin in ", $unit, ".")]
                 pub $field: MonitorReport,
             )*
+            /// The largest clear pull-up rate the controller's envelope map gives
+            /// at this state's altitude and Mach number (interpolated), rad/s; -1
+            /// where not known (docs/protocol.md §3, "Limits").
+            pub limit_pull_up_radps: f32,
+            /// The largest clear level-turn rate there, rad/s; -1 where not known.
+            pub limit_turn_radps: f32,
+            /// The largest clear along-path acceleration there, m/s²; -1 where not
+            /// known.
+            pub limit_acceleration_mps2: f32,
+            /// The pull-up's floor: the smallest limit of the map's cells around
+            /// the state's flight condition (the value to cue against: between
+            /// cells the interpolation is not conservative), rad/s; -1 where not
+            /// known.
+            pub floor_pull_up_radps: f32,
+            /// The turn's floor, rad/s; -1 where not known.
+            pub floor_turn_radps: f32,
+            /// The acceleration's floor, m/s²; -1 where not known.
+            pub floor_acceleration_mps2: f32,
+            /// What limits each of the three (pull-up, turn, acceleration) at the
+            /// map's nearest cell: 0 not known, 1 + the requirement's index (1
+            /// posture, 2 collision, 3 tension, 4 exhaust), 128 a bound of the
+            /// declared envelope (`decoy_link::limited_by`).
+            pub limited_by: [u8; 3],
+            /// Zero.
+            pub reserved_limits: [u8; 5],
         }
 
         impl Output {
@@ -236,7 +261,7 @@ decoy_schema::for_each_requirement!(output);
 /// when violated.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.MonitorReport")]
+#[type_name("decoy.bridge.v4.MonitorReport")]
 pub struct MonitorReport {
     /// The margin now.
     pub margin: f32,
@@ -262,7 +287,7 @@ pub struct MonitorReport {
 /// Why a state or a command was rejected.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.Rejection")]
+#[type_name("decoy.bridge.v4.Rejection")]
 pub struct Rejection {
     /// `header.seq` of the rejected request.
     pub request_seq: u32,
@@ -281,7 +306,7 @@ pub struct Rejection {
 /// all zero. The lockstep service's response and the outputs service's sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.Answer")]
+#[type_name("decoy.bridge.v4.Answer")]
 pub struct Answer {
     /// `kind` = [`kind::OUTPUT`], [`kind::REJECTED`] or [`kind::INITIALISING`]; `seq` = the bridge's
     /// answer number (+1 per answer on the service, wrapping; a gap on the
@@ -298,7 +323,7 @@ pub struct Answer {
     Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable, serde::Serialize,
 )]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.Counters")]
+#[type_name("decoy.bridge.v4.Counters")]
 pub struct Counters {
     /// States answered by an output.
     pub accepted: u64,
@@ -347,7 +372,7 @@ pub struct Counters {
 /// command reply.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.Status")]
+#[type_name("decoy.bridge.v4.Status")]
 pub struct Status {
     /// `kind` = [`kind::STATUS`]; `seq` = the bridge's status number.
     pub header: Header,
@@ -389,7 +414,7 @@ pub struct Status {
 /// A command (request of the commands service).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.Command")]
+#[type_name("decoy.bridge.v4.Command")]
 pub struct Command {
     /// `kind` = [`kind::COMMAND`].
     pub header: Header,
@@ -410,7 +435,7 @@ pub struct Command {
 /// The reply to a [`Command`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, ZeroCopySend, Pod, Zeroable)]
 #[repr(C)]
-#[type_name("decoy.bridge.v3.CommandReply")]
+#[type_name("decoy.bridge.v4.CommandReply")]
 pub struct CommandReply {
     /// `kind` = [`kind::COMMAND_REPLY`]; `seq` = the bridge's reply number.
     pub header: Header,
@@ -660,7 +685,7 @@ pub fn type_name_of<T: ZeroCopySend>() -> &'static str {
 /// bridge across hosts over Zenoh, docs/bridge.md "Across hosts"): exactly the
 /// bytes the type has in shared memory (no implicit padding, so every byte is a
 /// field, `Pod` checks it at compile time), sent with its [`Wire::tag`] (the
-/// iceoryx2 type name and the size, `decoy.bridge.v3.Answer/240`), which the
+/// iceoryx2 type name and the size, `decoy.bridge.v4.Answer/272`), which the
 /// receiver checks as iceoryx2 checks a port's type.
 pub trait Wire: Pod + ZeroCopySend {
     /// The bytes of `self`.

@@ -244,6 +244,11 @@ pub fn bridge_command(
         host_backend(&config, &options)
     }
     .map_err(bridge_failure)?;
+    // A map of another configuration is not used: the Outputs say every limit
+    // is unknown; say why once.
+    if let Err(stale) = config.check_limits() {
+        eprintln!("warning: {stale}; the controller reports every manoeuvre limit as unknown (-1)");
+    }
     let info = backend.info().clone();
     let zenoh = args.zenoh.options();
     if let Some(z) = &zenoh {

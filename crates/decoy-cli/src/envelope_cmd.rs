@@ -18,6 +18,54 @@ use decoy_studies::envelope::{
 use crate::failure::{Failure, to_json, usage};
 use crate::progress::Progress;
 
+/// `decoy limits-table`.
+#[derive(Args, Debug)]
+pub struct LimitsTableArgs {
+    /// Output directories of `decoy envelope` (complete maps of the pull-up,
+    /// the turn and the acceleration; any of them), made with the
+    /// configuration (`--config`, default the built-in reference system).
+    #[arg(required = true, value_name = "DIR")]
+    maps: Vec<PathBuf>,
+    /// The file to write (default, for the built-in reference system only:
+    /// config/reference-system.limits.toml; with --config, required).
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+}
+
+/// `decoy limits-table`: the envelope map on board
+/// (`decoy_studies::onboard`), written to `--out`.
+pub fn limits_table_command(
+    config: &SystemConfig,
+    args: &LimitsTableArgs,
+    json: bool,
+    given_config: bool,
+) -> Result<String, Failure> {
+    let out = match (&args.out, given_config) {
+        (Some(out), _) => out.clone(),
+        (None, false) => PathBuf::from("config/reference-system.limits.toml"),
+        (None, true) => {
+            return Err(usage(
+                "--out is required with --config (the default is the reference system's map)",
+            ));
+        }
+    };
+    decoy_studies::onboard::write_limits_table(config, &args.maps, &out)?;
+    let hash = decoy_config::config_hash(config);
+    if json {
+        return Ok(to_json(&serde_json::json!({
+            "file": out.display().to_string(),
+            "config_hash": hash,
+            "maps": args.maps.iter().map(|d| d.display().to_string()).collect::<Vec<_>>(),
+        })));
+    }
+    Ok(format!(
+        "wrote {} ({} maps) for the configuration {}\n",
+        out.display(),
+        args.maps.len(),
+        hash
+    ))
+}
+
 /// The manoeuvres the map covers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum EnvelopeManoeuvre {

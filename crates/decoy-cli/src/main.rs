@@ -92,6 +92,10 @@ enum Command {
     /// The manoeuvre envelope map: for each altitude x Mach, the largest pull-up
     /// or turn rate that violates no requirement, and what limits it.
     Envelope(envelope_cmd::EnvelopeArgs),
+    /// Write the envelope map the onboard controller carries
+    /// (config/reference-system.limits.toml) from `decoy envelope`'s maps of
+    /// this configuration.
+    LimitsTable(envelope_cmd::LimitsTableArgs),
     /// A study: `discretisation` (the paper's Figs. 13-14) and the embedded
     /// model's choice.
     Study(studies::StudyArgs),
@@ -281,8 +285,12 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: &Cli) -> Result<String, Failure> {
-    // An explicitly named configuration is loaded (and so checked) whatever the command.
+    // An explicitly named configuration is loaded (and so checked) whatever the
+    // command; the map's own commands load it without its envelope map on
+    // board, which they make (a stale map must not stop them).
+    let unmapped = matches!(cli.command, Command::Envelope(_) | Command::LimitsTable(_));
     let config = match &cli.config {
+        Some(path) if unmapped => Some(SystemConfig::from_file_unmapped(path)?),
         Some(path) => Some(SystemConfig::from_file(path)?),
         None => None,
     };
@@ -312,9 +320,16 @@ fn run(cli: &Cli) -> Result<String, Failure> {
         Command::Envelope(args) => {
             let config = match config {
                 Some(c) => c,
-                None => SystemConfig::builtin()?,
+                None => SystemConfig::builtin_unmapped()?,
             };
             envelope_cmd::envelope_command(&config, args, cli.json)
+        }
+        Command::LimitsTable(args) => {
+            let config = match config {
+                Some(c) => c,
+                None => SystemConfig::builtin_unmapped()?,
+            };
+            envelope_cmd::limits_table_command(&config, args, cli.json, cli.config.is_some())
         }
         Command::Study(args) => {
             let config = match config {

@@ -620,18 +620,18 @@ fn the_layout_json_describes_every_type() {
         .unwrap();
     assert!(out.status.success());
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["protocol_version"], 3);
+    assert_eq!(v["protocol_version"], 4);
     let types = v["types"].as_array().unwrap();
     let answer = types.iter().find(|t| t["name"] == "Answer").unwrap();
-    assert_eq!(answer["type_name"], "decoy.bridge.v3.Answer");
-    assert_eq!(answer["size"], 240);
+    assert_eq!(answer["type_name"], "decoy.bridge.v4.Answer");
+    assert_eq!(answer["size"], 272);
     assert_eq!(answer["fields"][2]["name"], "output");
     assert_eq!(answer["fields"][2]["offset"], 24);
     assert_eq!(v["services"].as_array().unwrap().len(), 7);
     let text = Command::new(DECOY).arg("bridge-layout").output().unwrap();
     assert!(
         String::from_utf8_lossy(&text.stdout)
-            .contains("AircraftState (decoy.bridge.v3.AircraftState): size 104, align 8")
+            .contains("AircraftState (decoy.bridge.v4.AircraftState): size 104, align 8")
     );
 }
 

@@ -315,6 +315,8 @@ fn config_copy(name: &str, edit: impl Fn(&str) -> String) -> PathBuf {
     let toml = std::fs::read_to_string(source.join("reference-system.toml")).unwrap();
     std::fs::write(dir.join("system.toml"), edit(&toml)).unwrap();
     std::fs::copy(source.join("decoy-aero.csv"), dir.join("decoy-aero.csv")).unwrap();
+    let limits = "reference-system.limits.toml";
+    std::fs::copy(source.join(limits), dir.join(limits)).unwrap();
     dir
 }
 

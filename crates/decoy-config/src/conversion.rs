@@ -135,6 +135,7 @@ impl SystemConfig {
             grading_ratio_embedded: s.grading_ratio_embedded,
             management: self.management.params(),
             envelope: self.envelope.params(),
+            limits: self.limits.unwrap_or(decoy_controller::LimitMap::EMPTY),
         })
     }
 

@@ -71,9 +71,54 @@ pub enum ConfigError {
     /// many segments for its capacity).
     #[error("{0}")]
     Solver(#[from] solver_core::ConfigError),
+    /// The envelope map on board (`envelope.limits_map`) was made for another
+    /// configuration.
+    #[error(
+        "{file} was made for another configuration than {config} (its config_hash is {found}, \
+         the configuration's {expected}): map the envelope again and write the file with \
+         `decoy limits-table` (docs/envelope.md, \"On board\"), or remove `limits_map` from \
+         [envelope]"
+    )]
+    StaleLimits {
+        /// The map file.
+        file: String,
+        /// The configuration (its source).
+        config: String,
+        /// The hash the file gives.
+        found: String,
+        /// The configuration's.
+        expected: String,
+    },
     /// The atmosphere cannot give air properties at the requested altitude.
     #[error("{0}")]
     Atmosphere(#[from] AtmosphereError),
+}
+
+/// A map file made for another configuration than the one that names it
+/// (kept by `SystemConfig::stale_limits`; `SystemConfig::check_limits`
+/// turns it into [`ConfigError::StaleLimits`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StaleLimits {
+    /// The map file.
+    pub file: String,
+    /// The configuration (its source).
+    pub config: String,
+    /// The hash the file gives.
+    pub found: String,
+    /// The configuration's.
+    pub expected: String,
+}
+
+impl StaleLimits {
+    /// As an error.
+    pub fn error(&self) -> ConfigError {
+        ConfigError::StaleLimits {
+            file: self.file.clone(),
+            config: self.config.clone(),
+            found: self.found.clone(),
+            expected: self.expected.clone(),
+        }
+    }
 }
 
 fn line_suffix(line: Option<usize>) -> String {

@@ -33,7 +33,8 @@
 //! The modules, each depending only on those before it: `error`
 //! ([`ConfigError`]), `schema` (the serde types), `validation` (the ranges),
 //! `tables` (the aerodynamic CSV), `conversion` (to
-//! [`decoy_controller::SystemParams`] and the solver's types), `load` (files,
+//! [`decoy_controller::SystemParams`] and the solver's types), `limits` (the
+//! envelope map on board and the configuration's hash), `load` (files,
 //! built-ins and overlays).
 //!
 //! Units SI; world frame NED (z down, altitude = -z); aircraft points in the
@@ -51,6 +52,7 @@
 
 mod conversion;
 mod error;
+mod limits;
 mod load;
 mod schema;
 mod tables;
@@ -63,10 +65,11 @@ pub use conversion::vec3;
 pub use decoy_controller::{
     AeroRows, ControllerConfig, ManagementParams, PerRequirement, SystemParams, Thresholds,
 };
-pub use error::ConfigError;
+pub use error::{ConfigError, StaleLimits};
+pub use limits::{BOUND_NAMES, HASH_PREFIX, LimitsFile, LimitsGrid, config_hash};
 pub use load::{
-    BASE_KEY, BUILTIN_AERO_CSV, BUILTIN_AERO_NAME, BUILTIN_TOML, BUILTIN_TOML_NAME,
-    WEAK_STABILITY_NAME, WEAK_STABILITY_TOML,
+    BASE_KEY, BUILTIN_AERO_CSV, BUILTIN_AERO_NAME, BUILTIN_LIMITS_TOML, BUILTIN_TOML,
+    BUILTIN_TOML_NAME, WEAK_STABILITY_NAME, WEAK_STABILITY_TOML,
 };
 pub use schema::{
     AeroRow, AircraftConfig, CableConfig, CollisionSection, DecoyConfig, EnvelopeSection,

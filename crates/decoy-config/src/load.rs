@@ -13,6 +13,7 @@ use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
 use crate::error::{ConfigError, toml_error};
+use crate::limits::LimitsFile;
 use crate::schema::SystemConfig;
 use crate::tables::parse_aero_csv;
 use crate::validation::Origins;
@@ -24,6 +25,9 @@ pub const BUILTIN_AERO_CSV: &str = include_str!("../../../config/decoy-aero.csv"
 /// The built-in weak-stability decoy (`config/weak-stability-decoy.toml`): an
 /// overlay on the reference system.
 pub const WEAK_STABILITY_TOML: &str = include_str!("../../../config/weak-stability-decoy.toml");
+/// The built-in reference system's envelope map on board
+/// (`config/reference-system.limits.toml`).
+pub const BUILTIN_LIMITS_TOML: &str = include_str!("../../../config/reference-system.limits.toml");
 /// How errors in the built-in TOML name their file.
 pub const BUILTIN_TOML_NAME: &str = "built-in reference-system.toml";
 /// How errors in the built-in aerodynamic table name their file.
@@ -35,23 +39,37 @@ pub const BASE_KEY: &str = "base";
 
 /// The built-in files by the names their `base` and `decoy.aero_table` keys use
 /// (their names in `config/`).
-const BUILTIN_FILES: [(&str, &str); 3] = [
+const BUILTIN_FILES: [(&str, &str); 4] = [
     ("reference-system.toml", BUILTIN_TOML),
     ("weak-stability-decoy.toml", WEAK_STABILITY_TOML),
     ("decoy-aero.csv", BUILTIN_AERO_CSV),
+    ("reference-system.limits.toml", BUILTIN_LIMITS_TOML),
 ];
 
 impl SystemConfig {
     /// The project's reference system, embedded in the binary.
     pub fn builtin() -> Result<Self, ConfigError> {
-        load(builtin_file("reference-system.toml")?)
+        load(builtin_file("reference-system.toml")?, MapPolicy::Check)
+    }
+
+    /// The reference system without its envelope map on board (not read, so
+    /// not checked): what the map is made from (`decoy envelope`, `decoy
+    /// limits-table`), which must load while the map is stale.
+    pub fn builtin_unmapped() -> Result<Self, ConfigError> {
+        load(builtin_file("reference-system.toml")?, MapPolicy::Skip)
+    }
+
+    /// [`SystemConfig::from_file`] without the envelope map on board (see
+    /// [`SystemConfig::builtin_unmapped`]).
+    pub fn from_file_unmapped(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        load(disk_file(path.as_ref())?, MapPolicy::Skip)
     }
 
     /// The second decoy, built in: `config/weak-stability-decoy.toml`, an overlay
     /// on the reference system that moves the decoy's moment reference point and
     /// towing point (a weakly stable decoy; the file says why).
     pub fn weak_stability() -> Result<Self, ConfigError> {
-        load(builtin_file("weak-stability-decoy.toml")?)
+        load(builtin_file("weak-stability-decoy.toml")?, MapPolicy::Check)
     }
 
     /// Loads a system TOML file: a whole system, or an overlay on a `base`
@@ -59,22 +77,26 @@ impl SystemConfig {
     /// relative to the directory of the file that names it (or used as is when
     /// absolute).
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
-        load(disk_file(path.as_ref())?)
+        load(disk_file(path.as_ref())?, MapPolicy::Check)
     }
 
     /// Parses a system from TOML text and the text of its aerodynamic table (the
     /// TOML's `decoy.aero_table` is then only a name used in messages). The text
     /// cannot be an overlay: without a file there is nothing to resolve `base`
-    /// against.
+    /// against, nor `envelope.limits_map` (the system has no envelope map on
+    /// board).
     pub fn from_str(toml_text: &str, aero_csv_text: &str) -> Result<Self, ConfigError> {
-        load(File {
-            name: "configuration".to_owned(),
-            identity: String::new(),
-            place: Place::Text {
-                aero_csv: aero_csv_text.to_owned(),
+        load(
+            File {
+                name: "configuration".to_owned(),
+                identity: String::new(),
+                place: Place::Text {
+                    aero_csv: aero_csv_text.to_owned(),
+                },
+                text: toml_text.to_owned(),
             },
-            text: toml_text.to_owned(),
-        })
+            MapPolicy::Check,
+        )
     }
 
     /// Parses a system from the TOML text of a file that is not on disk (a
@@ -86,12 +108,33 @@ impl SystemConfig {
     /// overlay on the built-in reference system from any directory. Validated
     /// as a file is, with the same errors.
     pub fn from_text_in(name: &str, toml_text: &str, dir: &Path) -> Result<Self, ConfigError> {
-        load(File {
-            name: name.to_owned(),
-            identity: name.to_owned(),
-            place: Place::Given(dir.to_owned()),
-            text: toml_text.to_owned(),
-        })
+        load(
+            File {
+                name: name.to_owned(),
+                identity: name.to_owned(),
+                place: Place::Given(dir.to_owned()),
+                text: toml_text.to_owned(),
+            },
+            MapPolicy::Check,
+        )
+    }
+
+    /// [`SystemConfig::from_text_in`] without the envelope map on board (see
+    /// [`SystemConfig::builtin_unmapped`]).
+    pub fn from_text_in_unmapped(
+        name: &str,
+        toml_text: &str,
+        dir: &Path,
+    ) -> Result<Self, ConfigError> {
+        load(
+            File {
+                name: name.to_owned(),
+                identity: name.to_owned(),
+                place: Place::Given(dir.to_owned()),
+                text: toml_text.to_owned(),
+            },
+            MapPolicy::Skip,
+        )
     }
 }
 
@@ -217,9 +260,18 @@ fn disk_file(path: &Path) -> Result<File, ConfigError> {
     })
 }
 
+/// Whether loading reads the envelope map on board.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum MapPolicy {
+    /// Read it and check it against the configuration's hash.
+    Check,
+    /// Leave it unread (`limits` None).
+    Skip,
+}
+
 /// Loads `top` with its chain of bases, merges, deserialises, validates and
-/// reads the aerodynamic table.
-fn load(top: File) -> Result<SystemConfig, ConfigError> {
+/// reads the aerodynamic table and (by `policy`) the envelope map on board.
+fn load(top: File, policy: MapPolicy) -> Result<SystemConfig, ConfigError> {
     let files = chain(top)?;
     // Every file's text in one buffer, base first, so that a span in the merged
     // tables tells which file (and line) it came from.
@@ -273,6 +325,30 @@ fn load(top: File) -> Result<SystemConfig, ConfigError> {
         }
     };
     config.aero_rows = parse_aero_csv(&csv_name, &csv_text)?;
+
+    // The envelope map on board: only the top file's (an overlay is another
+    // system, whose map its base's cannot be), read and checked against the
+    // configuration's hash: a map of another configuration is not used (the
+    // configuration has none, `stale_limits` says why; the firmware's build
+    // refuses it through `check_limits`).
+    const LIMITS_KEY: &str = "envelope.limits_map";
+    if config.envelope.limits_map.is_some() && origins.file_of(LIMITS_KEY) != top.name {
+        config.envelope.limits_map = None;
+    }
+    // Text given without its file names no file: its map is not read.
+    let policy = match top.place {
+        Place::Text { .. } => MapPolicy::Skip,
+        _ => policy,
+    };
+    if let (Some(relative), MapPolicy::Check) = (config.envelope.limits_map.clone(), policy) {
+        let file = top.open(LIMITS_KEY, &relative)?;
+        let parsed = LimitsFile::parse(&file.name, &file.text)?;
+        let map = parsed.to_grids(&file.name)?;
+        match parsed.stale_for(&file.name, &config) {
+            None => config.limits = Some(map),
+            Some(stale) => config.stale_limits = Some(stale),
+        }
+    }
     Ok(config)
 }
 

@@ -216,6 +216,12 @@ pub struct EnvelopeSection {
     pub max_body_rate_radps: f64,
     /// Largest |acceleration along the velocity|, m/s^2.
     pub max_along_path_acceleration_mps2: f64,
+    /// The manoeuvre envelope map on board: a file written by `decoy
+    /// limits-table`, relative to the file that names it, checked against the
+    /// configuration's hash. An overlay does not inherit its base's (it is
+    /// another system): it names its own or has none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limits_map: Option<String>,
 }
 
 impl Default for EnvelopeSection {
@@ -228,6 +234,7 @@ impl Default for EnvelopeSection {
             load_factor: e.load_factor,
             max_body_rate_radps: e.max_body_rate_radps,
             max_along_path_acceleration_mps2: e.max_along_path_acceleration_mps2,
+            limits_map: None,
         }
     }
 }
@@ -318,6 +325,14 @@ pub struct SystemConfig {
     /// The decoy aerodynamic table read from `decoy.aero_table`.
     #[serde(skip)]
     pub aero_rows: Vec<AeroRow>,
+    /// The envelope map on board that `envelope.limits_map` names, read and
+    /// checked against this configuration (None without one).
+    #[serde(skip)]
+    pub limits: Option<decoy_controller::LimitMap>,
+    /// The envelope map named, when it was made for another configuration
+    /// (then `limits` is None: `SystemConfig::check_limits`).
+    #[serde(skip)]
+    pub stale_limits: Option<crate::error::StaleLimits>,
     /// Where the TOML came from (a path, or the built-in name; for an overlay, the
     /// overlay's own file), for messages.
     #[serde(skip)]

@@ -124,6 +124,10 @@ impl Scratch {
     /// The reference system as `dir/reference.toml` beside its aerodynamic table.
     fn reference(&self, dir: &str) -> std::path::PathBuf {
         self.write(&format!("{dir}/decoy-aero.csv"), BUILTIN_AERO_CSV);
+        self.write(
+            &format!("{dir}/reference-system.limits.toml"),
+            BUILTIN_LIMITS_TOML,
+        );
         self.write(&format!("{dir}/reference.toml"), BUILTIN_TOML)
     }
 }
@@ -145,6 +149,9 @@ fn the_weak_stability_overlay_is_the_reference_with_two_decoy_stations_moved() {
     expected.decoy.x_tow = 0.225;
     expected.decoy.x_mrp = 0.1715;
     expected.source = WEAK_STABILITY_NAME.to_owned();
+    // Not the reference's envelope map: an overlay is another system.
+    expected.envelope.limits_map = None;
+    expected.limits = None;
     assert_eq!(weak, expected);
     assert!(weak.decoy.x_mrp < reference.decoy.x_mrp);
 
@@ -177,6 +184,8 @@ fn an_overlay_merges_table_by_table_onto_its_base() {
     expected.solver.segments_embedded = 10;
     expected.management.tension.caution_n = 250.0;
     expected.envelope.mach = [0.4, 0.9];
+    expected.envelope.limits_map = None;
+    expected.limits = None;
     expected.source = overlay.display().to_string();
     assert_eq!(light, expected);
 
@@ -236,7 +245,10 @@ fn text_in_a_directory_resolves_its_names_there_else_among_the_builtins() {
             1,
         ),
     );
-    let draggy = SystemConfig::from_text_in("config dict", BUILTIN_TOML, &scratch.0).unwrap();
+    // (Without the reference's envelope map, which is not this system's.)
+    let unmapped = BUILTIN_TOML.replace("limits_map = \"reference-system.limits.toml\"", "");
+    assert_ne!(unmapped, BUILTIN_TOML);
+    let draggy = SystemConfig::from_text_in("config dict", &unmapped, &scratch.0).unwrap();
     assert_eq!(draggy.aero_rows[0].cd, 0.5);
     let light = SystemConfig::from_text_in("config dict", overlay, &scratch.0).unwrap();
     assert_eq!(light.aero_rows, reference.aero_rows);
@@ -611,4 +623,168 @@ fn mach_to_speed_uses_isa() {
         config.mach_to_speed(25_000.0, 0.8),
         Err(ConfigError::Atmosphere(_))
     ));
+}
+
+/// The reference system carries its envelope map on board, made for it: the
+/// file's cells are the controller's, and the map is in the params the
+/// firmware is built from.
+#[test]
+fn the_reference_system_carries_its_envelope_map() {
+    let config = SystemConfig::builtin().unwrap();
+    let map = config.limits.expect("the reference system names its map");
+    let file = LimitsFile::parse("built-in", BUILTIN_LIMITS_TOML).unwrap();
+    assert_eq!(file.config_hash, config_hash(&config));
+    for (grid, table) in [
+        (&map.pull_up, file.pull_up.as_ref()),
+        (&map.turn, file.turn.as_ref()),
+        (&map.acceleration, file.acceleration.as_ref()),
+    ] {
+        let table = table.expect("the three manoeuvres are mapped");
+        assert_eq!(grid.altitudes().len(), table.altitudes_m.len());
+        assert_eq!(grid.machs().len(), table.machs.len());
+        for (i, row) in table.limits.iter().enumerate() {
+            for (j, &limit) in row.iter().enumerate() {
+                let at = grid.at(f64::from(grid.altitudes()[i]), f64::from(grid.machs()[j]));
+                assert_eq!(at.map(|(v, _)| v), Some(f64::from(limit as f32)));
+            }
+        }
+    }
+    assert_eq!(config.params().unwrap().limits, map);
+    // The file on disk is the built-in one.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/reference-system.toml");
+    assert_eq!(SystemConfig::from_file(&path).unwrap().limits, Some(map));
+}
+
+/// The hash is of the values: comments and the embedded model's
+/// discretisation do not change it, any other value does; a map of another
+/// configuration is not used (the configuration loads without it, and
+/// `check_limits`, which the firmware's build calls, names the file and the
+/// command that remakes it); an overlay does not inherit its base's map.
+#[test]
+fn a_map_of_another_configuration_is_refused() {
+    let config = SystemConfig::builtin().unwrap();
+    let hash = config_hash(&config);
+    assert!(hash.starts_with(HASH_PREFIX) && hash.len() == HASH_PREFIX.len() + 64);
+    let commented = SystemConfig::from_str(
+        &with("mass = 4.0 ", "mass = 4.0    # a comment "),
+        BUILTIN_AERO_CSV,
+    )
+    .unwrap();
+    assert_eq!(config_hash(&commented), hash);
+    let variant = SystemConfig::from_str(
+        &with("segments_embedded = 12", "segments_embedded = 16"),
+        BUILTIN_AERO_CSV,
+    )
+    .unwrap();
+    assert_eq!(
+        config_hash(&variant),
+        hash,
+        "a firmware variant carries the map"
+    );
+    let heavier = with("mass = 4.0 ", "mass = 4.1 ");
+    let other = SystemConfig::from_str(&heavier, BUILTIN_AERO_CSV).unwrap();
+    assert_ne!(config_hash(&other), hash);
+
+    let scratch = Scratch::new("stale-limits");
+    let path = scratch.reference("a");
+    std::fs::write(&path, &heavier).unwrap();
+    let stale = SystemConfig::from_file(&path).unwrap();
+    assert_eq!(stale.limits, None);
+    assert_eq!(
+        stale.params().unwrap().limits,
+        decoy_controller::LimitMap::EMPTY
+    );
+    let e = stale.check_limits().unwrap_err();
+    let text = e.to_string();
+    assert!(matches!(e, ConfigError::StaleLimits { .. }), "{text}");
+    assert!(
+        text.contains("reference-system.limits.toml") && text.contains("decoy limits-table"),
+        "{text}"
+    );
+    assert!(
+        text.contains(&hash) && text.contains(&config_hash(&other)),
+        "{text}"
+    );
+    assert!(SystemConfig::builtin().unwrap().check_limits().is_ok());
+    let unmapped = SystemConfig::from_file_unmapped(&path).unwrap();
+    assert_eq!(unmapped.limits, None);
+    assert_eq!(config_hash(&unmapped), config_hash(&other));
+
+    let weak = SystemConfig::weak_stability().unwrap();
+    assert_eq!(
+        (weak.limits, weak.envelope.limits_map.as_deref()),
+        (None, None)
+    );
+    assert_eq!(
+        weak.params().unwrap().limits,
+        decoy_controller::LimitMap::EMPTY
+    );
+}
+
+/// A limits file that is not a map the controller can carry is refused with
+/// the file and the field named: a wrong unit, a row too short, an unknown
+/// limiting name, a negative or NaN limit, an axis not ascending, an unknown
+/// key, a missing file; an overlay may name a map, used only if its own.
+#[test]
+fn a_malformed_limits_file_is_refused() {
+    let good = LimitsFile::parse("built-in", BUILTIN_LIMITS_TOML).unwrap();
+    let grids = good.to_grids("f").unwrap();
+    assert_eq!(Some(grids), SystemConfig::builtin().unwrap().limits);
+    let refuse = |edit: &dyn Fn(&mut LimitsFile), field: &str| {
+        let mut file = good.clone();
+        edit(&mut file);
+        let e = file.to_grids("f.toml").unwrap_err().to_string();
+        assert!(e.starts_with("f.toml: ") && e.contains(field), "{e}");
+    };
+    refuse(
+        &|f| f.turn.as_mut().unwrap().unit = "m/s^2".into(),
+        "turn.unit",
+    );
+    refuse(
+        &|f| {
+            f.pull_up.as_mut().unwrap().limits[2].pop();
+        },
+        "pull-up.limits",
+    );
+    refuse(
+        &|f| f.acceleration.as_mut().unwrap().limiting[0][0] = "drag".into(),
+        "acceleration.limiting",
+    );
+    refuse(
+        &|f| f.pull_up.as_mut().unwrap().limits[0][0] = -0.1,
+        "pull-up.limits",
+    );
+    refuse(
+        &|f| f.pull_up.as_mut().unwrap().limits[0][0] = f64::NAN,
+        "pull-up.limits",
+    );
+    refuse(
+        &|f| f.turn.as_mut().unwrap().machs.reverse(),
+        "turn.altitudes_m or machs",
+    );
+    let e =
+        LimitsFile::parse("f.toml", &format!("{BUILTIN_LIMITS_TOML}\nextra = 1\n")).unwrap_err();
+    assert!(e.to_string().contains("extra"), "{e}");
+
+    let scratch = Scratch::new("limits-missing");
+    scratch.write("a/decoy-aero.csv", BUILTIN_AERO_CSV);
+    let toml = scratch.write("a/system.toml", BUILTIN_TOML);
+    let e = SystemConfig::from_file(&toml).unwrap_err();
+    assert!(matches!(e, ConfigError::Io { .. }), "{e}");
+    assert!(
+        e.to_string().contains("reference-system.limits.toml"),
+        "{e}"
+    );
+    // An overlay that names a map uses it only if it is its own.
+    scratch.reference("b");
+    let overlay = scratch.write(
+        "b/heavy.toml",
+        "base = \"reference.toml\"\n[decoy]\nmass = 4.5\n[envelope]\nlimits_map = \"reference-system.limits.toml\"\n",
+    );
+    let heavy = SystemConfig::from_file(&overlay).unwrap();
+    assert_eq!(
+        heavy.limits, None,
+        "the reference's map is not the heavier decoy's"
+    );
+    assert!(heavy.check_limits().is_err());
 }

@@ -12,6 +12,7 @@ use solver_core::{
 use crate::builtin;
 use crate::envelope::OperatingEnvelope;
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
+use crate::limits::LimitMap;
 use crate::lookahead::Lookahead;
 use crate::monitor::{ManagementConfig, Measures, Monitors};
 use crate::path::{FramePath, PathEnd, steady_flight};
@@ -133,6 +134,9 @@ pub struct ControllerConfig<T: Real> {
     /// The operating envelope the controller guarantees (frames outside it are
     /// flagged [`StatusFlags::OUTSIDE_ENVELOPE`]).
     pub envelope: OperatingEnvelope<T>,
+    /// The manoeuvre envelope map of the configuration (every Output reports
+    /// its limits at the frame's flight condition).
+    pub limits: LimitMap,
     /// Most RK4 steps one frame may take: [`MAX_STEPS_PER_FRAME`] onboard (the
     /// frame budget), [`HOST_MAX_STEPS_PER_FRAME`] for a host's finer model.
     pub max_steps_per_frame: u32,
@@ -281,6 +285,12 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     geometry: Geometry<T>,
     allowable_tension_n: T,
     envelope: OperatingEnvelope<T>,
+    /// [`ControllerConfig::limits`].
+    limits: LimitMap,
+    /// Altitude (m) and Mach number of the last accepted frame's flown state,
+    /// where the management looks the limits up; Mach NaN when it could not be
+    /// formed (the limits are then unknown).
+    condition: [T; 2],
     /// [`ControllerConfig::trim_units_per_frame`].
     trim_units_per_frame: u32,
     /// [`ControllerConfig::max_steps_per_frame`].
@@ -346,6 +356,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         geometry: Geometry::ZERO,
         allowable_tension_n: T::ZERO,
         envelope: OperatingEnvelope::ZERO,
+        limits: LimitMap::EMPTY,
+        condition: [T::ZERO; 2],
         trim_units_per_frame: 0,
         max_steps_per_frame: 0,
         pending_jump: PendingJump::NONE,
@@ -420,6 +432,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         self.geometry = config.geometry;
         self.allowable_tension_n = allowable_tension_n;
         self.envelope = config.envelope;
+        self.limits = config.limits;
+        self.condition = [T::zero(); 2];
         self.trim_units_per_frame = config.trim_units_per_frame;
         self.max_steps_per_frame = config.max_steps_per_frame.max(1);
         self.pending_jump = PendingJump::NONE;
@@ -753,6 +767,8 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         );
         output.prediction_steps = core::mem::take(&mut self.slice_steps) as u16;
         output.management = self.management_report(now);
+        let [altitude, mach] = self.condition;
+        output.management.limits = self.limits.at(altitude, mach);
         self.last_management = output.management;
         // The slice runs after the answer (the look-ahead's steps, if it has any
         // to fly, and the air columns' prefetch).
@@ -846,7 +862,7 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
             }
             (None, _) => frame,
         };
-        let inside = self.inside_envelope(flown, mach);
+        let (inside, mach) = self.inside_envelope(flown, mach);
         let result = match self.run {
             None => self.initialise(frame, flown),
             Some(run) => self.advance(&run, flown, interval, &saved).map(Some),
@@ -912,6 +928,10 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         }
         output.instructions = solution_instructions;
         output.step_instructions = step_instructions;
+        self.condition = [
+            T::lit(-flown.position_ned_m[2]),
+            mach.unwrap_or(T::lit(f64::NAN)),
+        ];
         Solved::Output(output, measures, aircraft, management)
     }
 
@@ -976,15 +996,17 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         ))
     }
 
-    /// True when the flown frame is inside the operating envelope; `mach` its
-    /// Mach number when validation computed it (streamed), else computed here.
-    fn inside_envelope(&self, flown: &AircraftStateFrame, mach: Option<T>) -> bool {
+    /// True when the flown frame is inside the operating envelope, and its
+    /// Mach number; `mach` its Mach number when validation computed it
+    /// (streamed), else computed here.
+    fn inside_envelope(&self, flown: &AircraftStateFrame, mach: Option<T>) -> (bool, Option<T>) {
         let env = &self.solver.model().params().environment;
         let mach = match mach {
             Some(mach) => Some(mach),
             None => crate::validate::mach_of(flown, &env.atmosphere, &env.wind),
         };
-        mach.is_some_and(|mach| self.envelope.contains(flown, mach, env.gravity))
+        let inside = mach.is_some_and(|mach| self.envelope.contains(flown, mach, env.gravity));
+        (inside, mach)
     }
 
     /// A State frame with no run: starts the trim at it if none is in progress

@@ -12,6 +12,8 @@
 //!   including the physical bounds of every input.
 //! - [`envelope`]: the operating envelope the controller guarantees (frames
 //!   outside it are answered and flagged).
+//! - [`limits`]: the manoeuvre envelope map on board ([`LimitMap`]): the
+//!   limits each Output reports at the aircraft's flight condition.
 //! - [`path`]: [`FramePath`], the flight path between two State frames.
 //! - [`geometry`]: the flight-path frame and the clearances to the exhaust plume
 //!   and the aircraft (the host's `decoy simulate` uses the same code).
@@ -38,6 +40,7 @@ mod builtin;
 pub mod controller;
 pub mod envelope;
 pub mod geometry;
+pub mod limits;
 pub mod lookahead;
 pub mod monitor;
 pub mod params;
@@ -57,6 +60,9 @@ pub use controller::{
 pub use decoy_schema::{PerRequirement, Requirement};
 pub use envelope::{EnvelopeParams, OperatingEnvelope};
 pub use geometry::{Envelope, ExhaustPlume, FlightPathFrame, Geometry};
+pub use limits::{
+    LIMIT_AXIS_CAPACITY, LIMIT_CELL_CAPACITY, LimitGrid, LimitGridError, LimitMap, Limiting,
+};
 pub use lookahead::{HeldManoeuvre, Lookahead, Prediction};
 pub use monitor::{ManagementConfig, ManagementParams, Measures, Monitors, Thresholds};
 pub use params::{AeroRows, SystemParams};

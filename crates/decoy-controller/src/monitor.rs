@@ -753,6 +753,7 @@ impl<T: Real> Monitors<T> {
             advisories: 0,
             prediction_from_s: -1.0,
             prediction_horizon_s: 0.0,
+            limits: decoy_link::Limits::UNKNOWN,
         }
     }
 }

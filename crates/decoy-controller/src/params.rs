@@ -22,6 +22,7 @@ use solver_core::{
 use crate::controller::ControllerConfig;
 use crate::envelope::{EnvelopeParams, OperatingEnvelope};
 use crate::geometry::{Envelope, ExhaustPlume, Geometry};
+use crate::limits::LimitMap;
 use crate::monitor::{ManagementConfig, ManagementParams, usable_angle_of_attack};
 
 /// Rows `[alpha_deg, cl, cd, cm]` of the decoy's aerodynamic table, room for the
@@ -102,6 +103,9 @@ pub struct SystemParams {
     pub management: ManagementParams,
     /// `[envelope]`: the operating envelope the controller guarantees.
     pub envelope: EnvelopeParams,
+    /// `envelope.limits_map`: the manoeuvre envelope map of this configuration
+    /// (its hash checked), or [`LimitMap::EMPTY`] without one.
+    pub limits: LimitMap,
 }
 
 /// A configuration triple as a solver vector in `T`.
@@ -232,6 +236,7 @@ impl SystemParams {
             allowable_tension_n: T::lit(self.allowable_tension),
             management: self.management(),
             envelope: OperatingEnvelope::new(&self.envelope, self.gravity),
+            limits: self.limits,
             trim_units_per_frame: crate::controller::trim_slice_units::<T>(),
             max_steps_per_frame: crate::controller::MAX_STEPS_PER_FRAME,
         })

@@ -366,3 +366,96 @@ fn the_slice_gives_the_same_bits_wherever_it_runs() {
     assert_eq!(rejected, 11);
     assert_eq!(lazy, eager, "background after each answer");
 }
+
+/// Every Output reports the envelope map's limits at its flight condition:
+/// along a level acceleration at 6 km from Mach 0.5 to 0.75, each Output's
+/// limits are the map's lookup at the frame's altitude and Mach number, at a
+/// grid point the map file's cell (to f32), and between two grid Mach numbers
+/// between their cells; the same bits in f32 and f64 up to the precision of
+/// the lookup; a controller without a map reports every limit unknown.
+#[test]
+fn every_output_reports_the_maps_limits_at_its_flight_condition() {
+    let config = SystemConfig::builtin().unwrap();
+    let system = config.params().unwrap();
+    let map = system.limits;
+    assert!(!map.pull_up.is_empty() && !map.turn.is_empty() && !map.acceleration.is_empty());
+    let speed = |mach: f64| config.mach_to_speed(6000.0, mach).unwrap();
+    let path = LevelAcceleration {
+        altitude: 6000.0,
+        initial_speed: speed(0.5),
+        final_speed: speed(0.75),
+        start: 1.0,
+        acceleration: 8.0,
+    };
+    let seconds = 1.0 + (speed(0.75) - speed(0.5)) / 8.0 + 0.5;
+    let outputs = fly_path::<f32, _>(&system, &path, seconds);
+    let outputs64 = fly_path::<f64, _>(&system, &path, seconds);
+    assert!(outputs.len() > 100);
+    let sound = speed(1.0);
+    let mut between = 0;
+    // The f64 trim may take another number of frames: pair the Outputs by time.
+    for o in &outputs {
+        let Some(o64) = outputs64.iter().find(|p| p.time_s == o.time_s) else {
+            continue;
+        };
+        let mach = FlightPath::<f64>::state_at(&path, o.time_s).velocity.norm() / sound;
+        let expected = map.at(6000.0f64, mach);
+        let got = o.management.limits;
+        for (a, b) in [
+            (got.pull_up_radps, expected.pull_up_radps),
+            (got.turn_radps, expected.turn_radps),
+            (got.acceleration_mps2, expected.acceleration_mps2),
+            (o64.management.limits.pull_up_radps, expected.pull_up_radps),
+        ] {
+            assert!(
+                (a - b).abs() <= 2e-5 * b.abs().max(1.0),
+                "t {}: {a} vs {b} at Mach {mach}",
+                o.time_s
+            );
+        }
+        // Halfway between two grid Mach numbers (0.55, 0.65, ...) the nearest
+        // cell is a matter of rounding.
+        let halfway = ((mach * 10.0).fract() - 0.5).abs() < 1e-4;
+        if !halfway {
+            assert_eq!(got.limited_by, expected.limited_by, "t {}", o.time_s);
+        }
+        // The floor: the smallest of the cells weighed, which changes at a
+        // grid line (0.5, 0.6, ...: there a rounding decides the side).
+        let on_line = ((mach * 10.0) - (mach * 10.0).round()).abs() < 1e-4;
+        if !on_line {
+            assert_eq!(got.pull_up_floor_radps, expected.pull_up_floor_radps);
+            assert_eq!(got.turn_floor_radps, expected.turn_floor_radps);
+            assert_eq!(
+                got.acceleration_floor_mps2,
+                expected.acceleration_floor_mps2
+            );
+        }
+        assert!(got.pull_up_floor_radps <= got.pull_up_radps + 1e-6);
+        assert!(got.turn_floor_radps <= got.turn_radps + 1e-6);
+        if (0.52..0.58).contains(&mach) {
+            between += 1;
+            let low = map.pull_up.at(6000.0f64, 0.5f64).unwrap().0 as f32;
+            let high = map.pull_up.at(6000.0f64, f64::from(0.6f32)).unwrap().0 as f32;
+            let v = got.pull_up_radps;
+            assert!(v >= low.min(high) - 1e-6 && v <= low.max(high) + 1e-6);
+        }
+    }
+    assert!(between > 10, "{between} frames between Mach 0.52 and 0.58");
+    // At the start, Mach 0.5 at 6 km: the file's cell.
+    let file =
+        decoy_config::LimitsFile::parse("built-in", decoy_config::BUILTIN_LIMITS_TOML).unwrap();
+    let pull_up = file.pull_up.unwrap();
+    let i = pull_up
+        .altitudes_m
+        .iter()
+        .position(|&h| h == 6000.0)
+        .unwrap();
+    let j = pull_up.machs.iter().position(|&m| m == 0.5).unwrap();
+    let cell = pull_up.limits[i][j] as f32;
+    assert!((outputs[0].management.limits.pull_up_radps - cell).abs() < 1e-4);
+
+    let mut unmapped = system;
+    unmapped.limits = decoy_controller::LimitMap::EMPTY;
+    let o = &fly_path::<f32, _>(&unmapped, &path, 0.5)[0];
+    assert_eq!(o.management.limits, decoy_link::Limits::UNKNOWN);
+}

@@ -14,7 +14,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 /// The most encoded bytes between two delimiters.
-pub const MAX_FRAME_BYTES: usize = 256;
+pub const MAX_FRAME_BYTES: usize = 320;
 /// Bytes of the CRC trailer.
 pub const CRC_BYTES: usize = 4;
 /// The most payload (postcard) bytes a frame can carry: COBS adds at least one

@@ -46,7 +46,8 @@ pub use framing::{
 };
 pub use messages::{
     Advisories, AircraftStateFrame, BOARD_NAME_CAPACITY, BoardInfo, BoardName, Command, Counters,
-    DeviceMessage, Hello, HostMessage, Management, MonitorLevel, MonitorReport, OutputFrame,
-    PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
+    DeviceMessage, Hello, HostMessage, Limits, Management, MonitorLevel, MonitorReport,
+    OutputFrame, PROTOCOL_VERSION, Profile, RejectReason, Rejected, StatusFlags, StatusFrame,
+    limited_by,
 };
 pub use profile::BuiltinProfile;

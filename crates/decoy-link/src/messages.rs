@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 pub use crate::profile::{BuiltinProfile, Profile};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 6;
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -227,6 +227,73 @@ pub struct Management {
     pub prediction_from_s: f64,
     /// Horizon of the last completed look-ahead, s (0 before the first).
     pub prediction_horizon_s: f32,
+    /// The manoeuvre limits the controller's map gives at this frame's flight
+    /// condition (docs/protocol.md §3, "Limits").
+    pub limits: Limits,
+}
+
+/// What limits a manoeuvre at the flight condition ([`Limits::limited_by`]).
+pub mod limited_by {
+    /// No limit known: the flight condition is outside the map's grid, or the
+    /// controller has no map of that manoeuvre.
+    pub const UNKNOWN: u8 = 0;
+    /// A requirement: this code plus the requirement's index in
+    /// `Requirement::ALL` (1 posture, 2 collision, 3 tension, 4 exhaust).
+    pub const REQUIREMENT: u8 = 1;
+    /// A bound of the declared operating envelope (load factor, body rate or
+    /// along-path acceleration) caps the manoeuvre before any requirement.
+    pub const BOUND: u8 = 0x80;
+}
+
+/// The largest manoeuvres the controller's envelope map allows at the frame's
+/// altitude and Mach number: what the mission computer can cue before a
+/// manoeuvre starts. Each interpolated bilinearly between the map's cells
+/// around the flight condition, and the floor: the smallest of those cells,
+/// the value to cue against where a limit must not be exceeded (between cells
+/// the interpolation is not conservative: docs/envelope.md, "On board"). A
+/// limit is -1 where it is not known (its code [`limited_by::UNKNOWN`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Limits {
+    /// The largest clear pull-up rate (flight-path rotation up), rad/s.
+    pub pull_up_radps: f32,
+    /// The largest clear level-turn rate, rad/s.
+    pub turn_radps: f32,
+    /// The largest clear along-path acceleration, m/s².
+    pub acceleration_mps2: f32,
+    /// The pull-up's floor: the smallest limit of the map's cells around the
+    /// flight condition, rad/s.
+    pub pull_up_floor_radps: f32,
+    /// The turn's floor, rad/s.
+    pub turn_floor_radps: f32,
+    /// The acceleration's floor, m/s².
+    pub acceleration_floor_mps2: f32,
+    /// What limits each (pull-up, turn, acceleration) at the nearest cell of
+    /// the map: a [`limited_by`] code.
+    pub limited_by: [u8; 3],
+}
+
+impl Limits {
+    /// Every value zero: the controller's report before it is configured.
+    pub const ZERO: Self = Limits {
+        pull_up_radps: 0.0,
+        turn_radps: 0.0,
+        acceleration_mps2: 0.0,
+        pull_up_floor_radps: 0.0,
+        turn_floor_radps: 0.0,
+        acceleration_floor_mps2: 0.0,
+        limited_by: [0; 3],
+    };
+
+    /// No limit known.
+    pub const UNKNOWN: Self = Limits {
+        pull_up_radps: -1.0,
+        turn_radps: -1.0,
+        acceleration_mps2: -1.0,
+        pull_up_floor_radps: -1.0,
+        turn_floor_radps: -1.0,
+        acceleration_floor_mps2: -1.0,
+        limited_by: [limited_by::UNKNOWN; 3],
+    };
 }
 
 impl Management {
@@ -246,6 +313,7 @@ impl Management {
         advisories: 0,
         prediction_from_s: 0.0,
         prediction_horizon_s: 0.0,
+        limits: Limits::ZERO,
     };
 
     /// The highest level of the reports.

@@ -4,8 +4,9 @@
 use decoy_link::framing::{CRC_BYTES, MAX_PAYLOAD_BYTES};
 use decoy_link::{
     AircraftStateFrame, BoardName, Command, Counters, DeviceMessage, FrameDecoder, FrameError,
-    Hello, HostMessage, MAX_FRAME_BYTES, MAX_WIRE_BYTES, Management, MonitorLevel, MonitorReport,
-    OutputFrame, PerRequirement, Profile, RejectReason, Rejected, StatusFrame, crc32, encode,
+    Hello, HostMessage, Limits, MAX_FRAME_BYTES, MAX_WIRE_BYTES, Management, MonitorLevel,
+    MonitorReport, OutputFrame, PerRequirement, Profile, RejectReason, Rejected, StatusFrame,
+    crc32, encode,
 };
 use decoy_schema::Manoeuvre;
 
@@ -127,6 +128,8 @@ fn management(r: &mut Rng) -> Management {
         advisories: r.byte(),
         prediction_from_s: r.f64(),
         prediction_horizon_s: r.f32(),
+        // Protocol 7's limits, drawing nothing (the other fields' draws as before).
+        limits: Limits::ZERO,
     }
 }
 
@@ -418,7 +421,7 @@ fn encode_reports_a_short_buffer() {
 }
 
 /// The example of docs/protocol.md and firmware/README.md, byte for byte: the
-/// ping and its answer (protocol version 6).
+/// ping and its answer (protocol version 7).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
@@ -432,7 +435,7 @@ fn the_documented_ping_frame() {
     };
     assert_eq!(
         wire(&pong),
-        [0x00, 0x08, 0x03, 0x07, 0x06, 0xb9, 0x54, 0x25, 0x5b, 0x00]
+        [0x00, 0x08, 0x03, 0x07, 0x07, 0x2f, 0x64, 0x22, 0x2c, 0x00]
     );
 }
 
@@ -472,6 +475,15 @@ fn the_largest_output_frame_fits() {
             advisories: u8::MAX,
             prediction_from_s: f64::MAX,
             prediction_horizon_s: f32::MAX,
+            limits: Limits {
+                pull_up_radps: f32::MAX,
+                turn_radps: f32::MAX,
+                acceleration_mps2: f32::MAX,
+                pull_up_floor_radps: f32::MAX,
+                turn_floor_radps: f32::MAX,
+                acceleration_floor_mps2: f32::MAX,
+                limited_by: [u8::MAX; 3],
+            },
         },
     });
     let mut payload = [0u8; 1024];
@@ -490,20 +502,30 @@ fn the_largest_output_frame_fits() {
 /// CRC-32 of the whole stream, and one `Management` byte for byte, recorded
 /// then), so that gathering them into `decoy_schema::PerRequirement` moved no
 /// byte: postcard writes a struct as its fields one after the other, nested or
-/// not.
+/// not. Protocol 7 appends the limits to `Management`, the last field of an
+/// Output: each payload is version 6's then the limits' 27 bytes (zero here),
+/// checked by framing the payloads without them.
 #[test]
 fn output_frames_encode_as_they_did_with_four_named_reports() {
     let mut r = Rng(0x0123_4567);
     let mut stream = Vec::new();
+    let mut version6 = Vec::new();
     let mut outputs = 0;
     while outputs < 400 {
         let message = device_message(&mut r);
         if let DeviceMessage::Output(_) = message {
             stream.extend(wire(&message));
+            let payload = postcard::to_allocvec(&message).unwrap();
+            let (before, limits) = payload.split_at(payload.len() - 27);
+            assert_eq!(limits, [0u8; 27]);
+            let mut raw = before.to_vec();
+            raw.extend_from_slice(&crc32(before).to_le_bytes());
+            version6.extend(raw_frame(&raw));
             outputs += 1;
         }
     }
-    assert_eq!((stream.len(), crc32(&stream)), (91_300, 0xe505_e62c));
+    assert_eq!((version6.len(), crc32(&version6)), (91_300, 0xe505_e62c));
+    assert_eq!((stream.len(), crc32(&stream)), (102_100, 0x9680_847d));
 
     let levels = [
         MonitorLevel::Normal,
@@ -526,13 +548,23 @@ fn output_frames_encode_as_they_did_with_four_named_reports() {
         advisories: 0b1010,
         prediction_from_s: 2.5,
         prediction_horizon_s: 3.0,
+        limits: Limits {
+            pull_up_radps: 0.125,
+            turn_radps: -1.0,
+            acceleration_mps2: 9.5,
+            pull_up_floor_radps: 0.125,
+            turn_floor_radps: -1.0,
+            acceleration_floor_mps2: 9.5,
+            limited_by: [4, 0, 0x80],
+        },
     };
     let mut buf = [0u8; 256];
     let bytes = postcard::to_slice(&management, &mut buf).unwrap();
     // Per report: level (varint), margin, worst margin (f32 LE), the three
     // counts (varints), predicted worst margin, time to violation (f32 LE);
     // posture, collision, tension, exhaust; then advisories, the prediction's
-    // start (f64 LE) and horizon (f32 LE).
+    // start (f64 LE) and horizon (f32 LE); from protocol 7 the limits (three
+    // f32 LE, the three floors, then the three codes).
     let golden = "00\
         0000803f000000c00a141e0000003f000080bf\
         01\
@@ -543,7 +575,10 @@ fn output_frames_encode_as_they_did_with_four_named_reports() {
         00008040000000c00d17210000003f000080bf\
         0a\
         0000000000000440\
-        00004040";
+        00004040\
+        0000003e000080bf00001841\
+        0000003e000080bf00001841\
+        040080";
     let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
     assert_eq!(hex, golden);
     assert_eq!(

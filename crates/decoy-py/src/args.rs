@@ -18,15 +18,31 @@ const CONFIG_DICT: &str = "config dict";
 /// The system configuration: `None` the built-in reference system, a path a
 /// TOML file (as `--config`), a dict that file's tables.
 pub(crate) fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemConfig> {
+    load(config, true)
+}
+
+/// [`load_config`] without the envelope map on board, for the envelope map,
+/// which makes it (as `decoy envelope`: a stale map must not stop it).
+pub(crate) fn load_config_unmapped(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemConfig> {
+    load(config, false)
+}
+
+fn load(config: Option<&Bound<'_, PyAny>>, mapped: bool) -> PyResult<SystemConfig> {
     let loaded = match config {
-        None => SystemConfig::builtin(),
+        None if mapped => SystemConfig::builtin(),
+        None => SystemConfig::builtin_unmapped(),
         Some(c) if c.cast::<PyMapping>().is_ok() => {
             let text = convert::toml_text(c, CONFIG_DICT)?;
             let dir = std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
-            SystemConfig::from_text_in(CONFIG_DICT, &text, &dir)
+            if mapped {
+                SystemConfig::from_text_in(CONFIG_DICT, &text, &dir)
+            } else {
+                SystemConfig::from_text_in_unmapped(CONFIG_DICT, &text, &dir)
+            }
         }
         Some(c) => match c.extract::<PathBuf>() {
-            Ok(path) => SystemConfig::from_file(path),
+            Ok(path) if mapped => SystemConfig::from_file(path),
+            Ok(path) => SystemConfig::from_file_unmapped(path),
             Err(_) => {
                 return Err(PyTypeError::new_err(format!(
                     "config: expected None, a path or a dict, got a {}",

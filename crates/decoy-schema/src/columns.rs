@@ -92,6 +92,18 @@ pub enum Quantity {
     Advisories,
     /// The look-ahead's predicted time to a requirement's violation, s.
     ViolationIn(Requirement),
+    /// The envelope map's largest clear pull-up rate at the flight condition, rad/s.
+    LimitPullUp,
+    /// The envelope map's largest clear turn rate at the flight condition, rad/s.
+    LimitTurn,
+    /// The envelope map's largest clear along-path acceleration there, m/s².
+    LimitAcceleration,
+    /// The floor of the pull-up's limit (the smallest of the cells around), rad/s.
+    LimitFloorPullUp,
+    /// The floor of the turn's limit, rad/s.
+    LimitFloorTurn,
+    /// The floor of the acceleration's limit, m/s².
+    LimitFloorAcceleration,
     /// A joint's index (cable snapshots).
     Joint,
     /// A joint's distance along the cable from the connection point, m.
@@ -164,6 +176,12 @@ impl Quantity {
             Quantity::Margin(_) => "margin",
             Quantity::Advisories => "advisories",
             Quantity::ViolationIn(_) => "violation_in",
+            Quantity::LimitPullUp => "limit_pull_up",
+            Quantity::LimitTurn => "limit_turn",
+            Quantity::LimitAcceleration => "limit_acceleration",
+            Quantity::LimitFloorPullUp => "limit_floor_pull_up",
+            Quantity::LimitFloorTurn => "limit_floor_turn",
+            Quantity::LimitFloorAcceleration => "limit_floor_acceleration",
             Quantity::Joint => "joint",
             Quantity::Along => "along",
             Quantity::Behind => "behind",
@@ -601,7 +619,47 @@ const OUTPUT_FRAME: [Column; 11] = join(&[
     ],
 ]);
 
-const HIL_TIMESERIES_COLUMNS: [Column; 26 + 3 * REQUIREMENT_COUNT + 1] = join(&[
+/// The envelope map's limits an Output reports (docs/protocol.md, "Limits").
+const LIMITS: [Column; 6] = [
+    Column::new(
+        Quantity::LimitPullUp,
+        "limit_pull_up_radps",
+        "rad/s",
+        "the controller's envelope map: the largest clear pull-up rate at the frame's altitude and Mach number (interpolated; -1 where not known)",
+    ),
+    Column::new(
+        Quantity::LimitTurn,
+        "limit_turn_radps",
+        "rad/s",
+        "the controller's envelope map: the largest clear level-turn rate there (-1 where not known)",
+    ),
+    Column::new(
+        Quantity::LimitAcceleration,
+        "limit_acceleration_mps2",
+        "m/s²",
+        "the controller's envelope map: the largest clear along-path acceleration there (-1 where not known)",
+    ),
+    Column::new(
+        Quantity::LimitFloorPullUp,
+        "limit_floor_pull_up_radps",
+        "rad/s",
+        "the floor of the pull-up's limit: the smallest of the map's cells around the flight condition, the value to cue against (-1 where not known)",
+    ),
+    Column::new(
+        Quantity::LimitFloorTurn,
+        "limit_floor_turn_radps",
+        "rad/s",
+        "the floor of the turn's limit (-1 where not known)",
+    ),
+    Column::new(
+        Quantity::LimitFloorAcceleration,
+        "limit_floor_acceleration_mps2",
+        "m/s²",
+        "the floor of the acceleration's limit (-1 where not known)",
+    ),
+];
+
+const HIL_TIMESERIES_COLUMNS: [Column; 26 + 3 * REQUIREMENT_COUNT + 1 + 6] = join(&[
     &[TIME.described("frame time"), SEQ],
     &OUTPUT_FRAME,
     &[
@@ -662,6 +720,7 @@ const HIL_TIMESERIES_COLUMNS: [Column; 26 + 3 * REQUIREMENT_COUNT + 1] = join(&[
     &LEVELS_AND_MARGINS,
     &[ADVISORIES],
     &VIOLATIONS_IN,
+    &LIMITS,
 ]);
 
 /// `decoy hil`'s and `decoy feed`'s `timeseries.csv`: one row per output frame
@@ -955,7 +1014,7 @@ mod tests {
         );
         assert_eq!(
             HIL_TIMESERIES.header().to_string(),
-            "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N,prediction_steps,management_instructions,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories,posture_violation_in_s,collision_violation_in_s,tension_violation_in_s,exhaust_violation_in_s"
+            "t_s,seq,tension_connection_N,tension_tow_N,decoy_cg_behind_m,decoy_cg_lateral_m,decoy_cg_below_m,decoy_roll_deg,decoy_pitch_deg,decoy_yaw_deg,decoy_aoa_deg,cable_exhaust_clearance_m,decoy_aircraft_clearance_m,aircraft_speed_mps,aircraft_altitude_m,flags,rk4_steps,instructions,host_tension_connection_N,host_tension_tow_N,host_decoy_pitch_deg,host_decoy_aoa_deg,tension_connection_diff_N,tension_tow_diff_N,prediction_steps,management_instructions,posture_level,posture_margin_deg,collision_level,collision_margin_m,tension_level,tension_margin_N,exhaust_level,exhaust_margin_m,advisories,posture_violation_in_s,collision_violation_in_s,tension_violation_in_s,exhaust_violation_in_s,limit_pull_up_radps,limit_turn_radps,limit_acceleration_mps2,limit_floor_pull_up_radps,limit_floor_turn_radps,limit_floor_acceleration_mps2"
         );
         assert_eq!(
             CLIENT_TIMESERIES.header().to_string(),

@@ -82,6 +82,20 @@ pub fn timeseries_cell(
         Quantity::ManagementInstructions => {
             Cell::Count(u64::from(controller.management_instructions))
         }
+        Quantity::LimitPullUp => Cell::Value(f64::from(controller.management.limits.pull_up_radps)),
+        Quantity::LimitTurn => Cell::Value(f64::from(controller.management.limits.turn_radps)),
+        Quantity::LimitAcceleration => {
+            Cell::Value(f64::from(controller.management.limits.acceleration_mps2))
+        }
+        Quantity::LimitFloorPullUp => {
+            Cell::Value(f64::from(controller.management.limits.pull_up_floor_radps))
+        }
+        Quantity::LimitFloorTurn => {
+            Cell::Value(f64::from(controller.management.limits.turn_floor_radps))
+        }
+        Quantity::LimitFloorAcceleration => Cell::Value(f64::from(
+            controller.management.limits.acceleration_floor_mps2,
+        )),
         // The closest point along the cable is not in the controller's Output.
         Quantity::CableExhaustClosestAlong => return None,
         other => return sample.cell(other),

@@ -944,6 +944,31 @@ pub fn pending_cells(plan: &EnvelopePlan, dir: &Path) -> Result<Vec<usize>, SimE
     Ok(pending)
 }
 
+/// Every cell of `plan`'s map in `dir`, in grid order; a cell missing is an
+/// error that says how to finish the map.
+pub(crate) fn read_map_cells(plan: &EnvelopePlan, dir: &Path) -> Result<Vec<Cell>, SimError> {
+    let conditions = plan.spec.conditions();
+    let mut cells = Vec::with_capacity(conditions.len());
+    let mut missing = 0;
+    for condition in conditions {
+        match read_cell(&cell_path(dir, condition))? {
+            Some(cell) => cells.push(cell),
+            None => missing += 1,
+        }
+    }
+    if missing > 0 {
+        return Err(SimError::invalid(
+            dir.display().to_string(),
+            "cells",
+            format!(
+                "{missing} of {} cells are not mapped yet: finish the map by running the same `decoy envelope` into it again (it resumes)",
+                cells.len() + missing
+            ),
+        ));
+    }
+    Ok(cells)
+}
+
 /// Writes `cell`, cell `index` of `plan` mapped elsewhere ([`map_cell`]),
 /// atomically into `dir` (prepared by [`pending_cells`]), where
 /// [`map_envelope`] takes it; a cell not of that index's condition is an

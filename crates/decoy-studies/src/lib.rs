@@ -12,13 +12,15 @@
 //!   embedded model (`decoy study discretisation`).
 //! - [`envelope`]: the manoeuvre envelope map over altitude x Mach (`decoy
 //!   envelope`).
+//! - [`onboard`]: the envelope map on board, the file the controller carries,
+//!   written from maps (`decoy limits-table`).
 //! - [`report`]: `docs/paper-reproduction.md`, every claim of the paper against
 //!   what the project computes (`decoy report`; outputs in `docs/sweeps.md`).
 //!
 //! ## Layering
 //!
 //! Each module uses only modules on the lines above its own, so the module graph
-//! has no cycle: `envelope` (on decoy-sim alone), `sweep` (`mod.rs`: ranges and table/plot helpers; then
+//! has no cycle: `envelope` (on decoy-sim alone), `onboard` (on `envelope`), `sweep` (`mod.rs`: ranges and table/plot helpers; then
 //! `steady`, `settling`, `pull_up`, `static_margin`), then `study`, then
 //! `report` (`spec.rs`: what it flies, its options, claims and verdicts; `data`, `claims`,
 //! `figures`, `render`; `mod.rs`: the entry point). Errors are decoy-sim's
@@ -27,6 +29,7 @@
 #![deny(missing_docs)]
 
 pub mod envelope;
+pub mod onboard;
 pub mod report;
 pub mod study;
 pub mod sweep;

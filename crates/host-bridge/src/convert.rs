@@ -8,8 +8,8 @@ use bridge_types::{
     kind, profile, reason,
 };
 use decoy_link::{
-    AircraftStateFrame, Command, Management, MonitorLevel, MonitorReport as LinkMonitorReport,
-    OutputFrame, Profile, RejectReason, StatusFlags,
+    AircraftStateFrame, Command, Limits, Management, MonitorLevel,
+    MonitorReport as LinkMonitorReport, OutputFrame, Profile, RejectReason, StatusFlags,
 };
 
 /// The link's State frame carrying `state` (its `header.seq` as the frame's seq).
@@ -79,6 +79,14 @@ pub fn output_from_link(out: &OutputFrame) -> Output {
         prediction_steps: out.prediction_steps,
         advisories: out.management.advisories,
         reserved: 0,
+        limit_pull_up_radps: out.management.limits.pull_up_radps,
+        limit_turn_radps: out.management.limits.turn_radps,
+        limit_acceleration_mps2: out.management.limits.acceleration_mps2,
+        floor_pull_up_radps: out.management.limits.pull_up_floor_radps,
+        floor_turn_radps: out.management.limits.turn_floor_radps,
+        floor_acceleration_mps2: out.management.limits.acceleration_floor_mps2,
+        limited_by: out.management.limits.limited_by,
+        reserved_limits: [0; 5],
         // The reports, one field per requirement, below.
         ..Output::default()
     };
@@ -145,6 +153,15 @@ pub fn output_to_link(out: &Output) -> OutputFrame {
             advisories: out.advisories,
             prediction_from_s: out.prediction_from_s,
             prediction_horizon_s: out.prediction_horizon_s,
+            limits: Limits {
+                pull_up_radps: out.limit_pull_up_radps,
+                turn_radps: out.limit_turn_radps,
+                acceleration_mps2: out.limit_acceleration_mps2,
+                pull_up_floor_radps: out.floor_pull_up_radps,
+                turn_floor_radps: out.floor_turn_radps,
+                acceleration_floor_mps2: out.floor_acceleration_mps2,
+                limited_by: out.limited_by,
+            },
         },
     }
 }
@@ -331,6 +348,15 @@ mod tests {
                 advisories: 8,
                 prediction_from_s: 0.25,
                 prediction_horizon_s: 3.0,
+                limits: Limits {
+                    pull_up_radps: 0.15,
+                    turn_radps: 0.1,
+                    acceleration_mps2: -1.0,
+                    pull_up_floor_radps: 0.12,
+                    turn_floor_radps: 0.09,
+                    acceleration_floor_mps2: -1.0,
+                    limited_by: [4, 128, 0],
+                },
             },
         };
         let out = output_from_link(&frame);

@@ -20,7 +20,7 @@
 //!
 //! Every payload is the wire type's bytes exactly as in shared memory
 //! ([`Wire`]), with the type's tag (type name and size,
-//! `decoy.bridge.v3.Answer/240`) as the attachment; both sides check it and a
+//! `decoy.bridge.v4.Answer/272`) as the attachment; both sides check it and a
 //! mismatch is a typed error ([`BridgeError::Protocol`]), as iceoryx2 refuses
 //! a port of another type. A query the bridge cannot answer gets one error
 //! reply saying why.

@@ -38,7 +38,7 @@ key expression              Zenoh                                payload
 
 Every payload is the wire structure's bytes exactly as in shared memory
 (``bytes(structure)``), with its tag as the attachment: the type name and size,
-UTF-8, ``decoy.bridge.v3.AircraftState/104`` (:func:`wire_tag`). Both sides check
+UTF-8, ``decoy.bridge.v4.AircraftState/104`` (:func:`wire_tag`). Both sides check
 it: a reply or sample of another tag or size is a :class:`VersionMismatch`, and the
 bridge answers a query of another tag by an error reply (which this client raises
 as :class:`VersionMismatch` too). The client's session is a Zenoh *client* that
@@ -129,7 +129,7 @@ _INSTANCE = re.compile(r"[A-Za-z0-9_-]{1,32}")
 
 def wire_tag(cls: type) -> str:
     """The tag of wire type ``cls`` carried beside every payload over Zenoh: its
-    type name and size, ``decoy.bridge.v3.AircraftState/104`` (the Rust
+    type name and size, ``decoy.bridge.v4.AircraftState/104`` (the Rust
     ``Wire::tag``)."""
     return f"{cls.type_name()}/{ctypes.sizeof(cls)}"  # type: ignore[attr-defined]
 

@@ -15,7 +15,7 @@ opens, so a reordered field would pass it silently: the field-by-field check her
 is what guards against that.
 
 Every structure has a static ``type_name()`` returning the Rust type's iceoryx2
-name (``decoy.bridge.v3.AircraftState``), which the iceoryx2 Python package uses
+name (``decoy.bridge.v4.AircraftState``), which the iceoryx2 Python package uses
 when it opens a service.
 
 The same description lists the decoy management's requirements in wire order
