@@ -959,9 +959,9 @@ pub(crate) fn read_map_cells(plan: &EnvelopePlan, dir: &Path) -> Result<Vec<Cell
     if missing > 0 {
         return Err(SimError::invalid(
             dir.display().to_string(),
-            "cells",
+            "map",
             format!(
-                "{missing} of {} cells are not mapped yet: finish the map by running the same `decoy envelope` into it again (it resumes)",
+                "is not complete: {missing} of {} cells are not mapped yet (finish it by running the same `decoy envelope` into it again: it resumes)",
                 cells.len() + missing
             ),
         ));

@@ -142,10 +142,17 @@ fn grid(spec: &EnvelopeSpec, cells: &[Cell]) -> LimitsGrid {
 /// error that says how to finish it.
 fn read_map(dir: &Path) -> Result<(EnvelopePlan, Vec<Cell>), SimError> {
     let path = dir.join("inputs.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| SimError::Io {
-        action: "read",
-        path: path.clone(),
-        source,
+    let text = std::fs::read_to_string(&path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => SimError::invalid(
+            dir.display().to_string(),
+            "map",
+            "is not an output directory of `decoy envelope` (it has no inputs.json)",
+        ),
+        _ => SimError::Io {
+            action: "read",
+            path: path.clone(),
+            source,
+        },
     })?;
     let plan = EnvelopePlan::from_json(&text)?;
     let cells = read_map_cells(&plan, dir)?;
@@ -247,6 +254,11 @@ mod tests {
         map(&config, Manoeuvre::Turn, &partial, false);
         let e = message(&[partial]);
         assert!(e.contains("1 of 4 cells are not mapped yet"), "{e}");
+        let e = message(&[root.join("nowhere")]);
+        assert!(
+            e.contains("not an output directory of `decoy envelope`"),
+            "{e}"
+        );
         let mut heavier = config.clone();
         heavier.decoy.mass = 4.5;
         let other = root.join("other");
