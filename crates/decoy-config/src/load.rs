@@ -108,15 +108,7 @@ impl SystemConfig {
     /// overlay on the built-in reference system from any directory. Validated
     /// as a file is, with the same errors.
     pub fn from_text_in(name: &str, toml_text: &str, dir: &Path) -> Result<Self, ConfigError> {
-        load(
-            File {
-                name: name.to_owned(),
-                identity: name.to_owned(),
-                place: Place::Given(dir.to_owned()),
-                text: toml_text.to_owned(),
-            },
-            MapPolicy::Check,
-        )
+        load(File::given(name, toml_text, dir), MapPolicy::Check)
     }
 
     /// [`SystemConfig::from_text_in`] without the envelope map on board (see
@@ -126,15 +118,7 @@ impl SystemConfig {
         toml_text: &str,
         dir: &Path,
     ) -> Result<Self, ConfigError> {
-        load(
-            File {
-                name: name.to_owned(),
-                identity: name.to_owned(),
-                place: Place::Given(dir.to_owned()),
-                text: toml_text.to_owned(),
-            },
-            MapPolicy::Skip,
-        )
+        load(File::given(name, toml_text, dir), MapPolicy::Skip)
     }
 }
 
@@ -169,6 +153,17 @@ struct File {
 }
 
 impl File {
+    /// The text of a file that is not on disk, named `name`, whose names
+    /// resolve in `dir` (else among the built-in files).
+    fn given(name: &str, text: &str, dir: &Path) -> File {
+        File {
+            name: name.to_owned(),
+            identity: name.to_owned(),
+            place: Place::Given(dir.to_owned()),
+            text: text.to_owned(),
+        }
+    }
+
     /// The file `relative` names from this one (its `base` or its aerodynamic
     /// table), or why it cannot be had.
     fn open(&self, field: &str, relative: &str) -> Result<File, ConfigError> {

@@ -548,9 +548,9 @@ fn malformed_frames_are_rejected_and_the_state_is_kept(board: Board) {
     );
     p.valid(2);
 
-    // Oversize: 300 bytes without a delimiter.
+    // Oversize: more bytes than a frame may have without a delimiter.
     let mut oversize = vec![0x00];
-    oversize.extend(std::iter::repeat_n(0x42, 300));
+    oversize.extend(std::iter::repeat_n(0x42, decoy_link::MAX_FRAME_BYTES + 44));
     oversize.push(0x00);
     p.malformed(&oversize, RejectReason::Oversize, 1);
     p.valid(1);
