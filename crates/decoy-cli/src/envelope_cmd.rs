@@ -104,7 +104,7 @@ pub struct EnvelopeArgs {
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     onset: Option<f64>,
     /// The acceleration's gain in Mach number from each cell's (default 0.1;
-    /// to the envelope's upper Mach at most).
+    /// to the envelope's largest Mach at the cell's altitude at most).
     #[arg(long, value_name = "DM", allow_negative_numbers = true)]
     mach_gain: Option<f64>,
     /// Bisection tolerance: rad/s on a rate (default 0.005), m/s^2 on the

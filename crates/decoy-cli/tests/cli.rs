@@ -1497,6 +1497,7 @@ fn envelope_maps_resumes_and_checks() {
                 "cap",
                 "clear_runs",
                 "false_advisories",
+                "inside_envelope",
                 "limit",
                 "limiting_requirement",
                 "mach",
@@ -1506,6 +1507,7 @@ fn envelope_maps_resumes_and_checks() {
                 "steady_margins"
             ])
         );
+        assert_eq!(cell["inside_envelope"], true, "9 km is inside");
         assert!(num(cell, "limit") > 0.0 && num(cell, "limit") <= num(cell, "cap"));
         assert_eq!(
             keys(&cell["steady_margins"]),

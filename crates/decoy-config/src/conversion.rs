@@ -22,6 +22,7 @@ impl EnvelopeSection {
             load_factor: self.load_factor,
             max_body_rate_radps: self.max_body_rate_radps,
             max_along_path_acceleration_mps2: self.max_along_path_acceleration_mps2,
+            max_dynamic_pressure_pa: self.max_dynamic_pressure_pa,
         }
     }
 }
@@ -147,6 +148,27 @@ impl SystemConfig {
             gamma: T::lit(env.gamma),
             gravity: T::lit(env.gravity),
         }
+    }
+
+    /// The largest Mach number of the declared envelope at `altitude` (m): the
+    /// Mach range's upper end, or lower where the dynamic-pressure bound binds
+    /// first ([`decoy_controller::EnvelopeParams::max_mach_at`]); `None`
+    /// outside the atmosphere.
+    pub fn max_mach_at(&self, altitude: f64) -> Option<f64> {
+        self.envelope
+            .params()
+            .max_mach_at(altitude, &self.atmosphere(), self.environment.gamma)
+    }
+
+    /// The dynamic pressure of Mach `mach` at `altitude` (m), Pa; `None`
+    /// outside the atmosphere.
+    pub fn dynamic_pressure(&self, altitude: f64, mach: f64) -> Option<f64> {
+        decoy_controller::EnvelopeParams::dynamic_pressure(
+            mach,
+            altitude,
+            &self.atmosphere(),
+            self.environment.gamma,
+        )
     }
 
     /// The host model's layout: `solver.segments_host` uniform segments.

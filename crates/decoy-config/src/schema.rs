@@ -216,6 +216,9 @@ pub struct EnvelopeSection {
     pub max_body_rate_radps: f64,
     /// Largest |acceleration along the velocity|, m/s^2.
     pub max_along_path_acceleration_mps2: f64,
+    /// Largest dynamic pressure of the aircraft's airspeed, Pa (cuts the low,
+    /// fast corner of the altitude and Mach ranges).
+    pub max_dynamic_pressure_pa: f64,
     /// The manoeuvre envelope map on board: a file written by `decoy
     /// limits-table`, relative to the file that names it, checked against the
     /// configuration's hash. An overlay does not inherit its base's (it is
@@ -234,6 +237,7 @@ impl Default for EnvelopeSection {
             load_factor: e.load_factor,
             max_body_rate_radps: e.max_body_rate_radps,
             max_along_path_acceleration_mps2: e.max_along_path_acceleration_mps2,
+            max_dynamic_pressure_pa: e.max_dynamic_pressure_pa,
             limits_map: None,
         }
     }

@@ -507,6 +507,33 @@ fn negative_mass_is_invalid() {
     );
 }
 
+/// The envelope's dynamic-pressure bound: negative, zero, NaN and missing are
+/// refused naming the field; the reference's gives Mach 0.805 at sea level
+/// and the Mach range's 0.95 from 2.7 km.
+#[test]
+fn the_dynamic_pressure_bound_is_checked_and_cuts_the_low_fast_corner() {
+    for bad in ["-1.0", "0.0", "nan", "1e9"] {
+        let toml = with(
+            "max_dynamic_pressure_pa = 46000.0",
+            &format!("max_dynamic_pressure_pa = {bad}"),
+        );
+        let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+        assert!(
+            matches!(&err, ConfigError::Invalid { field, .. } if field == "envelope.max_dynamic_pressure_pa"),
+            "{bad}: {err:?}"
+        );
+    }
+    let toml = with("max_dynamic_pressure_pa = 46000.0\n", "");
+    let err = SystemConfig::from_str(&toml, BUILTIN_AERO_CSV).unwrap_err();
+    assert!(err.to_string().contains("max_dynamic_pressure_pa"), "{err}");
+    let config = SystemConfig::builtin().unwrap();
+    let sea_level = config.max_mach_at(0.0).unwrap();
+    assert!((sea_level - 0.8053).abs() < 1e-4, "{sea_level}");
+    assert_eq!(config.max_mach_at(2_800.0), Some(0.95));
+    let q = config.dynamic_pressure(0.0, sea_level).unwrap();
+    assert!((q - 46_000.0).abs() < 1e-6, "{q}");
+}
+
 #[test]
 fn non_finite_and_unsupported_values_are_rejected() {
     let toml = with("length = 100.0 ", "length = nan ");

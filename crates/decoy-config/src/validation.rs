@@ -249,6 +249,13 @@ impl EnvelopeSection {
             self.max_along_path_acceleration_mps2,
             0.0,
             f64::from(MAX_ACCELERATION_MPS2),
+        )?;
+        // Up to the dynamic pressure of the physical bounds' Mach 2 at sea level.
+        c.range(
+            "envelope.max_dynamic_pressure_pa",
+            self.max_dynamic_pressure_pa,
+            1.0,
+            0.7 * 101_325.0 * MAX_MACH * MAX_MACH,
         )
     }
 }

@@ -5,7 +5,7 @@
 //! [`decoy_link::StatusFlags::OUTSIDE_ENVELOPE`] set; only the physical input
 //! bounds of [`crate::validate`] reject a frame.
 
-use solver_core::Real;
+use solver_core::{Atmosphere, Real};
 
 use decoy_link::AircraftStateFrame;
 
@@ -26,6 +26,12 @@ pub struct EnvelopeParams {
     pub max_body_rate_radps: f64,
     /// Largest |acceleration along the velocity|, m/s².
     pub max_along_path_acceleration_mps2: f64,
+    /// Largest dynamic pressure, Pa: q = rho V^2 / 2 = gamma p M^2 / 2 of the
+    /// aircraft's airspeed at its altitude's static pressure. It cuts the
+    /// low, fast corner of the altitude and Mach ranges, where the cable's
+    /// steady tension comes within the tension monitor's caution of the
+    /// allowable (docs/protocol.md §4, "The operating envelope").
+    pub max_dynamic_pressure_pa: f64,
 }
 
 impl EnvelopeParams {
@@ -37,8 +43,52 @@ impl EnvelopeParams {
         load_factor: [0.0, 4.0],
         max_body_rate_radps: 0.35,
         max_along_path_acceleration_mps2: 10.0,
+        max_dynamic_pressure_pa: 46_000.0,
     };
+
+    /// The largest Mach number inside the envelope at `altitude` (m) in
+    /// `atmosphere` (ratio of specific heats `gamma`): the Mach range's upper end,
+    /// or lower where the dynamic-pressure bound binds first (exact, f64; the
+    /// controller's check uses [`OperatingEnvelope`]'s table, which is inside
+    /// this by at most [`Q_TABLE_MAX_INSET`]). `None` outside the atmosphere.
+    pub fn max_mach_at(
+        &self,
+        altitude: f64,
+        atmosphere: &Atmosphere<f64>,
+        gamma: f64,
+    ) -> Option<f64> {
+        let pressure = atmosphere.at(altitude).ok()?.pressure;
+        let by_pressure =
+            Real::square_root(2.0 * self.max_dynamic_pressure_pa / (gamma * pressure));
+        Some(if pressure > 0.0 {
+            by_pressure.min(self.mach[1])
+        } else {
+            self.mach[1]
+        })
+    }
+
+    /// The dynamic pressure, Pa, of Mach `mach` at `altitude` (m) in
+    /// `atmosphere` (`None` outside it).
+    pub fn dynamic_pressure(
+        mach: f64,
+        altitude: f64,
+        atmosphere: &Atmosphere<f64>,
+        gamma: f64,
+    ) -> Option<f64> {
+        Some(0.5 * gamma * atmosphere.at(altitude).ok()?.pressure * mach * mach)
+    }
 }
+
+/// Nodes of [`OperatingEnvelope`]'s table of the dynamic-pressure bound, at
+/// equal steps over the altitude range (236 m apart over 0-15 km).
+pub const Q_TABLE_NODES: usize = 64;
+
+/// The most the table's bound on Mach² is inside the exact one, relative: the
+/// nodes are lowered by the linear interpolation's largest error (its chord
+/// above the convex bound, from the ISA's curvature) and f32 rounding, so that
+/// a frame the check passes is within the bound, and one flagged is within
+/// this of it (2.3e-4 over 0-15 km: Mach 1.2e-4 at sea level).
+pub const Q_TABLE_MAX_INSET: f64 = 3e-4;
 
 /// Relative widening of the envelope's bounds in [`OperatingEnvelope::new`]
 /// (1e-5: a hundred times f32's rounding, 0.15 m at 15 km, Mach 1e-5).
@@ -54,6 +104,12 @@ pub struct OperatingEnvelope<T: Real> {
     specific_force: [T; 2],
     body_rate2: T,
     along2: T,
+    /// The dynamic-pressure bound as the largest Mach² at [`Q_TABLE_NODES`]
+    /// altitudes from `table_base` every 1 / `table_scale` m, interpolated
+    /// linearly (never above the exact bound).
+    mach2_table: [T; Q_TABLE_NODES],
+    table_base: T,
+    table_scale: T,
 }
 
 impl<T: Real> OperatingEnvelope<T> {
@@ -64,13 +120,18 @@ impl<T: Real> OperatingEnvelope<T> {
         specific_force: [T::ZERO; 2],
         body_rate2: T::ZERO,
         along2: T::ZERO,
+        mach2_table: [T::ZERO; Q_TABLE_NODES],
+        table_base: T::ZERO,
+        table_scale: T::ZERO,
     };
 
     /// `params` in `T`, with gravity `g0` (m/s²) for the load factor. Each bound
     /// is widened by [`BOUND_TOLERANCE`] of its magnitude (at least of its unit),
     /// so that a frame exactly at a bound, in the wire's f32 and the check's
-    /// rounding, counts as inside.
-    pub fn new(params: &EnvelopeParams, g0: f64) -> Self {
+    /// rounding, counts as inside; but for the dynamic pressure's, in
+    /// `atmosphere` (ratio of specific heats `gamma`), whose table is never
+    /// above it ([`Q_TABLE_MAX_INSET`]).
+    pub fn new(params: &EnvelopeParams, g0: f64, atmosphere: &Atmosphere<f64>, gamma: f64) -> Self {
         let lit = T::lit;
         let widen = |[low, high]: [f64; 2], unit: f64| {
             [
@@ -85,13 +146,85 @@ impl<T: Real> OperatingEnvelope<T> {
             specific_force: widen(params.load_factor.map(|n| n * g0), g0),
             body_rate2: square(params.max_body_rate_radps),
             along2: square(params.max_along_path_acceleration_mps2),
+            ..Self::dynamic_pressure_table(params, atmosphere, gamma)
+        }
+    }
+
+    /// The envelope with only its dynamic-pressure table (every other bound
+    /// zero): Mach² = 2 q_max / (gamma p(h)) at the nodes, lowered so that the
+    /// linear interpolation between them never exceeds it. The bound is
+    /// increasing and convex in altitude (1/p, with (1/p)'/(1/p) = g / (R T) and
+    /// (1/p)''/(1/p) = (g / (R T))² + g L / (R T²) in the ISA's layers, largest
+    /// at the tropopause's 216.65 K), so the chord over a step D is above it by
+    /// at most k2 D² / 8 times its value at the step's upper end, itself at
+    /// most exp(k1 D) times the value where the chord is measured. A node
+    /// outside the atmosphere is 0 (nothing inside there).
+    fn dynamic_pressure_table(
+        params: &EnvelopeParams,
+        atmosphere: &Atmosphere<f64>,
+        gamma: f64,
+    ) -> Self {
+        const T_MIN_K: f64 = 216.65;
+        const LAPSE_K_PER_M: f64 = 0.0065;
+        let (gas_constant, gravity) = match *atmosphere {
+            Atmosphere::Isa1976 {
+                gas_constant,
+                gravity,
+                ..
+            } => (gas_constant, gravity),
+            Atmosphere::Vacuum => (1.0, 0.0),
+        };
+        let [low, high] = params.altitude_m;
+        let low = low - BOUND_TOLERANCE * low.abs().max(1.0);
+        let high = high + BOUND_TOLERANCE * high.abs().max(1.0);
+        let step = (high - low) / (Q_TABLE_NODES - 1) as f64;
+        let k1 = gravity / (gas_constant * T_MIN_K);
+        let k2 = k1 * k1 + gravity * LAPSE_K_PER_M / (gas_constant * T_MIN_K * T_MIN_K);
+        // The chord's excess (exp(y) <= 1 + 2 y for 0 <= y <= 1.25: y is 0.04
+        // over 0-15 km), and 4 f32 ulps of the node and the interpolation.
+        let growth = 1.0 + 2.0 * (k1 * step).min(1.25);
+        let inset = k2 * step * step / 8.0 * growth + 4.0 * f64::from(f32::EPSILON);
+        let mut table = [T::ZERO; Q_TABLE_NODES];
+        for (i, node) in table.iter_mut().enumerate() {
+            let h = low + step * i as f64;
+            let bound = match atmosphere.at(h) {
+                Ok(air) if air.pressure > 0.0 => {
+                    2.0 * params.max_dynamic_pressure_pa / (gamma * air.pressure)
+                }
+                // No air: no dynamic pressure, nothing excluded.
+                Ok(_) => f64::from(f32::MAX),
+                Err(_) => 0.0,
+            };
+            *node = T::lit((bound / (1.0 + inset)).min(f64::from(f32::MAX)));
+        }
+        OperatingEnvelope {
+            mach2_table: table,
+            table_base: T::lit(low),
+            table_scale: T::lit(if step > 0.0 { 1.0 / step } else { 0.0 }),
+            ..Self::ZERO
+        }
+    }
+
+    /// The table's bound on Mach² at `altitude` (m): the linear interpolation
+    /// between its nodes (the end intervals extended beyond the range). Without
+    /// a panic site (on the frame path): every index is a `get`.
+    #[inline(always)]
+    fn mach2_bound(&self, altitude: T) -> T {
+        let x = (altitude - self.table_base) * self.table_scale;
+        let last = Q_TABLE_NODES - 2;
+        let i = x.truncated_index();
+        let i = if i > last { last } else { i };
+        match (self.mach2_table.get(i), self.mach2_table.get(i + 1)) {
+            (Some(&a), Some(&b)) => a + (b - a) * (x - T::from_count(i as u64)),
+            _ => T::ZERO,
         }
     }
 
     /// True when the aircraft state `frame`, flying at Mach `mach`, is inside:
-    /// every bound met (closed ranges). In `T` from the frame's f32 fields: a
-    /// few dozen instructions, the same for every frame; the quaternion is taken
-    /// as unit (validation holds it within 1e-3).
+    /// every bound met (closed ranges), the dynamic pressure's from the table
+    /// at the frame's altitude. In `T` from the frame's f32 fields: a few dozen
+    /// instructions, the same for every frame; the quaternion is taken as unit
+    /// (validation holds it within 1e-3).
     pub fn contains(&self, frame: &AircraftStateFrame, mach: T, gravity: T) -> bool {
         let w = |v: f32| T::lit(f64::from(v));
         let altitude = T::lit(-frame.position_ned_m[2]);
@@ -115,6 +248,7 @@ impl<T: Real> OperatingEnvelope<T> {
             & within(normal, &self.specific_force)
             & (rate2 <= self.body_rate2)
             & (along * along <= self.along2 * speed2)
+            & (mach * mach <= self.mach2_bound(altitude))
     }
 }
 
@@ -135,13 +269,52 @@ mod tests {
         }
     }
 
+    fn reference<T: Real>() -> OperatingEnvelope<T> {
+        OperatingEnvelope::new(&EnvelopeParams::REFERENCE, 9.80665, &Atmosphere::isa(), 1.4)
+    }
+
+    /// The table's bound against the exact one, at every metre of the altitude
+    /// range and beyond it: never above, and within [`Q_TABLE_MAX_INSET`]; in
+    /// f32 (the M4F's) and f64, for the reference and a bound that binds
+    /// everywhere.
+    #[test]
+    fn the_dynamic_pressure_table_is_within_the_exact_bound_and_close_to_it() {
+        let isa = Atmosphere::<f64>::isa();
+        for q in [46_000.0, 5_000.0] {
+            let params = EnvelopeParams {
+                max_dynamic_pressure_pa: q,
+                ..EnvelopeParams::REFERENCE
+            };
+            let e32 = OperatingEnvelope::<f32>::new(&params, 9.80665, &isa, 1.4);
+            let e64 = OperatingEnvelope::<f64>::new(&params, 9.80665, &isa, 1.4);
+            let mut worst = 0.0f64;
+            for h in (0..=15_000).map(f64::from) {
+                let exact = 2.0 * q / (1.4 * isa.at(h).unwrap().pressure);
+                for table in [f64::from(e32.mach2_bound(h as f32)), e64.mach2_bound(h)] {
+                    assert!(table <= exact, "q {q} at {h} m: {table} above {exact}");
+                    worst = worst.max(1.0 - table / exact);
+                }
+            }
+            assert!(worst < Q_TABLE_MAX_INSET, "q {q}: inset {worst}");
+            assert!(worst > 1e-6, "q {q}: the table was lowered ({worst})");
+            // The helper's exact Mach at sea level agrees.
+            let m = params.max_mach_at(0.0, &isa, 1.4).unwrap();
+            let expected = (2.0 * q / (1.4 * 101_325.0f64)).sqrt().min(0.95);
+            assert!((m - expected).abs() < 1e-12, "{m} {expected}");
+        }
+    }
+
     #[test]
     fn the_reference_envelope_holds_level_flight_and_rejects_its_outside() {
-        let e = OperatingEnvelope::<f32>::new(&EnvelopeParams::REFERENCE, 9.80665);
+        let e = reference::<f32>();
         let g = 9.80665f32;
         assert!(e.contains(&level(9000.0, 243.0), 0.8, g));
         assert!(e.contains(&level(0.0, 243.0), 0.3, g));
         assert!(e.contains(&level(15_000.0, 243.0), 0.95, g));
+        // The dynamic-pressure corner: sea level up to Mach 0.805 (46 kPa).
+        assert!(e.contains(&level(0.0, 243.0), 0.80, g));
+        assert!(!e.contains(&level(0.0, 243.0), 0.81, g));
+        assert!(e.contains(&level(3_000.0, 243.0), 0.95, g));
         assert!(!e.contains(&level(15_001.0, 243.0), 0.8, g));
         assert!(!e.contains(&level(-1.0, 243.0), 0.8, g));
         assert!(!e.contains(&level(9000.0, 243.0), 0.96, g));

@@ -235,7 +235,12 @@ impl SystemParams {
             geometry: self.geometry(),
             allowable_tension_n: T::lit(self.allowable_tension),
             management: self.management(),
-            envelope: OperatingEnvelope::new(&self.envelope, self.gravity),
+            envelope: OperatingEnvelope::new(
+                &self.envelope,
+                self.gravity,
+                &self.atmosphere::<f64>(),
+                self.gamma,
+            ),
             limits: self.limits,
             trim_units_per_frame: crate::controller::trim_slice_units::<T>(),
             max_steps_per_frame: crate::controller::MAX_STEPS_PER_FRAME,

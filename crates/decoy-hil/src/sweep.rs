@@ -9,13 +9,16 @@
 //! The grid's flights, each from a trim at its first frame:
 //!
 //! - **steady**: level flight at several altitudes across the envelope's range
-//!   (the tropopause band 10-12 km among them) and Mach numbers across its range;
+//!   (the tropopause band 10-12 km among them) and Mach numbers across its range
+//!   (a Mach number above the dynamic-pressure bound at its altitude is flown at
+//!   the bound, a thousandth inside);
 //! - **shipped**: every manoeuvre the product ships at its full duration (the
 //!   scenario files' `t_end_s`; the pull-ups and turns at each of the paper's
 //!   rates);
 //! - **rate limit**: pull-ups and turns at the envelope's limits (the normal
 //!   load factor's upper bound or the body rate's, whichever binds first, 2 %
-//!   inside) at its altitude and Mach corners: the pull-up rotates for 5 s or
+//!   inside) at its altitude and Mach corners (the dynamic-pressure bound's Mach,
+//!   a thousandth inside, where it binds): the pull-up rotates for 5 s or
 //!   until the climb is 85 degrees, whichever is first, so the load factor never
 //!   falls below the envelope's 0 g;
 //! - **tropopause**: a climb and a descent through 11 km (the two-layer density
@@ -165,9 +168,26 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
                 .collect(),
         ),
     };
+    // The envelope's largest Mach number at an altitude (the dynamic-pressure
+    // bound's below 2.7 km), a thousandth inside: the controller's check is
+    // inside the exact bound by at most 1.5e-4 in Mach
+    // (`decoy_controller::envelope::Q_TABLE_MAX_INSET`).
+    let top = |h: f64| -> Result<f64, SimError> {
+        config
+            .max_mach_at(h)
+            .map(|m| m * (1.0 - 1e-3))
+            .ok_or_else(|| {
+                SimError::invalid(
+                    "envelope",
+                    "altitude",
+                    format!("{h} m is outside the atmosphere"),
+                )
+            })
+    };
     let mut cases = Vec::new();
     for &h in &altitudes {
         for &m in &machs {
+            let m = m.min(top(h)?);
             let (profile, _) = scenario(
                 config,
                 "steady",
@@ -228,12 +248,13 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
                 duration: 5.0f64.min(85f64.to_radians() / w),
             })
         };
+        let m = m.min(top(h)?);
         let (mut h0, mut m0) = (h, m);
         for _ in 0..8 {
             let p = pull_up(h0, m0)?;
-            let (top, fastest) = climb_extremes(config, &p, LIMIT_S)?;
-            let over_h = top - envelope.altitude_m[1];
-            let over_m = fastest / envelope.mach[1];
+            let (highest, fastest) = climb_extremes(config, &p, LIMIT_S)?;
+            let over_h = highest - envelope.altitude_m[1];
+            let over_m = fastest;
             if over_h <= 0.0 && over_m <= 1.0 {
                 break;
             }
@@ -291,8 +312,10 @@ pub fn cases(config: &SystemConfig, grid: Grid) -> Result<Vec<Case>, SimError> {
     Ok(cases)
 }
 
-/// The highest altitude (m) and Mach number of pull-up `p` over `t_end` s (at
-/// every 10 ms frame).
+/// The highest altitude (m) of pull-up `p` over `t_end` s (at every 10 ms
+/// frame), and its largest Mach number as a fraction of the largest the
+/// envelope allows at its altitude (the Mach range's upper end, or the
+/// dynamic-pressure bound's).
 fn climb_extremes(config: &SystemConfig, p: &PullUp, t_end: f64) -> Result<(f64, f64), SimError> {
     let mut top = f64::NEG_INFINITY;
     let mut fastest = 0.0f64;
@@ -300,7 +323,9 @@ fn climb_extremes(config: &SystemConfig, p: &PullUp, t_end: f64) -> Result<(f64,
         let s = solver_core::FlightPath::<f64>::state_at(p, f64::from(k) * 0.01);
         let h = -s.position.z;
         top = top.max(h);
-        fastest = fastest.max(s.velocity.norm() / config.speed_of_sound(h)?);
+        // Above the atmosphere's range: the altitude bound says so.
+        let allowed = config.max_mach_at(h).unwrap_or(config.envelope.mach[1]);
+        fastest = fastest.max(s.velocity.norm() / config.speed_of_sound(h)? / allowed);
     }
     Ok((top, fastest))
 }

@@ -69,7 +69,7 @@ pub struct EnvelopeSpec {
     /// Bisection tolerance on the rate, rad/s (on the acceleration, m/s^2).
     pub tolerance: f64,
     /// The acceleration's gain in Mach number from the cell's (acceleration
-    /// only; to the envelope's upper Mach at most).
+    /// only; to the envelope's largest Mach at the cell's altitude at most).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mach_gain: Option<f64>,
 }
@@ -165,6 +165,31 @@ pub struct Cell {
     /// Runs of the cell that stayed clear of every requirement.
     #[serde(default)]
     pub clear_runs: u32,
+    /// Whether the cell's flight condition is inside the declared envelope
+    /// (`[envelope]`: its altitude and Mach ranges and its dynamic-pressure
+    /// bound). A cell outside (the low, fast corner) is mapped all the same,
+    /// for information: the controller flags its frames OUTSIDE_ENVELOPE.
+    #[serde(default = "inside_by_default")]
+    pub inside_envelope: bool,
+}
+
+/// A cell file of a map made before `inside_envelope` was recorded: its
+/// directory's `inputs.json` must match the configuration anyway.
+fn inside_by_default() -> bool {
+    true
+}
+
+/// Whether (`altitude` m, Mach `mach`) is inside `config`'s declared envelope:
+/// its altitude and Mach ranges, and the Mach number its dynamic-pressure
+/// bound allows there.
+pub fn inside_envelope(config: &SystemConfig, altitude: f64, mach: f64) -> bool {
+    let [h0, h1] = config.envelope.altitude_m;
+    let m0 = config.envelope.mach[0];
+    (h0..=h1).contains(&altitude)
+        && mach >= m0
+        && config
+            .max_mach_at(altitude)
+            .is_some_and(|top| mach <= top * (1.0 + 1e-12))
 }
 
 /// The map: the spec and its cells in grid order (altitude-major).
@@ -329,11 +354,17 @@ impl EnvelopeSpec {
         }
     }
 
-    /// The Mach number an acceleration from `mach` ends at: the gain above it,
-    /// the envelope's upper Mach at most (None for a rotation).
-    pub fn final_mach(&self, config: &SystemConfig, mach: f64) -> Option<f64> {
-        self.mach_gain
-            .map(|gain| (mach + gain).min(config.envelope.mach[1]))
+    /// The Mach number an acceleration from `mach` at `altitude` (m) ends at:
+    /// the gain above it, the envelope's largest Mach there at most (its Mach
+    /// range's upper end, or its dynamic-pressure bound's); from a condition
+    /// already beyond the dynamic-pressure bound, the Mach range's upper end
+    /// at most (None for a rotation).
+    pub fn final_mach(&self, config: &SystemConfig, altitude: f64, mach: f64) -> Option<f64> {
+        let top = config
+            .max_mach_at(altitude)
+            .filter(|&top| mach <= top)
+            .unwrap_or(config.envelope.mach[1]);
+        self.mach_gain.map(|gain| (mach + gain).min(top))
     }
 
     /// Checks the spec: a pull-up, turn or acceleration, a non-empty grid, a
@@ -432,7 +463,7 @@ impl EnvelopeSpec {
     pub fn describe_manoeuvre(&self) -> String {
         match self.mach_gain {
             Some(gain) => format!(
-                "accelerating from each Mach by {gain} (to the envelope's upper Mach at most), then {AFTERMATH_S} s on"
+                "accelerating from each Mach by {gain} (to the envelope's largest Mach at that altitude at most), then {AFTERMATH_S} s on"
             ),
             None => format!("rates built over {} s", self.onset_s),
         }
@@ -547,7 +578,7 @@ fn fly_held(
         ..RunOptions::default()
     };
     let changed;
-    let scenario = match (spec.final_mach(config, mach), rate) {
+    let scenario = match (spec.final_mach(config, altitude, mach), rate) {
         (Some(final_mach), Some(acceleration)) => {
             let speed = config.mach_to_speed(altitude, mach)?;
             let gain = config.mach_to_speed(altitude, final_mach)? - speed;
@@ -646,7 +677,7 @@ fn advisory_confirmed(
         .or(scenario.start_s)
         .unwrap_or_default();
     // When the manoeuvre's rotation or acceleration ends (the turn's never).
-    let ends = match (rate, spec.final_mach(config, condition.1)) {
+    let ends = match (rate, spec.final_mach(config, condition.0, condition.1)) {
         (Some(a), Some(final_mach)) => {
             let gain = config.mach_to_speed(condition.0, final_mach)?
                 - config.mach_to_speed(condition.0, condition.1)?;
@@ -737,6 +768,7 @@ fn map_condition(
         nuisance_advisories: tally.nuisance_advisories,
         advised_clear_runs: tally.advised_clear_runs,
         clear_runs: tally.clear_runs,
+        inside_envelope: inside_envelope(config, altitude, mach),
     };
     if let Some(r) = steady_trial.violated {
         return Ok(cell(
@@ -748,7 +780,7 @@ fn map_condition(
     }
     // An acceleration ends in steady flight at the final Mach: not clear
     // there, not clear at any acceleration.
-    if let Some(final_mach) = spec.final_mach(config, mach) {
+    if let Some(final_mach) = spec.final_mach(config, altitude, mach) {
         let arrived = tally
             .note(
                 fly(
@@ -1116,13 +1148,13 @@ impl EnvelopeMap {
             "radps"
         };
         let mut out = format!(
-            "altitude_m,mach,limit_{unit},cap_{unit},limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,advised_clear_runs,false_advisories,nuisance_advisories\n",
+            "altitude_m,mach,limit_{unit},cap_{unit},limiting,margin,steady_posture_margin_deg,steady_collision_margin_m,steady_tension_margin_N,steady_exhaust_margin_m,advisory_lead_s,runs,clear_runs,advised_clear_runs,false_advisories,nuisance_advisories,inside_envelope\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
         for c in &self.cells {
             let s = &c.steady_margins;
             out.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 c.altitude_m,
                 c.mach,
                 c.limit,
@@ -1138,7 +1170,8 @@ impl EnvelopeMap {
                 c.clear_runs,
                 c.advised_clear_runs,
                 c.false_advisories,
-                c.nuisance_advisories
+                c.nuisance_advisories,
+                c.inside_envelope
             ));
         }
         out
@@ -1169,6 +1202,7 @@ impl EnvelopeMap {
                 "advised_clear_runs": c.advised_clear_runs,
                 "false_advisories": c.false_advisories,
                 "nuisance_advisories": c.nuisance_advisories,
+                "inside_envelope": c.inside_envelope,
                 "steady_margins": {
                     "posture": c.steady_margins.posture,
                     "collision": c.steady_margins.collision,
@@ -1204,10 +1238,9 @@ impl EnvelopeMap {
                 spec.unit()
             ),
             subtitle: vec![
+                format!("{}, {}", spec.describe_model(), spec.describe_manoeuvre()),
                 format!(
-                    "{}, {}, bisected to {} {}; thin lines every {} {}",
-                    spec.describe_model(),
-                    spec.describe_manoeuvre(),
+                    "bisected to {} {}; thin lines every {} {}",
                     spec.tolerance,
                     spec.unit(),
                     self.level_step(),
@@ -1226,7 +1259,13 @@ impl EnvelopeMap {
                         ""
                     }
                 ),
-            ],
+            ]
+            .into_iter()
+            .chain(
+                (!self.cells.iter().all(|c| c.inside_envelope))
+                    .then(|| "*: outside the declared envelope (its dynamic-pressure bound), mapped for information".to_owned()),
+            )
+            .collect(),
             x_label: "Mach".to_owned(),
             y_label: "altitude [m]".to_owned(),
             columns: spec.machs.iter().map(|m| format!("{m}")).collect(),
@@ -1242,7 +1281,14 @@ impl EnvelopeMap {
                 .collect(),
             marks: rows
                 .iter()
-                .map(|r| r.iter().map(|c| c.limiting.mark().to_owned()).collect())
+                .map(|r| {
+                    r.iter()
+                        .map(|c| {
+                            let outside = if c.inside_envelope { "" } else { "*" };
+                            format!("{}{outside}", c.limiting.mark())
+                        })
+                        .collect()
+                })
                 .collect(),
             decimals: if accelerates { 2 } else { 3 },
             contour: pull_up.then_some(0.10),
@@ -1337,6 +1383,18 @@ impl EnvelopeMap {
                 }
             }
             out.push('\n');
+        }
+        let outside: Vec<String> = self
+            .cells
+            .iter()
+            .filter(|c| !c.inside_envelope)
+            .map(|c| format!("{} m Mach {}", c.altitude_m, c.mach))
+            .collect();
+        if !outside.is_empty() {
+            out.push_str(&format!(
+                "Outside the declared envelope (its dynamic-pressure bound), mapped for information: {}\n",
+                outside.join(", ")
+            ));
         }
         out.push_str(&self.advisories());
         if spec.manoeuvre == Manoeuvre::PullUp {
@@ -1492,7 +1550,17 @@ mod tests {
         assert_eq!(defaults.machs, vec![0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85]);
         assert_eq!(defaults.mach_gain, Some(0.1));
         assert_eq!(defaults.tolerance, DEFAULT_ACCELERATION_TOLERANCE);
-        assert_eq!(defaults.final_mach(&config, 0.85), Some(0.95));
+        assert_eq!(defaults.final_mach(&config, 9000.0, 0.85), Some(0.95));
+        // Low down the dynamic-pressure bound caps it (sea level: Mach 0.805);
+        // from beyond it, the Mach range's upper end.
+        let top = config.max_mach_at(0.0).unwrap();
+        assert!((top - 0.8053).abs() < 1e-3, "{top}");
+        assert_eq!(defaults.final_mach(&config, 0.0, 0.75), Some(top));
+        assert_eq!(defaults.final_mach(&config, 0.0, 0.85), Some(0.95));
+        assert!(inside_envelope(&config, 0.0, 0.8));
+        assert!(!inside_envelope(&config, 0.0, 0.81));
+        assert!(inside_envelope(&config, 3000.0, 0.95));
+        assert!(!inside_envelope(&config, 3000.0, 0.96));
         let gain = |g: f64| {
             EnvelopeSpec::new(
                 &config,

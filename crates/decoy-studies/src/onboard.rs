@@ -208,6 +208,7 @@ mod tests {
                 false_advisories: 0,
                 nuisance_advisories: 0,
                 clear_runs: 1,
+                inside_envelope: true,
             };
             store_cell(&plan, dir, index, &cell).unwrap();
         }

@@ -1,7 +1,7 @@
 //! The envelope sweep under QEMU (issue 22): the firmware flies the test grid of
 //! `decoy_hil::sweep` (steady flight at seven altitudes across 0-15 km, four of
 //! them in the tropopause band 10.6-11.7 km or at its ends, by three Mach numbers
-//! across 0.3-0.95; every shipped manoeuvre at its full duration; pull-ups and
+//! across 0.3-0.95, capped by the dynamic-pressure bound at sea level; every shipped manoeuvre at its full duration; pull-ups and
 //! turns at the envelope's load-factor and body-rate limits at three corners; a
 //! climb and a descent through 11 km), each flight from its own trim, and for
 //! every State frame of every flight, the frames of the trim included:
@@ -384,7 +384,8 @@ fn f64_envelope_subset() {
             let corner = c.group == Group::Steady
                 && [
                     "steady 0 m Mach 0.30",
-                    "steady 0 m Mach 0.95",
+                    // 0.95 capped by the dynamic-pressure bound (0.805).
+                    "steady 0 m Mach 0.80",
                     "steady 11000 m Mach 0.95",
                     "steady 15000 m Mach 0.30",
                 ]

@@ -199,11 +199,13 @@ pub(super) fn render_envelope(s: &mut String, inputs: &Inputs) -> std::fmt::Resu
         "The full grid of `decoy_hil::sweep` (`Grid::Full`), each flight from its own trim \
          over the decoy link, every frame counted: steady level flight 4 s at every \
          kilometre from 0 to 15 km and at 10.5 and 11.5 km, by Mach 0.30, 0.45, 0.62, 0.80 \
-         and 0.95; every shipped manoeuvre at its full duration (the scenario files: steady, \
+         and 0.95 (a Mach number beyond the envelope's dynamic-pressure bound, below 2.7 km, \
+         flown at the bound); every shipped manoeuvre at its full duration (the scenario files: steady, \
          the acceleration, the pull-ups at 0.05, 0.10 and 0.20 rad/s, the turns at 0.10 and \
          0.20 rad/s, the recorded flight); pull-ups and turns at the envelope's load factor \
          (4 g, 2 % inside) or body rate (0.35 rad/s), whichever binds, at 0, 5, 9, 11, 13 \
-         and 15 km by Mach 0.3, 0.6 and 0.95, 12 s each; a climb and a descent through \
+         and 15 km by Mach 0.3, 0.6 and 0.95 (at sea level 0.95 is the bound's 0.80), 12 s \
+         each; a climb and a descent through \
          11 km. The frame is the whole State frame's work (validation, the trim's slice or \
          the RK4 steps, outputs), the trim's frames included. `cargo xtask test` flies a \
          smaller grid and asserts the same bounds (`crates/hil-tests/tests/envelope.rs`)."

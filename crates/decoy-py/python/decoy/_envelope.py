@@ -136,7 +136,8 @@ def envelope(
     on stderr, False for none (None: a bar when stderr is a terminal).
 
     Returns {"manoeuvre", "limit_unit", "cells": [{"altitude_m", "mach",
-    "limit", "limiting_requirement", "margin", "cap", "steady_margins", ...}],
+    "limit", "limiting_requirement", "margin", "cap", "inside_envelope",
+    "steady_margins", ...}],
     ...}: docs/envelope.md. Raises InputError, ConfigError, SolverError with
     the command line's messages.
     """
