@@ -5,6 +5,7 @@
 //! [`decoy_link::StatusFlags::OUTSIDE_ENVELOPE`] set; only the physical input
 //! bounds of [`crate::validate`] reject a frame.
 
+use solver_core::atmosphere::{LAPSE, MAX_ALTITUDE_M, MIN_ALTITUDE_M, T_TROPOPAUSE};
 use solver_core::{Atmosphere, Real};
 
 use decoy_link::AircraftStateFrame;
@@ -83,12 +84,14 @@ impl EnvelopeParams {
 /// equal steps over the altitude range (236 m apart over 0-15 km).
 pub const Q_TABLE_NODES: usize = 64;
 
-/// The most the table's bound on Mach² is inside the exact one, relative: the
-/// nodes are lowered by the linear interpolation's largest error (its chord
-/// above the convex bound, from the ISA's curvature) and f32 rounding, so that
-/// a frame the check passes is within the bound, and one flagged is within
-/// this of it (2.3e-4 over 0-15 km: Mach 1.2e-4 at sea level).
-pub const Q_TABLE_MAX_INSET: f64 = 3e-4;
+/// The most the table's bound on Mach² is inside the exact one, relative, for
+/// any altitude range within the atmosphere's (-500 m to 20 km): the nodes are
+/// lowered by the linear interpolation's largest error (its chord above the
+/// convex bound, from the ISA's curvature) and f32 rounding, so that a frame
+/// the check passes is within the bound, and one flagged is within this of it
+/// (measured: 2.3e-4 over the reference's 0-15 km, 1.2e-4 in Mach; 4.3e-4 over
+/// the atmosphere's whole range).
+pub const Q_TABLE_MAX_INSET: f64 = 5e-4;
 
 /// Relative widening of the envelope's bounds in [`OperatingEnvelope::new`]
 /// (1e-5: a hundred times f32's rounding, 0.15 m at 15 km, Mach 1e-5).
@@ -140,32 +143,36 @@ impl<T: Real> OperatingEnvelope<T> {
             ]
         };
         let square = |v: f64| lit(v * v * (1.0 + 2.0 * BOUND_TOLERANCE));
-        OperatingEnvelope {
+        let mut envelope = OperatingEnvelope {
             altitude: widen(params.altitude_m, 1.0),
             mach: widen(params.mach, 1.0),
             specific_force: widen(params.load_factor.map(|n| n * g0), g0),
             body_rate2: square(params.max_body_rate_radps),
             along2: square(params.max_along_path_acceleration_mps2),
-            ..Self::dynamic_pressure_table(params, atmosphere, gamma)
-        }
+            ..Self::ZERO
+        };
+        envelope.dynamic_pressure_table(params, atmosphere, gamma);
+        envelope
     }
 
-    /// The envelope with only its dynamic-pressure table (every other bound
-    /// zero): Mach² = 2 q_max / (gamma p(h)) at the nodes, lowered so that the
-    /// linear interpolation between them never exceeds it. The bound is
-    /// increasing and convex in altitude (1/p, with (1/p)'/(1/p) = g / (R T) and
-    /// (1/p)''/(1/p) = (g / (R T))² + g L / (R T²) in the ISA's layers, largest
-    /// at the tropopause's 216.65 K), so the chord over a step D is above it by
-    /// at most k2 D² / 8 times its value at the step's upper end, itself at
-    /// most exp(k1 D) times the value where the chord is measured. A node
-    /// outside the atmosphere is 0 (nothing inside there).
+    /// The dynamic-pressure table (`mach2_table`, `table_base`,
+    /// `table_scale`): Mach² = 2 q_max / (gamma p(h)) at the nodes over the
+    /// envelope's altitude range (widened as the other bounds, within the
+    /// atmosphere's), lowered so that the linear interpolation between them
+    /// never exceeds it. The bound is increasing and convex in altitude (1/p,
+    /// with (1/p)'/(1/p) = g / (R T) and (1/p)''/(1/p) = (g / (R T))² + g L /
+    /// (R T²) in the ISA's layers, largest at the tropopause's 216.65 K; the
+    /// slope is continuous there, the temperature being so), so the chord over a
+    /// step D is above it by at most k2 D² / 8 times its value at the step's
+    /// upper end, itself at most exp(k1 D) times the value where the chord is
+    /// measured; beyond the range the end intervals' chords extended lie below
+    /// it too. A node outside the atmosphere would be 0 (nothing inside there).
     fn dynamic_pressure_table(
+        &mut self,
         params: &EnvelopeParams,
         atmosphere: &Atmosphere<f64>,
         gamma: f64,
-    ) -> Self {
-        const T_MIN_K: f64 = 216.65;
-        const LAPSE_K_PER_M: f64 = 0.0065;
+    ) {
         let (gas_constant, gravity) = match *atmosphere {
             Atmosphere::Isa1976 {
                 gas_constant,
@@ -175,17 +182,16 @@ impl<T: Real> OperatingEnvelope<T> {
             Atmosphere::Vacuum => (1.0, 0.0),
         };
         let [low, high] = params.altitude_m;
-        let low = low - BOUND_TOLERANCE * low.abs().max(1.0);
-        let high = high + BOUND_TOLERANCE * high.abs().max(1.0);
+        let low = (low - BOUND_TOLERANCE * low.abs().max(1.0)).max(MIN_ALTITUDE_M);
+        let high = (high + BOUND_TOLERANCE * high.abs().max(1.0)).min(MAX_ALTITUDE_M);
         let step = (high - low) / (Q_TABLE_NODES - 1) as f64;
-        let k1 = gravity / (gas_constant * T_MIN_K);
-        let k2 = k1 * k1 + gravity * LAPSE_K_PER_M / (gas_constant * T_MIN_K * T_MIN_K);
+        let k1 = gravity / (gas_constant * T_TROPOPAUSE);
+        let k2 = k1 * k1 + gravity * LAPSE / (gas_constant * T_TROPOPAUSE * T_TROPOPAUSE);
         // The chord's excess (exp(y) <= 1 + 2 y for 0 <= y <= 1.25: y is 0.04
         // over 0-15 km), and 4 f32 ulps of the node and the interpolation.
         let growth = 1.0 + 2.0 * (k1 * step).min(1.25);
         let inset = k2 * step * step / 8.0 * growth + 4.0 * f64::from(f32::EPSILON);
-        let mut table = [T::ZERO; Q_TABLE_NODES];
-        for (i, node) in table.iter_mut().enumerate() {
+        for (i, node) in self.mach2_table.iter_mut().enumerate() {
             let h = low + step * i as f64;
             let bound = match atmosphere.at(h) {
                 Ok(air) if air.pressure > 0.0 => {
@@ -197,12 +203,8 @@ impl<T: Real> OperatingEnvelope<T> {
             };
             *node = T::lit((bound / (1.0 + inset)).min(f64::from(f32::MAX)));
         }
-        OperatingEnvelope {
-            mach2_table: table,
-            table_base: T::lit(low),
-            table_scale: T::lit(if step > 0.0 { 1.0 / step } else { 0.0 }),
-            ..Self::ZERO
-        }
+        self.table_base = T::lit(low);
+        self.table_scale = T::lit(if step > 0.0 { 1.0 / step } else { 0.0 });
     }
 
     /// The table's bound on Mach² at `altitude` (m): the linear interpolation
@@ -274,28 +276,40 @@ mod tests {
     }
 
     /// The table's bound against the exact one, at every metre of the altitude
-    /// range and beyond it: never above, and within [`Q_TABLE_MAX_INSET`]; in
-    /// f32 (the M4F's) and f64, for the reference and a bound that binds
-    /// everywhere.
+    /// range: never above, and within [`Q_TABLE_MAX_INSET`]; in f32 (the M4F's)
+    /// and f64, for the reference and a bound that binds everywhere, over the
+    /// reference's range and the atmosphere's whole range.
     #[test]
     fn the_dynamic_pressure_table_is_within_the_exact_bound_and_close_to_it() {
         let isa = Atmosphere::<f64>::isa();
-        for q in [46_000.0, 5_000.0] {
+        // The reference's range, and the atmosphere's whole range (the table
+        // within it, its end intervals extended to the widened bounds).
+        let ranges = [[0.0, 15_000.0], [-500.0, 20_000.0]];
+        for (q, altitude_m) in [46_000.0, 5_000.0]
+            .into_iter()
+            .flat_map(|q| ranges.map(|r| (q, r)))
+        {
             let params = EnvelopeParams {
                 max_dynamic_pressure_pa: q,
+                altitude_m,
                 ..EnvelopeParams::REFERENCE
             };
             let e32 = OperatingEnvelope::<f32>::new(&params, 9.80665, &isa, 1.4);
             let e64 = OperatingEnvelope::<f64>::new(&params, 9.80665, &isa, 1.4);
             let mut worst = 0.0f64;
-            for h in (0..=15_000).map(f64::from) {
+            let [h0, h1] = altitude_m.map(|h| h as i32);
+            for h in (h0..=h1).map(f64::from) {
                 let exact = 2.0 * q / (1.4 * isa.at(h).unwrap().pressure);
                 for table in [f64::from(e32.mach2_bound(h as f32)), e64.mach2_bound(h)] {
                     assert!(table <= exact, "q {q} at {h} m: {table} above {exact}");
+                    assert!(table > 0.0, "q {q} at {h} m: the table is 0");
                     worst = worst.max(1.0 - table / exact);
                 }
             }
-            assert!(worst < Q_TABLE_MAX_INSET, "q {q}: inset {worst}");
+            assert!(
+                worst < Q_TABLE_MAX_INSET,
+                "q {q} {altitude_m:?}: inset {worst}"
+            );
             assert!(worst > 1e-6, "q {q}: the table was lowered ({worst})");
             // The helper's exact Mach at sea level agrees.
             let m = params.max_mach_at(0.0, &isa, 1.4).unwrap();

@@ -181,7 +181,8 @@ fn inside_by_default() -> bool {
 
 /// Whether (`altitude` m, Mach `mach`) is inside `config`'s declared envelope:
 /// its altitude and Mach ranges, and the Mach number its dynamic-pressure
-/// bound allows there.
+/// bound allows there (the exact bound: the controller's check flags frames
+/// up to `decoy_controller::envelope::Q_TABLE_MAX_INSET` of Mach² inside it).
 pub fn inside_envelope(config: &SystemConfig, altitude: f64, mach: f64) -> bool {
     let [h0, h1] = config.envelope.altitude_m;
     let m0 = config.envelope.mach[0];

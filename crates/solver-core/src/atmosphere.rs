@@ -17,14 +17,17 @@ pub const MAX_ALTITUDE_M: f64 = 20_000.0;
 
 const T0: f64 = 288.15;
 const P0: f64 = 101_325.0;
-const LAPSE: f64 = 0.0065;
+/// Temperature lapse rate of the troposphere, K per geopotential metre.
+pub const LAPSE: f64 = 0.0065;
 /// Tropopause, geopotential altitude, m.
 const H_TROPOPAUSE: f64 = 11_000.0;
 /// Effective earth radius of the 1976 standard for geopotential altitude, m.
 const EARTH_RADIUS: f64 = 6_356_766.0;
 /// Tropopause, geometric altitude, m.
 const H_TROPOPAUSE_GEOMETRIC: f64 = EARTH_RADIUS * H_TROPOPAUSE / (EARTH_RADIUS - H_TROPOPAUSE);
-const T_TROPOPAUSE: f64 = 216.65;
+/// Temperature of the tropopause and the lower stratosphere, K (the
+/// atmosphere's lowest).
+pub const T_TROPOPAUSE: f64 = 216.65;
 
 /// Air properties at one altitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
