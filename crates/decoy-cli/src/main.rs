@@ -286,11 +286,18 @@ fn main() -> ExitCode {
 
 fn run(cli: &Cli) -> Result<String, Failure> {
     // An explicitly named configuration is loaded (and so checked) whatever the
-    // command; the map's own commands load it without its envelope map on
-    // board, which they make (a stale map must not stop them).
-    let unmapped = matches!(cli.command, Command::Envelope(_) | Command::LimitsTable(_));
+    // command; the map's own commands never fail on its envelope map on
+    // board, which they make (a stale map must not stop them): `decoy
+    // limits-table` does not read it, `decoy envelope` uses it only when it
+    // was made for the configuration (the controller flown beside its runs
+    // then advises with it, as the firmware's does).
     let config = match &cli.config {
-        Some(path) if unmapped => Some(SystemConfig::from_file_unmapped(path)?),
+        Some(path) if matches!(cli.command, Command::Envelope(_)) => {
+            Some(SystemConfig::from_file_for_mapping(path)?)
+        }
+        Some(path) if matches!(cli.command, Command::LimitsTable(_)) => {
+            Some(SystemConfig::from_file_unmapped(path)?)
+        }
         Some(path) => Some(SystemConfig::from_file(path)?),
         None => None,
     };
@@ -320,7 +327,7 @@ fn run(cli: &Cli) -> Result<String, Failure> {
         Command::Envelope(args) => {
             let config = match config {
                 Some(c) => c,
-                None => SystemConfig::builtin_unmapped()?,
+                None => SystemConfig::builtin_for_mapping()?,
             };
             envelope_cmd::envelope_command(&config, args, cli.json)
         }

@@ -92,6 +92,17 @@ pub struct LimitsGrid {
     /// (`posture`, `collision`, `tension`, `exhaust`) or the envelope bound
     /// that caps it (`load factor`, `body rate`, `acceleration bound`).
     pub limiting: Vec<Vec<String>>,
+    /// The longest the map's manoeuvre lasts from its entry, s (the pull-up's
+    /// rotation with its onsets; the turn's whole run; absent for the
+    /// acceleration, whose extent is a Mach gain): how long the map's verdict
+    /// covers a manoeuvre on board (docs/protocol.md §3, "Advisories from the
+    /// map"). Absent: the map covers nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub manoeuvre_s: Option<f64>,
+    /// How long the map's runs fly on after the manoeuvre ends, s (its
+    /// aftermath; 0 for the turn, whose run ends turning).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aftermath_s: Option<f64>,
 }
 
 /// The envelope bounds a cell's limit may be capped by, as the map names them.
@@ -214,12 +225,28 @@ impl LimitsGrid {
             }
         }
         let narrow = |axis: &[f64]| axis.iter().map(|&v| v as f32).collect::<Vec<f32>>();
-        LimitGrid::new(&narrow(&self.altitudes_m), &narrow(&self.machs), &cells).map_err(|e| {
-            let field = match e {
-                LimitGridError::AxisSize | LimitGridError::NotAscending => "altitudes_m or machs",
-                LimitGridError::CellCount | LimitGridError::Limit => "limits",
-            };
-            invalid(field, e.to_string())
-        })
+        let grid = LimitGrid::new(&narrow(&self.altitudes_m), &narrow(&self.machs), &cells)
+            .map_err(|e| {
+                let field = match e {
+                    LimitGridError::AxisSize | LimitGridError::NotAscending => {
+                        "altitudes_m or machs"
+                    }
+                    LimitGridError::CellCount | LimitGridError::Limit => "limits",
+                };
+                invalid(field, e.to_string())
+            })?;
+        let seconds = |field: &str, v: Option<f64>| match v {
+            None => Ok(0.0),
+            Some(s) if s.is_finite() && (0.0..=1e6).contains(&s) => Ok(s as f32),
+            Some(s) => Err(invalid(field, format!("= {s} must be between 0 and 1e6 s"))),
+        };
+        match (self.manoeuvre_s, self.aftermath_s) {
+            (None, None) => Ok(grid),
+            (Some(_), None) | (None, Some(_)) => Err(invalid(
+                "manoeuvre_s",
+                "and aftermath_s come together or not at all".to_owned(),
+            )),
+            (m, a) => Ok(grid.with_cover(seconds("manoeuvre_s", m)?, seconds("aftermath_s", a)?)),
+        }
     }
 }

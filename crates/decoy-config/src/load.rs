@@ -65,6 +65,21 @@ impl SystemConfig {
         load(disk_file(path.as_ref())?, MapPolicy::Skip)
     }
 
+    /// The reference system as `decoy envelope` loads it: its envelope map on
+    /// board used when it is there, readable and made for it (the onboard
+    /// controller flown beside the map's runs then advises with it, as the
+    /// firmware's does), and otherwise left, never an error (the map is what
+    /// `decoy envelope` makes).
+    pub fn builtin_for_mapping() -> Result<Self, ConfigError> {
+        load(builtin_file("reference-system.toml")?, MapPolicy::IfFresh)
+    }
+
+    /// [`SystemConfig::from_file`] as `decoy envelope` loads it (see
+    /// [`SystemConfig::builtin_for_mapping`]).
+    pub fn from_file_for_mapping(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        load(disk_file(path.as_ref())?, MapPolicy::IfFresh)
+    }
+
     /// The second decoy, built in: `config/weak-stability-decoy.toml`, an overlay
     /// on the reference system that moves the decoy's moment reference point and
     /// towing point (a weakly stable decoy; the file says why).
@@ -119,6 +134,16 @@ impl SystemConfig {
         dir: &Path,
     ) -> Result<Self, ConfigError> {
         load(File::given(name, toml_text, dir), MapPolicy::Skip)
+    }
+
+    /// [`SystemConfig::from_text_in`] as `decoy envelope` loads it (see
+    /// [`SystemConfig::builtin_for_mapping`]).
+    pub fn from_text_in_for_mapping(
+        name: &str,
+        toml_text: &str,
+        dir: &Path,
+    ) -> Result<Self, ConfigError> {
+        load(File::given(name, toml_text, dir), MapPolicy::IfFresh)
     }
 }
 
@@ -262,6 +287,9 @@ enum MapPolicy {
     Check,
     /// Leave it unread (`limits` None).
     Skip,
+    /// Read it and use it if it is there, readable and made for the
+    /// configuration; otherwise leave it (`limits` None), never an error.
+    IfFresh,
 }
 
 /// Loads `top` with its chain of bases, merges, deserialises, validates and
@@ -335,13 +363,25 @@ fn load(top: File, policy: MapPolicy) -> Result<SystemConfig, ConfigError> {
         Place::Text { .. } => MapPolicy::Skip,
         _ => policy,
     };
-    if let (Some(relative), MapPolicy::Check) = (config.envelope.limits_map.clone(), policy) {
-        let file = top.open(LIMITS_KEY, &relative)?;
-        let parsed = LimitsFile::parse(&file.name, &file.text)?;
-        let map = parsed.to_grids(&file.name)?;
-        match parsed.stale_for(&file.name, &config) {
-            None => config.limits = Some(map),
-            Some(stale) => config.stale_limits = Some(stale),
+    if let Some(relative) = config.envelope.limits_map.clone() {
+        let read = || -> Result<_, ConfigError> {
+            let file = top.open(LIMITS_KEY, &relative)?;
+            let parsed = LimitsFile::parse(&file.name, &file.text)?;
+            let map = parsed.to_grids(&file.name)?;
+            Ok((parsed.stale_for(&file.name, &config), map, file.text))
+        };
+        let read = match policy {
+            MapPolicy::Check => Some(read()?),
+            MapPolicy::IfFresh => read().ok(),
+            MapPolicy::Skip => None,
+        };
+        match read {
+            Some((None, map, text)) => {
+                config.limits = Some(map);
+                config.limits_text = Some(text);
+            }
+            Some((Some(stale), ..)) => config.stale_limits = Some(stale),
+            None => {}
         }
     }
     Ok(config)

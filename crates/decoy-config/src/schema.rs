@@ -333,6 +333,9 @@ pub struct SystemConfig {
     /// checked against this configuration (None without one).
     #[serde(skip)]
     pub limits: Option<decoy_controller::LimitMap>,
+    /// The text of the file `limits` was read from (None without it).
+    #[serde(skip)]
+    pub limits_text: Option<String>,
     /// The envelope map named, when it was made for another configuration
     /// (then `limits` is None: `SystemConfig::check_limits`).
     #[serde(skip)]

@@ -152,6 +152,7 @@ fn the_weak_stability_overlay_is_the_reference_with_two_decoy_stations_moved() {
     // Not the reference's envelope map: an overlay is another system.
     expected.envelope.limits_map = None;
     expected.limits = None;
+    expected.limits_text = None;
     assert_eq!(weak, expected);
     assert!(weak.decoy.x_mrp < reference.decoy.x_mrp);
 
@@ -186,6 +187,7 @@ fn an_overlay_merges_table_by_table_onto_its_base() {
     expected.envelope.mach = [0.4, 0.9];
     expected.envelope.limits_map = None;
     expected.limits = None;
+    expected.limits_text = None;
     expected.source = overlay.display().to_string();
     assert_eq!(light, expected);
 
@@ -788,6 +790,30 @@ fn a_malformed_limits_file_is_refused() {
     refuse(
         &|f| f.turn.as_mut().unwrap().machs.reverse(),
         "turn.altitudes_m or machs",
+    );
+    // The map's cover: both times or neither, each 0 to 1e6 s.
+    refuse(
+        &|f| f.pull_up.as_mut().unwrap().aftermath_s = None,
+        "pull-up.manoeuvre_s",
+    );
+    refuse(
+        &|f| f.turn.as_mut().unwrap().manoeuvre_s = Some(-1.0),
+        "turn.manoeuvre_s",
+    );
+    refuse(
+        &|f| f.pull_up.as_mut().unwrap().aftermath_s = Some(f64::INFINITY),
+        "pull-up.aftermath_s",
+    );
+    assert_eq!(
+        (grids.pull_up.manoeuvre_s, grids.pull_up.aftermath_s),
+        (5.5, 12.5)
+    );
+    assert_eq!(
+        (
+            grids.acceleration.manoeuvre_s,
+            grids.acceleration.aftermath_s
+        ),
+        (0.0, 0.0)
     );
     let e =
         LimitsFile::parse("f.toml", &format!("{BUILTIN_LIMITS_TOML}\nextra = 1\n")).unwrap_err();

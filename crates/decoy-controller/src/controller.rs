@@ -12,7 +12,7 @@ use solver_core::{
 use crate::builtin;
 use crate::envelope::OperatingEnvelope;
 use crate::geometry::{FlightPathFrame, Geometry, cable_plume_clearance, to_body};
-use crate::limits::LimitMap;
+use crate::limits::{LimitMap, MapCover, MapManoeuvre};
 use crate::lookahead::Lookahead;
 use crate::monitor::{ManagementConfig, Measures, Monitors};
 use crate::path::{FramePath, PathEnd, steady_flight};
@@ -20,8 +20,8 @@ use crate::validate::{is_finite, validate_streamed};
 use crate::wave::{wave_rate_of, wave_steps};
 use decoy_link::{
     Advisories, AircraftStateFrame, BoardInfo, Command, Counters, DeviceMessage, Hello,
-    HostMessage, Management, OutputFrame, PROTOCOL_VERSION, Profile, RejectReason, Rejected,
-    StatusFlags, StatusFrame,
+    HostMessage, Limits, Management, OutputFrame, PROTOCOL_VERSION, Profile, RejectReason,
+    Rejected, StatusFlags, StatusFrame,
 };
 use decoy_link::{Decoder, FrameError};
 
@@ -291,6 +291,18 @@ pub struct Controller<T: Real, const N: usize, const M: usize = PREDICTION_CAPAC
     /// where the management looks the limits up; Mach NaN when it could not be
     /// formed (the limits are then unknown).
     condition: [T; 2],
+    /// The limits at the flight condition where the aircraft entered its
+    /// manoeuvre (the last frame in steady flight's, [`MapManoeuvre`], or the
+    /// first Output's after the trim when the aircraft was manoeuvring already):
+    /// what the map advises with.
+    map_entry: Limits,
+    /// `map_entry` was taken since the last trim or reset.
+    map_entry_taken: bool,
+    /// When `map_entry` was taken, s (the frame's time).
+    map_entry_s: f64,
+    /// Whether the map covers the flight (then the look-ahead's advisory bits
+    /// are withheld).
+    map_cover: MapCover,
     /// [`ControllerConfig::trim_units_per_frame`].
     trim_units_per_frame: u32,
     /// [`ControllerConfig::max_steps_per_frame`].
@@ -358,6 +370,10 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         envelope: OperatingEnvelope::ZERO,
         limits: LimitMap::EMPTY,
         condition: [T::ZERO; 2],
+        map_entry: Limits::ZERO,
+        map_entry_taken: false,
+        map_entry_s: 0.0,
+        map_cover: MapCover::SETTLED,
         trim_units_per_frame: 0,
         max_steps_per_frame: 0,
         pending_jump: PendingJump::NONE,
@@ -521,6 +537,9 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
     fn reset_management(&mut self) {
         self.monitors.reset();
         self.lookahead.reset();
+        self.map_entry = Limits::ZERO;
+        self.map_entry_taken = false;
+        self.map_cover = MapCover::SETTLED;
         self.slice_due = false;
         self.slice_steps = 0;
         self.slice_instructions = 0;
@@ -769,6 +788,27 @@ impl<T: Real, const N: usize, const M: usize> Controller<T, N, M> {
         output.management = self.management_report(now);
         let [altitude, mach] = self.condition;
         output.management.limits = self.limits.at(altitude, mach);
+        // The map's advisories: with the limits where the manoeuvre was entered.
+        let manoeuvre = MapManoeuvre::of(aircraft);
+        // (Retaken when older than the map's longest manoeuvre: a flight
+        // never steady for that long, in turbulence, is judged where it is.)
+        let stale = now - self.map_entry_s > self.limits.longest_manoeuvre_s();
+        if manoeuvre.steady || !self.map_entry_taken || stale {
+            self.map_entry = output.management.limits;
+            self.map_entry_taken = true;
+            self.map_entry_s = now;
+        }
+        // Where the map covers the flight it advises alone (its runs are
+        // the host's 300 segments; the look-ahead's time to violation and
+        // predicted margins stay in the report).
+        let map_advisories = manoeuvre.advisories(&self.map_entry);
+        let covered = self
+            .map_cover
+            .update(now, &manoeuvre, &self.limits, &self.map_entry);
+        if covered {
+            output.management.advisories = 0;
+        }
+        output.management.advisories |= map_advisories;
         self.last_management = output.management;
         // The slice runs after the answer (the look-ahead's steps, if it has any
         // to fly, and the air columns' prefetch).

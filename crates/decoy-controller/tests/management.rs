@@ -13,10 +13,11 @@ use decoy_config::SystemConfig;
 use decoy_controller::path::state_frame;
 use decoy_controller::{Controller, NoCounter, SystemParams};
 use decoy_link::{
-    Command, DeviceMessage, HostMessage, MonitorLevel, OutputFrame, Profile, Requirement,
+    Advisories, Command, DeviceMessage, HostMessage, MonitorLevel, OutputFrame, Profile,
+    Requirement,
 };
 use decoy_schema::{Manoeuvre, REQUIREMENT_COUNT};
-use solver_core::profiles::LevelAcceleration;
+use solver_core::profiles::{LevelAcceleration, LevelTurn, PullUp};
 use solver_core::{AircraftState, FlightPath, Real};
 
 use common::CAPACITY;
@@ -99,12 +100,16 @@ fn name(k: usize) -> &'static str {
 /// lets it take 12 ms steps, 5 per frame.
 const LEAST_LEAD_S: f64 = 1.0;
 
-/// In the paper's pull-up and turn at 0.20 rad/s the look-ahead advises before
+/// In the paper's pull-up and turn at 0.20 rad/s the controller advises before
 /// every violation (at least [`LEAST_LEAD_S`] ahead), and something is violated
-/// (the test cannot pass by predicting nothing).
+/// (the test cannot pass by predicting nothing): as shipped (the map on board
+/// and the look-ahead), and by the look-ahead alone (no map), which must hold
+/// for the manoeuvres the map does not cover.
 #[test]
 fn the_paper_manoeuvres_are_advised_ahead_of_every_violation() {
-    for (label, system) in [("shipped", shipped())] {
+    let mut unmapped = shipped();
+    unmapped.limits = decoy_controller::LimitMap::EMPTY;
+    for (label, system) in [("shipped", shipped()), ("look-ahead alone", unmapped)] {
         // The paper's 0.20 rad/s pull-up and turn, and every other built-in
         // manoeuvre the product ships (pull-ups 0.05 and 0.10, turn 0.10).
         for profile in [
@@ -430,8 +435,10 @@ fn every_output_reports_the_maps_limits_at_its_flight_condition() {
                 expected.acceleration_floor_mps2
             );
         }
-        assert!(got.pull_up_floor_radps <= got.pull_up_radps + 1e-6);
-        assert!(got.turn_floor_radps <= got.turn_radps + 1e-6);
+        // (Within 1e-4 of a spacing of a grid line the floor is the line's
+        // cells, up to 1e-4 of their difference above the interpolation.)
+        assert!(got.pull_up_floor_radps <= got.pull_up_radps + 2e-5);
+        assert!(got.turn_floor_radps <= got.turn_radps + 2e-5);
         if (0.52..0.58).contains(&mach) {
             between += 1;
             let low = map.pull_up.at(6000.0f64, 0.5f64).unwrap().0 as f32;
@@ -458,4 +465,75 @@ fn every_output_reports_the_maps_limits_at_its_flight_condition() {
     unmapped.limits = decoy_controller::LimitMap::EMPTY;
     let o = &fly_path::<f32, _>(&unmapped, &path, 0.5)[0];
     assert_eq!(o.management.limits, decoy_link::Limits::UNKNOWN);
+}
+
+/// The map on board advises a manoeuvre whose rate is above the map's limit
+/// where it was entered, against the requirement that limits it there (with
+/// `Advisories::MAP`), on every frame of the manoeuvre; 3 % below the limit it
+/// never does, though the pull-up climbs off the cell it started in, and as
+/// the map covers that flight no advisory comes at all. The
+/// paper's step profiles: the rate jumps at 2 s (the pull-up's stops at 5 s).
+#[test]
+fn the_map_advises_a_manoeuvre_above_its_limit_where_it_was_entered() {
+    let config = SystemConfig::builtin().unwrap();
+    let system = config.params().unwrap();
+    let cases: [(f64, f64, bool); 2] = [(9000.0, 0.6, true), (12000.0, 0.5, false)];
+    for (altitude, mach, pull_up) in cases {
+        let speed = config.mach_to_speed(altitude, mach).unwrap();
+        let grid = if pull_up {
+            &system.limits.pull_up
+        } else {
+            &system.limits.turn
+        };
+        let (limit, code) = grid.at(altitude, f64::from(mach as f32)).unwrap();
+        let requirement = Requirement::ALL[usize::from(code) - 1];
+        for (factor, advised) in [(1.03, true), (0.97, false)] {
+            let rate = limit * factor;
+            let outputs = if pull_up {
+                let path = PullUp {
+                    altitude,
+                    speed,
+                    start: 2.0,
+                    rate,
+                    duration: 3.0,
+                };
+                fly_path::<f32, _>(&system, &path, 6.0)
+            } else {
+                let path = LevelTurn {
+                    altitude,
+                    speed,
+                    start: 2.0,
+                    rate,
+                    gravity: 9.80665,
+                };
+                fly_path::<f32, _>(&system, &path, 6.0)
+            };
+            assert!(outputs.first().is_some_and(|o| o.time_s < 1.5));
+            let end = if pull_up { 5.0 } else { f64::INFINITY };
+            let mut count = 0;
+            for o in &outputs {
+                let t = o.time_s;
+                let bits = o.management.advisories;
+                if (t - 2.0).abs() < 0.015 || (t - end).abs() < 0.015 {
+                    continue;
+                }
+                let expected = advised && t > 2.0 && t < end;
+                assert_eq!(
+                    bits & Advisories::MAP != 0,
+                    expected,
+                    "{altitude} m Mach {mach}, {rate} rad/s: t {t}"
+                );
+                if expected {
+                    assert!(bits & requirement.bit() != 0, "t {t}: {bits:#x}");
+                    count += 1;
+                }
+                // Below the limit the map covers the flight: no advisory at
+                // all (the look-ahead's bits withheld).
+                if !advised {
+                    assert_eq!(bits, 0, "{altitude} m Mach {mach}, {rate} rad/s: t {t}");
+                }
+            }
+            assert!(!advised || count > 250, "{count} frames advised");
+        }
+    }
 }

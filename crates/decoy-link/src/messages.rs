@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 pub use crate::profile::{BuiltinProfile, Profile};
 
 /// The protocol version, reported in [`Hello`], [`StatusFrame`] and [`DeviceMessage::Pong`].
-pub const PROTOCOL_VERSION: u16 = 7;
+pub const PROTOCOL_VERSION: u16 = 8;
 
 /// Host to controller.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -220,7 +220,8 @@ pub struct Management {
     /// its [`Requirement::unit`]). On the wire the reports one after the other.
     pub reports: PerRequirement<MonitorReport>,
     /// [`Advisories`] bits: requirements the look-ahead predicts violated within
-    /// its horizon if the aircraft holds its current manoeuvre.
+    /// its horizon if the aircraft holds its current manoeuvre, or that the map
+    /// on board says the manoeuvre violates (then with [`Advisories::MAP`]).
     pub advisories: u8,
     /// Time of the frame whose state the last completed look-ahead started from,
     /// s (-1 before the first completes).
@@ -339,6 +340,13 @@ impl Management {
 pub struct Advisories(pub u8);
 
 impl Advisories {
+    /// Set with a requirement's bit when the map on board advises against
+    /// the manoeuvre: its rate is above the map's limit (the floor) at the
+    /// flight condition where it was entered, and the map's limit there is that
+    /// requirement's (docs/protocol.md §3, "Advisories"). The look-ahead's
+    /// advisories set the requirement's bit alone.
+    pub const MAP: u8 = 0x80;
+
     /// The bit of `requirement`: continuing the manoeuvre violates it.
     pub const fn bit(requirement: Requirement) -> u8 {
         requirement.bit()

@@ -421,7 +421,7 @@ fn encode_reports_a_short_buffer() {
 }
 
 /// The example of docs/protocol.md and firmware/README.md, byte for byte: the
-/// ping and its answer (protocol version 7).
+/// ping and its answer (protocol version 8).
 #[test]
 fn the_documented_ping_frame() {
     let ping = HostMessage::Command(Command::Ping { nonce: 7 });
@@ -435,7 +435,7 @@ fn the_documented_ping_frame() {
     };
     assert_eq!(
         wire(&pong),
-        [0x00, 0x08, 0x03, 0x07, 0x07, 0x2f, 0x64, 0x22, 0x2c, 0x00]
+        [0x00, 0x08, 0x03, 0x07, 0x08, 0xbe, 0x79, 0x9d, 0xbc, 0x00]
     );
 }
 

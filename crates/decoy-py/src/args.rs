@@ -21,28 +21,29 @@ pub(crate) fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemC
     load(config, true)
 }
 
-/// [`load_config`] without the envelope map on board, for the envelope map,
-/// which makes it (as `decoy envelope`: a stale map must not stop it).
-pub(crate) fn load_config_unmapped(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemConfig> {
+/// [`load_config`] for the envelope map, which makes the map on board (as
+/// `decoy envelope`: a stale map must not stop it; one made for the
+/// configuration is used by the controller flown beside the runs).
+pub(crate) fn load_config_for_mapping(config: Option<&Bound<'_, PyAny>>) -> PyResult<SystemConfig> {
     load(config, false)
 }
 
 fn load(config: Option<&Bound<'_, PyAny>>, mapped: bool) -> PyResult<SystemConfig> {
     let loaded = match config {
         None if mapped => SystemConfig::builtin(),
-        None => SystemConfig::builtin_unmapped(),
+        None => SystemConfig::builtin_for_mapping(),
         Some(c) if c.cast::<PyMapping>().is_ok() => {
             let text = convert::toml_text(c, CONFIG_DICT)?;
             let dir = std::env::current_dir().unwrap_or_else(|_| PathBuf::from("."));
             if mapped {
                 SystemConfig::from_text_in(CONFIG_DICT, &text, &dir)
             } else {
-                SystemConfig::from_text_in_unmapped(CONFIG_DICT, &text, &dir)
+                SystemConfig::from_text_in_for_mapping(CONFIG_DICT, &text, &dir)
             }
         }
         Some(c) => match c.extract::<PathBuf>() {
             Ok(path) if mapped => SystemConfig::from_file(path),
-            Ok(path) => SystemConfig::from_file_unmapped(path),
+            Ok(path) => SystemConfig::from_file_for_mapping(path),
             Err(_) => {
                 return Err(PyTypeError::new_err(format!(
                     "config: expected None, a path or a dict, got a {}",

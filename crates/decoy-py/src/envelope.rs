@@ -15,7 +15,7 @@ use decoy_studies::envelope::{
 };
 use pyo3::prelude::*;
 
-use crate::args::{load_config_unmapped, segment_count};
+use crate::args::{load_config_for_mapping, segment_count};
 use crate::errors::{InputError, sim_error};
 use crate::{convert, worker};
 
@@ -51,7 +51,7 @@ pub fn envelope_plan(
                 "envelope: --manoeuvre must be pull-up, turn or acceleration, got {manoeuvre:?}"
             ))
         })?;
-    let config = load_config_unmapped(config)?;
+    let config = load_config_for_mapping(config)?;
     let request = EnvelopeRequest {
         altitudes_m: altitudes,
         machs,

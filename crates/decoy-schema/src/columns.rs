@@ -88,7 +88,7 @@ pub enum Quantity {
     Level(Requirement),
     /// A requirement's margin, in its file unit.
     Margin(Requirement),
-    /// The look-ahead's advisory bits.
+    /// The onboard controller's advisory bits (the look-ahead's and the map's).
     Advisories,
     /// The look-ahead's predicted time to a requirement's violation, s.
     ViolationIn(Requirement),
@@ -507,7 +507,7 @@ const ADVISORIES: Column = Column::new(
     Quantity::Advisories,
     "advisories",
     "",
-    "the onboard look-ahead's advisory bits, bit k (value 2^k) for the k-th requirement of docs/management.md's table: \"continuing this manoeuvre violates it within the horizon\"",
+    "the onboard controller's advisory bits, bit k (value 2^k) for the k-th requirement of docs/management.md's table: \"continuing this manoeuvre violates it\" (the look-ahead's, within its horizon, or the map on board's); bit 7 (128) when the map on board advises",
 );
 
 /// The look-ahead's predicted time to each requirement's violation.

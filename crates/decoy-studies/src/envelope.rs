@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use decoy_config::{AeroRow, SystemConfig};
+use decoy_config::{AeroRow, LimitsFile, SystemConfig};
 use decoy_plots::atomic::write_atomically;
 use decoy_plots::{HeatMap, write_heatmap};
 pub use decoy_schema::Manoeuvre;
@@ -137,7 +137,7 @@ pub struct Cell {
     pub steady_margins: PerRequirement<Option<f64>>,
     /// Runs flown for the cell.
     pub runs: u32,
-    /// The onboard look-ahead's advisory lead on the limiting requirement at
+    /// The onboard controller's advisory lead on the limiting requirement at
     /// the smallest rate found violating it, s (first violation - first
     /// advisory; negative: late); None when no run violated it, or it was
     /// violated unadvised ([`Cell::advised`]).
@@ -148,7 +148,7 @@ pub struct Cell {
     #[serde(default)]
     pub advised: Option<bool>,
     /// Runs of the cell that stayed clear of every requirement but in which
-    /// the look-ahead advised against one (steady flight included).
+    /// the controller advised against one (steady flight included).
     #[serde(default)]
     pub advised_clear_runs: u32,
     /// Of those, the runs whose first advisory was false: the manoeuvre
@@ -202,6 +202,9 @@ pub struct EnvelopeMap {
     pub cells: Vec<Cell>,
     /// Cells taken from an earlier run into the same directory.
     pub resumed: usize,
+    /// Whether the controller flown beside the runs had the configuration's
+    /// envelope map on board (made for it), which advises too.
+    pub onboard_map: bool,
 }
 
 /// A map's inputs, what an output directory's `inputs.json` holds: the
@@ -217,6 +220,12 @@ pub struct EnvelopePlan {
     aero_rows: Vec<AeroRow>,
     /// What to map.
     pub spec: EnvelopeSpec,
+    /// The text of the envelope map on board of the controller flown beside
+    /// the runs (the configuration's map file, when it was made for it: its
+    /// advisories use it), or None (the controller then has no map and
+    /// advises by its look-ahead alone). Absent from the JSON when None.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    onboard_map: Option<String>,
 }
 
 impl EnvelopePlan {
@@ -227,6 +236,7 @@ impl EnvelopePlan {
             config: config.clone(),
             aero_rows: config.aero_rows.clone(),
             spec: spec.clone(),
+            onboard_map: config.limits.and(config.limits_text.clone()),
         })
     }
 
@@ -248,6 +258,12 @@ impl EnvelopePlan {
         plan.config.aero_rows = plan.aero_rows.clone();
         plan.config.source = "the map's inputs.json".to_owned();
         plan.config.validate()?;
+        if let Some(text) = &plan.onboard_map {
+            let name = "the map's inputs.json (onboard_map)";
+            let file = LimitsFile::parse(name, text)?;
+            plan.config.limits = Some(file.to_map(name, &plan.config)?);
+            plan.config.limits_text = Some(text.clone());
+        }
         plan.spec.check(&plan.config)?;
         Ok(plan)
     }
@@ -468,6 +484,28 @@ impl EnvelopeSpec {
             ),
             None => format!("rates built over {} s", self.onset_s),
         }
+    }
+
+    /// What the map's runs fly, for the controller's cover (docs/protocol.md
+    /// §3, "Advisories from the map"): the longest the manoeuvre lasts from its
+    /// entry and how long the runs fly on after it, s. The pull-up: its
+    /// rotation with the onset that ends it, then the climb to the run's end;
+    /// the turn: the whole run, turning. None for the acceleration, whose
+    /// extent is a Mach gain, not a time (the map covers none).
+    pub fn cover(&self) -> Result<Option<(f64, f64)>, SimError> {
+        if self.mach_gain.is_some() {
+            return Ok(None);
+        }
+        let scenario = Scenario::builtin(self.manoeuvre.name())?;
+        let start = scenario.start_s.unwrap_or_default();
+        let run = scenario.t_end_s - start;
+        Ok(Some(match scenario.duration_s {
+            Some(duration) => {
+                let lasts = (duration + self.onset_s).min(run);
+                (lasts, run - lasts)
+            }
+            None => (run, 0.0),
+        }))
     }
 
     /// The cells' flight conditions (altitude m, Mach) in grid order.
@@ -960,6 +998,7 @@ pub fn map_envelope(
         spec: spec.clone(),
         cells,
         resumed,
+        onboard_map: config.limits.is_some(),
     })
 }
 
@@ -1044,6 +1083,7 @@ fn prepare_dir(config: &SystemConfig, spec: &EnvelopeSpec, dir: &Path) -> Result
         config: config.clone(),
         aero_rows: config.aero_rows.clone(),
         spec: spec.clone(),
+        onboard_map: config.limits.and(config.limits_text.clone()),
     };
     let path = dir.join("inputs.json");
     let json = to_json(&inputs, &path)?;
@@ -1052,7 +1092,7 @@ fn prepare_dir(config: &SystemConfig, spec: &EnvelopeSpec, dir: &Path) -> Result
         Ok(_) => Err(SimError::invalid(
             path.display().to_string(),
             "inputs",
-            "the directory holds a map of other inputs (configuration, manoeuvre, grid, model, onset, Mach gain or tolerance): give another --out, or remove it".to_owned(),
+            "the directory holds a map of other inputs (configuration, manoeuvre, grid, model, onset, Mach gain, tolerance or the map on board its advisories use): give another --out, or remove it".to_owned(),
         )),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             write_atomically(&path, json.as_bytes()).map_err(io("write", &path))
@@ -1323,7 +1363,12 @@ impl EnvelopeMap {
     /// advised at least 1 s ahead, later, or not at all, and the false
     /// advisories in the runs that stayed clear.
     pub fn advisories(&self) -> String {
-        let violated: Vec<&Cell> = self.cells.iter().filter(|c| c.advised.is_some()).collect();
+        let inside: Vec<&Cell> = self.cells.iter().filter(|c| c.inside_envelope).collect();
+        let violated: Vec<&Cell> = inside
+            .iter()
+            .copied()
+            .filter(|c| c.advised.is_some())
+            .collect();
         let ahead = violated
             .iter()
             .filter(|c| c.advisory_lead_s.is_some_and(|l| l >= 1.0))
@@ -1333,14 +1378,26 @@ impl EnvelopeMap {
             .filter(|c| c.advisory_lead_s.is_some_and(|l| l < 1.0))
             .count();
         let missed = violated.iter().filter(|c| c.advised == Some(false)).count();
-        let clear: u32 = self.cells.iter().map(|c| c.clear_runs).sum();
-        let advised_clear: u32 = self.cells.iter().map(|c| c.advised_clear_runs).sum();
-        let false_advisories: u32 = self.cells.iter().map(|c| c.false_advisories).sum();
-        let nuisance: u32 = self.cells.iter().map(|c| c.nuisance_advisories).sum();
-        let cells_false = self.cells.iter().filter(|c| c.false_advisories > 0).count();
+        let clear: u32 = inside.iter().map(|c| c.clear_runs).sum();
+        let advised_clear: u32 = inside.iter().map(|c| c.advised_clear_runs).sum();
+        let false_advisories: u32 = inside.iter().map(|c| c.false_advisories).sum();
+        let nuisance: u32 = inside.iter().map(|c| c.nuisance_advisories).sum();
+        let cells_false = inside.iter().filter(|c| c.false_advisories > 0).count();
+        let outside = self.cells.len() - inside.len();
         format!(
-            "Advisories (the onboard look-ahead): of {} cells' violations (at the smallest violating rate), {ahead} advised at least 1 s ahead, {late} less than 1 s ahead, {missed} not advised; of {clear} runs that stayed clear, {advised_clear} were advised against, {false_advisories} falsely (the manoeuvre continued to the horizon stays clear; {cells_false} cells), {nuisance} of them without even reaching the warning level\n",
-            violated.len()
+            "Advisories (the onboard controller: its look-ahead{}), over the {} cells inside the declared envelope: of {} cells' violations (at the smallest violating rate), {ahead} advised at least 1 s ahead, {late} less than 1 s ahead, {missed} not advised; of {clear} runs that stayed clear, {advised_clear} were advised against, {false_advisories} falsely (the manoeuvre continued to the horizon stays clear; {cells_false} cells), {nuisance} of them without even reaching the warning level{}\n",
+            if self.onboard_map {
+                " and the envelope map on board"
+            } else {
+                " alone: no envelope map on board made for this configuration"
+            },
+            inside.len(),
+            violated.len(),
+            if outside > 0 {
+                format!(" ({outside} cells outside it not counted)")
+            } else {
+                String::new()
+            }
         )
     }
 
@@ -1528,8 +1585,11 @@ mod tests {
         // The summary marks the limits and the paper's advice.
         let text = one.summary();
         assert!(text.contains("The paper's advice"), "{text}");
+        // The test's configuration is the built-in one, its map on board.
         assert!(
-            text.contains("Advisories (the onboard look-ahead): of 4 cells"),
+            text.contains(
+                "Advisories (the onboard controller: its look-ahead and the envelope map on board), over the 4 cells inside the declared envelope: of 4 cells"
+            ),
             "{text}"
         );
         assert_eq!(one.csv().lines().count(), 5);

@@ -63,7 +63,7 @@ pub fn limits_table(config: &SystemConfig, dirs: &[PathBuf]) -> Result<String, S
                 format!("is a second map of the {}", spec.manoeuvre.name()),
             ));
         }
-        *slot = Some(grid(spec, &cells));
+        *slot = Some(grid(spec, &cells)?);
         sources.push(spec.manoeuvre.name());
     }
     if sources.is_empty() {
@@ -111,15 +111,16 @@ pub fn write_limits_table(
 }
 
 /// The table of one manoeuvre's cells, in the map's grid order.
-fn grid(spec: &EnvelopeSpec, cells: &[Cell]) -> LimitsGrid {
+fn grid(spec: &EnvelopeSpec, cells: &[Cell]) -> Result<LimitsGrid, SimError> {
     let columns = spec.machs.len();
+    let cover = spec.cover()?;
     let rows = |f: &dyn Fn(&Cell) -> String| -> Vec<Vec<String>> {
         cells
             .chunks(columns)
             .map(|r| r.iter().map(f).collect())
             .collect()
     };
-    LimitsGrid {
+    Ok(LimitsGrid {
         unit: spec.unit().to_owned(),
         made_with: format!(
             "{}; {}; bisection to {} {}",
@@ -135,7 +136,9 @@ fn grid(spec: &EnvelopeSpec, cells: &[Cell]) -> LimitsGrid {
             .map(|r| r.iter().map(|c| c.limit).collect())
             .collect(),
         limiting: rows(&|c| c.limiting.name().to_owned()),
-    }
+        manoeuvre_s: cover.map(|c| c.0),
+        aftermath_s: cover.map(|c| c.1),
+    })
 }
 
 /// The plan and every cell of the map in `dir`; a map not complete is an
